@@ -1,0 +1,51 @@
+// glint/core/aabb.hpp: axis-aligned bounding box.
+#pragma once
+
+#include <algorithm>
+
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+
+namespace glint {
+
+/// An axis-aligned box. A default-constructed box is empty (lo = +inf, hi = -inf), so that
+/// extending it by any point gives that point.
+template <class T>
+struct AABB {
+    Vec3<T> lo{infinity<T>};
+    Vec3<T> hi{-infinity<T>};
+
+    bool empty() const { return !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z); }
+    void extend(const Vec3<T>& p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+    void extend(const AABB& b) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+    Vec3<T> extent() const { return empty() ? Vec3<T>(0) : hi - lo; }
+    Vec3<T> center() const { return (lo + hi) * T(0.5); }
+    T surface_area() const {
+        const Vec3<T> e = extent();
+        return T(2) * (e.x * e.y + e.y * e.z + e.z * e.x);
+    }
+    int longest_axis() const { return max_abs_axis(extent()); }
+    bool contains(const Vec3<T>& p) const {
+        return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z &&
+               p.z <= hi.z;
+    }
+
+    /// Slab test. On a hit, [t0, t1] is the overlap of the box with (tmin, tmax).
+    /// Rays with zero direction components are handled by IEEE infinities; a NaN in the ray
+    /// gives a miss.
+    bool intersect(const Ray<T>& r, const Vec3<T>& inv_dir, T& t0, T& t1) const {
+        t0 = r.tmin;
+        t1 = r.tmax;
+        for (int a = 0; a < 3; ++a) {
+            T tn = (lo[a] - r.origin[a]) * inv_dir[a];
+            T tf = (hi[a] - r.origin[a]) * inv_dir[a];
+            if (tn > tf) std::swap(tn, tf);
+            // max/min written so that a NaN slab (0 * inf) leaves the interval unchanged.
+            t0 = tn > t0 ? tn : t0;
+            t1 = tf < t1 ? tf : t1;
+        }
+        return t0 <= t1;
+    }
+};
+
+}  // namespace glint
