@@ -1,0 +1,113 @@
+// glint/intersection/ivm.hpp: ray-triangle intersection with the inverse vertex matrix.
+//
+// 000 section 4.1 (lines 2331-2470), Szecsi's IVM test. With the triangle's vertices as the
+// columns of V = [v0, v1, v2], the record is exactly the 9 scalars of M = V^-1 (the IVM):
+//   - barycentrics of a point x are b = M x (eq. 4.8);
+//   - every vertex satisfies [1,1,1] M v_i = 1, so the plane is q' . x = 1 with the row
+//     q' = [1,1,1] M (eq. 4.12, the plane's point nearest the origin inverted in the unit
+//     sphere); substituting x = o + t d gives t = (1 - q' . o) / (q' . d) (eq. 4.5 divided
+//     by q . q);
+//   - the hit is inside when all three barycentrics are >= 0: one three-way sign test.
+// Repairs to the extracted text: eq. 4.5 is printed as (q.q - q.o)/(q.d), which is the same
+// after dividing numerator and denominator by q.q; we use the q' (= q / q.q) form so that
+// only M is stored.
+//
+// The frame. V is singular when the triangle's plane passes through the origin, and
+// ill-conditioned when it passes near it. 000 asks for a modelling space that avoids this;
+// glint makes it automatic: records are built in a translated frame whose origin is chosen
+// away from every plane of the block (detail::choose_frame in triangle.hpp: 26 candidates
+// around the block's box, and blocks split until each group has quality >= 1/8), and the ray
+// is translated once per group. A standalone Triangle<Ivm<T>> gets its own frame (centroid
+// moved off the plane by the triangle's size). Degenerate (zero-area) triangles, and any
+// record whose inverse is not finite, are stored as all zeros: then q' = 0, t = 1/0 is
+// infinite and the test reports a miss, never a wrong hit.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include <glint/core/math.hpp>
+#include <glint/intersection/triangle.hpp>
+
+namespace glint {
+
+template <Scalar T>
+struct Ivm {
+    using scalar_type = T;
+    using RayData = detail::PlainRay<T>;
+    static constexpr const char* name = "Ivm";
+    static constexpr bool uses_frame = true;
+    static constexpr int field_count = 9;
+
+    // Rows of M = [v0 v1 v2]^-1: b_i = m[i] . x.
+    Vec3<T> m[3]{};
+
+    /// Inverts the vertex matrix in double precision, then rounds to T. Triangles whose
+    /// area is below double rounding noise (|e1 x e2| <= 2^-60 * longest edge^2) are
+    /// degenerate and never hit.
+    static Ivm build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+        Ivm r;
+        const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) return r;
+        // Rows of the inverse of the column matrix [a b c] are the cross products of pairs
+        // of columns divided by the determinant.
+        const double det = glm::dot(a, glm::cross(b, c));
+        if (!(std::abs(det) > 0.0) || !std::isfinite(det)) return r;
+        const Vec3d rows[3] = {glm::cross(b, c) / det, glm::cross(c, a) / det, glm::cross(a, b) / det};
+        for (int i = 0; i < 3; ++i) {
+            const Vec3<T> row(rows[i]);
+            if (!all_finite(row)) return Ivm{};
+            r.m[i] = row;
+        }
+        return r;
+    }
+
+    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
+        const Vec3<T> q = m[0] + m[1] + m[2];  // q' = [1,1,1] M
+        const T t = (T(1) - glm::dot(q, r.o)) / glm::dot(q, r.d);
+        if (!(t > r.tmin && t < r.tmax)) return false;
+        const Vec3<T> x = r.o + r.d * t;
+        const T b0 = glm::dot(m[0], x), b1 = glm::dot(m[1], x), b2 = glm::dot(m[2], x);
+        if (!(b0 >= T(0) && b1 >= T(0) && b2 >= T(0))) return false;
+        hit.t = t;
+        hit.u = b1;
+        hit.v = b2;
+        return true;
+    }
+
+    void store(T* out) const {
+        for (int k = 0; k < 9; ++k) out[k] = m[k / 3][k % 3];
+    }
+    static Ivm load(const SoaView<T, field_count>& v, std::size_t i) {
+        Ivm r;
+        for (int k = 0; k < 9; ++k) r.m[k / 3][k % 3] = v.fields[k][i];
+        return r;
+    }
+
+    /// Branch-free kernel over n <= batch_width records starting at `first`.
+    static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
+                      const RayData& r, T* ts, T* us, T* vs) {
+        const T* f[9];
+        for (int k = 0; k < 9; ++k) f[k] = v.fields[k] + first;
+        for (std::size_t i = 0; i < n; ++i) {
+            const T qx = f[0][i] + f[3][i] + f[6][i];
+            const T qy = f[1][i] + f[4][i] + f[7][i];
+            const T qz = f[2][i] + f[5][i] + f[8][i];
+            const T t = (T(1) - (qx * r.o.x + qy * r.o.y + qz * r.o.z)) /
+                        (qx * r.d.x + qy * r.d.y + qz * r.d.z);
+            const T x = r.o.x + r.d.x * t, y = r.o.y + r.d.y * t, z = r.o.z + r.d.z * t;
+            const T b0 = f[0][i] * x + f[1][i] * y + f[2][i] * z;
+            const T b1 = f[3][i] * x + f[4][i] * y + f[5][i] * z;
+            const T b2 = f[6][i] * x + f[7][i] * y + f[8][i] * z;
+            const bool ok = t > r.tmin && t < r.tmax && b0 >= T(0) && b1 >= T(0) && b2 >= T(0);
+            ts[i] = ok ? t : infinity<T>;
+            us[i] = b1;
+            vs[i] = b2;
+        }
+    }
+};
+
+}  // namespace glint

@@ -1,0 +1,111 @@
+// glint/intersection/moller_trumbore.hpp: the Moller-Trumbore ray-triangle test.
+//
+// Moller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection" (JGT 1997): solve
+// o + t d = (1 - u - v) v0 + u v1 + v v2 by Cramer's rule with two cross products and no
+// precomputed plane. 000 section 4.1.1 (lines 2486-2520) compares the IVM test against it as
+// "the fastest known ... working without precomputed values". Our record keeps v0 and the
+// two edges e1 = v1 - v0, e2 = v2 - v0 (9 scalars, the same footprint as the IVM), which is
+// how it is usually deployed and the strongest version of this baseline.
+//
+// No epsilon: the classic |det| < 1e-8 rejection is scale dependent (it drops small but
+// valid triangles). Only det == 0 (ray parallel to the plane, or a degenerate triangle) is
+// a miss; every comparison is written so that NaN fails it.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+
+#include <glint/core/math.hpp>
+#include <glint/intersection/triangle.hpp>
+
+namespace glint {
+
+template <Scalar T>
+struct MollerTrumbore {
+    using scalar_type = T;
+    using RayData = detail::PlainRay<T>;
+    static constexpr const char* name = "MollerTrumbore";
+    static constexpr bool uses_frame = false;
+    static constexpr int field_count = 9;
+
+    Vec3<T> v0{0}, e1{0}, e2{0};
+
+    /// Degenerate triangles (|e1 x e2| <= 2^-60 * longest edge^2) get zero edges: det = 0,
+    /// never a hit.
+    static MollerTrumbore build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+        MollerTrumbore r;
+        r.v0 = Vec3<T>(a);
+        const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) return r;
+        r.e1 = Vec3<T>(b - a);
+        r.e2 = Vec3<T>(c - a);
+        return r;
+    }
+
+    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
+        const Vec3<T> p = glm::cross(r.d, e2);
+        const T det = glm::dot(e1, p);
+        if (det == T(0)) return false;
+        const T inv = T(1) / det;
+        const Vec3<T> s = r.o - v0;
+        const T u = glm::dot(s, p) * inv;
+        if (!(u >= T(0) && u <= T(1))) return false;
+        const Vec3<T> q = glm::cross(s, e1);
+        const T v = glm::dot(r.d, q) * inv;
+        if (!(v >= T(0) && u + v <= T(1))) return false;
+        const T t = glm::dot(e2, q) * inv;
+        if (!(t > r.tmin && t < r.tmax)) return false;
+        hit.t = t;
+        hit.u = u;
+        hit.v = v;
+        return true;
+    }
+
+    void store(T* out) const {
+        for (int k = 0; k < 3; ++k) {
+            out[k] = v0[k];
+            out[3 + k] = e1[k];
+            out[6 + k] = e2[k];
+        }
+    }
+    static MollerTrumbore load(const SoaView<T, field_count>& v, std::size_t i) {
+        MollerTrumbore r;
+        for (int k = 0; k < 3; ++k) {
+            r.v0[k] = v.fields[k][i];
+            r.e1[k] = v.fields[3 + k][i];
+            r.e2[k] = v.fields[6 + k][i];
+        }
+        return r;
+    }
+
+    static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
+                      const RayData& r, T* ts, T* us, T* vs) {
+        const T* f[9];
+        for (int k = 0; k < 9; ++k) f[k] = v.fields[k] + first;
+        for (std::size_t i = 0; i < n; ++i) {
+            const T e1x = f[3][i], e1y = f[4][i], e1z = f[5][i];
+            const T e2x = f[6][i], e2y = f[7][i], e2z = f[8][i];
+            const T px = r.d.y * e2z - r.d.z * e2y;
+            const T py = r.d.z * e2x - r.d.x * e2z;
+            const T pz = r.d.x * e2y - r.d.y * e2x;
+            const T det = e1x * px + e1y * py + e1z * pz;
+            const T inv = T(1) / det;
+            const T sx = r.o.x - f[0][i], sy = r.o.y - f[1][i], sz = r.o.z - f[2][i];
+            const T u = (sx * px + sy * py + sz * pz) * inv;
+            const T qx = sy * e1z - sz * e1y;
+            const T qy = sz * e1x - sx * e1z;
+            const T qz = sx * e1y - sy * e1x;
+            const T w = (r.d.x * qx + r.d.y * qy + r.d.z * qz) * inv;
+            const T t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+            const bool ok = det != T(0) && u >= T(0) && w >= T(0) && u + w <= T(1) &&
+                            t > r.tmin && t < r.tmax;
+            ts[i] = ok ? t : infinity<T>;
+            us[i] = u;
+            vs[i] = w;
+        }
+    }
+};
+
+}  // namespace glint

@@ -1,0 +1,155 @@
+// glint/intersection/watertight.hpp: the watertight ray-triangle test, glint's robustness
+// reference.
+//
+// Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013). The ray is
+// made the +z axis of a sheared frame (kz = its dominant axis, kx and ky the others, swapped
+// when d[kz] < 0 to keep the winding), vertices are translated by the origin and sheared,
+// and the three 2D edge functions U, V, W decide inside/outside. Two triangles sharing an
+// edge compute the same edge function with opposite sign, so a ray can never pass between
+// them, provided the edge functions' signs are exact.
+//
+// Exact signs. The paper recomputes U, V, W in double when one is exactly 0 (float). Here:
+//  - T = float: U, V, W are always computed in double, where the products of two floats
+//    are exact, so each edge function is one correctly rounded subtraction: exact sign,
+//    whatever floating-point contraction (FMA) the compiler applies;
+//  - T = double: Kahan's difference of products with fma, relative error <= 2 ulps
+//    (Jeannerod, Louvet and Muller 2013), hence the exact sign, and exactly 0 iff the
+//    products are equal.
+// The shear of each vertex is computed the same way in every triangle that shares it, so
+// shared edges agree. Edges and vertices are inclusive (a ray through a shared edge hits
+// both triangles).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <utility>
+
+#include <glint/core/math.hpp>
+#include <glint/intersection/triangle.hpp>
+
+namespace glint {
+
+namespace detail {
+/// a*b - c*d with an exact sign (see the header comment).
+inline double edge_function(float a, float b, float c, float d) {
+    return double(a) * double(b) - double(c) * double(d);
+}
+inline double edge_function(double a, double b, double c, double d) {
+    const double w = c * d;
+    const double e = std::fma(-c, d, w);  // exactly w - c*d
+    const double f = std::fma(a, b, -w);
+    return f + e;
+}
+}  // namespace detail
+
+template <Scalar T>
+struct Watertight {
+    using scalar_type = T;
+    static constexpr const char* name = "Watertight";
+    static constexpr bool uses_frame = false;
+    static constexpr int field_count = 9;
+
+    struct RayData {
+        Vec3<T> o;
+        int kx, ky, kz;
+        T sx, sy, sz;
+        T tmin, tmax;
+    };
+
+    Vec3<T> v[3]{};
+
+    /// Stores the vertices as given. Degenerate triangles need no special case: all edge
+    /// functions' sum (det) is 0 for them, which is a miss.
+    static Watertight build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+        Watertight r;
+        r.v[0] = Vec3<T>(a);
+        r.v[1] = Vec3<T>(b);
+        r.v[2] = Vec3<T>(c);
+        return r;
+    }
+
+    static RayData prepare(const Ray<T>& r) {
+        RayData d;
+        d.o = r.origin;
+        d.kz = max_abs_axis(r.direction);
+        d.kx = (d.kz + 1) % 3;
+        d.ky = (d.kx + 1) % 3;
+        if (r.direction[d.kz] < T(0)) std::swap(d.kx, d.ky);
+        d.sx = r.direction[d.kx] / r.direction[d.kz];
+        d.sy = r.direction[d.ky] / r.direction[d.kz];
+        d.sz = T(1) / r.direction[d.kz];
+        d.tmin = r.tmin;
+        d.tmax = r.tmax;
+        return d;
+    }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
+        T x[3], y[3], z[3];
+        for (int i = 0; i < 3; ++i) {
+            const Vec3<T> p = v[i] - r.o;
+            x[i] = p[r.kx] - r.sx * p[r.kz];
+            y[i] = p[r.ky] - r.sy * p[r.kz];
+            z[i] = r.sz * p[r.kz];
+        }
+        T t, u, w;
+        if (!solve(x, y, z, r, t, u, w)) return false;
+        hit.t = t;
+        hit.u = u;
+        hit.v = w;
+        return true;
+    }
+
+    void store(T* out) const {
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) out[3 * i + k] = v[i][k];
+    }
+    static Watertight load(const SoaView<T, field_count>& s, std::size_t i) {
+        Watertight r;
+        for (int f = 0; f < 9; ++f) r.v[f / 3][f % 3] = s.fields[f][i];
+        return r;
+    }
+
+    static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
+                      const RayData& r, T* ts, T* us, T* vs) {
+        // The ray's axes are the same for every record: pick the field arrays once.
+        const T* fx[3]; const T* fy[3]; const T* fz[3];
+        for (int i = 0; i < 3; ++i) {
+            fx[i] = s.fields[3 * i + r.kx] + first;
+            fy[i] = s.fields[3 * i + r.ky] + first;
+            fz[i] = s.fields[3 * i + r.kz] + first;
+        }
+        const T ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz];
+        for (std::size_t j = 0; j < n; ++j) {
+            T x[3], y[3], z[3];
+            for (int i = 0; i < 3; ++i) {
+                const T pz = fz[i][j] - oz;
+                x[i] = (fx[i][j] - ox) - r.sx * pz;
+                y[i] = (fy[i][j] - oy) - r.sy * pz;
+                z[i] = r.sz * pz;
+            }
+            T t, u, w;
+            const bool ok = solve(x, y, z, r, t, u, w);
+            ts[j] = ok ? t : infinity<T>;
+            us[j] = u;
+            vs[j] = w;
+        }
+    }
+
+private:
+    /// Edge functions, sign test, determinant and distance from sheared vertices.
+    static bool solve(const T* x, const T* y, const T* z, const RayData& r, T& t, T& u, T& w) {
+        const double e0 = detail::edge_function(x[2], y[1], y[2], x[1]);  // U: weight of v0
+        const double e1 = detail::edge_function(x[0], y[2], y[0], x[2]);  // V: weight of v1
+        const double e2 = detail::edge_function(x[1], y[0], y[1], x[0]);  // W: weight of v2
+        const bool has_neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
+        const bool has_pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
+        const double det = e0 + e1 + e2;
+        const double tt = (e0 * double(z[0]) + e1 * double(z[1]) + e2 * double(z[2])) / det;
+        t = T(tt);
+        u = T(e1 / det);
+        w = T(e2 / det);
+        return !(has_neg && has_pos) && det != 0.0 && t > r.tmin && t < r.tmax;
+    }
+};
+
+}  // namespace glint
