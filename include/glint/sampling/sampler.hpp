@@ -1,0 +1,51 @@
+// glint/sampling/sampler.hpp: the Sampler concept (a source of sample dimensions for one
+// pixel sample at a time) and its independent-random baseline, RandomSampler.
+//
+// A renderer asks a sampler for the sample of pixel (x, y) with number i, then draws its
+// dimensions in order: get_pixel_2d() for the position inside the pixel, then get_1d() /
+// get_2d() for everything else (lens, lights, BRDF lobes, roulette). HaltonSampler
+// (halton.hpp) is the low-discrepancy policy; RandomSampler is what it is compared against.
+#pragma once
+
+#include <concepts>
+#include <cstdint>
+
+#include <glint/core/math.hpp>
+#include <glint/core/random.hpp>
+
+namespace glint {
+
+/// What a path tracer needs from a sample generator.
+template <class S, class T>
+concept Sampler = Scalar<T> && requires(S s, int x, int y, std::uint64_t i) {
+    s.start_pixel_sample(x, y, i);
+    { s.get_1d() } -> std::same_as<T>;
+    { s.get_2d() } -> std::same_as<Vec2<T>>;
+    { s.get_pixel_2d() } -> std::same_as<Vec2<T>>;
+};
+
+/// Independent uniform samples from PCG32; the stream of pixel sample (x, y, i) depends only on
+/// (seed, x, y, i), so results do not depend on the order pixels are rendered in.
+template <Scalar T>
+class RandomSampler {
+public:
+    explicit RandomSampler(std::uint64_t seed = 0) : seed_(seed) {}
+
+    void start_pixel_sample(int x, int y, std::uint64_t index) {
+        const std::uint64_t pixel =
+            (std::uint64_t(std::uint32_t(x)) << 32) | std::uint64_t(std::uint32_t(y));
+        rng_.seed_with(index ^ (seed_ * 0x9e3779b97f4a7c15ULL), pixel);
+    }
+    T get_1d() { return rng_.uniform<T>(); }
+    Vec2<T> get_2d() {
+        const T a = rng_.uniform<T>();
+        return Vec2<T>(a, rng_.uniform<T>());
+    }
+    Vec2<T> get_pixel_2d() { return get_2d(); }
+
+private:
+    std::uint64_t seed_;
+    Pcg32 rng_;
+};
+
+}  // namespace glint

@@ -1,0 +1,388 @@
+// Tests for glint/sampling: exact radical-inverse values, Halton/Hammersley structure, warps and
+// their densities, Russian roulette and BRDF selection, multiple correlated sampling.
+// Statistical cases use fixed seeds and tolerances computed from the measured sample variance
+// (|mean - exact| < 4 standard errors), never hand-tuned constants.
+#define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <set>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/random.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/sampling/halton.hpp>
+#include <glint/sampling/primes.hpp>
+#include <glint/sampling/radical_inverse.hpp>
+#include <glint/sampling/sampler.hpp>
+#include <glint/sampling/warps.hpp>
+
+using namespace glint;
+
+namespace {
+
+/// Running mean and variance (Welford) of a scalar estimator.
+struct Stats {
+    double n = 0, mean = 0, m2 = 0;
+    void add(double x) {
+        n += 1;
+        const double d = x - mean;
+        mean += d / n;
+        m2 += d * (x - mean);
+    }
+    double variance() const { return n > 1 ? m2 / (n - 1) : 0; }
+    double stderr_mean() const { return std::sqrt(variance() / n); }
+    /// Standard error of variance(): sqrt((m4 - s^4)/n) needs the fourth moment; we keep it.
+};
+
+/// Mean, variance and the standard error of the variance (from the fourth central moment).
+struct MomentStats {
+    std::vector<double> xs;
+    void add(double x) { xs.push_back(x); }
+    double mean() const {
+        double s = 0;
+        for (double x : xs) s += x;
+        return s / double(xs.size());
+    }
+    double variance() const {
+        const double m = mean();
+        double s = 0;
+        for (double x : xs) s += (x - m) * (x - m);
+        return s / double(xs.size() - 1);
+    }
+    double variance_stderr() const {
+        const double m = mean(), v = variance();
+        double m4 = 0;
+        for (double x : xs) m4 += std::pow(x - m, 4);
+        m4 /= double(xs.size());
+        return std::sqrt(std::max(0.0, m4 - v * v) / double(xs.size()));
+    }
+};
+
+/// Check the mean of n draws of `estimator` is within 4 standard errors of `exact`.
+template <class F>
+void check_unbiased(F&& estimator, double exact, int n) {
+    Stats s;
+    for (int i = 0; i < n; ++i) s.add(estimator());
+    INFO("mean " << s.mean << " exact " << exact << " stderr " << s.stderr_mean());
+    CHECK(std::abs(s.mean - exact) < 4 * s.stderr_mean());
+}
+
+/// Is `r` the largest double not above p/q?  Exact integer comparison r = k / 2^53.
+bool is_floor_of_ratio(double r, std::uint64_t p, std::uint64_t q) {
+    const auto k = static_cast<std::uint64_t>(std::ldexp(r, 53));
+    if (std::ldexp(double(k), -53) != r) return false;
+    using u128 = detail::u128;
+    const u128 lhs = u128(k) * q, rhs = u128(p) << 53;
+    return lhs <= rhs && (u128(k) + 1) * q > rhs;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Radical inverse and Halton
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("exact: radical inverse check values of 003 section 6 (lines 2170-2172, eq. 6.2)") {
+    // Phi_10(1234) = 0.4321, Phi_10(524) = 0.425, Phi_10(2) = 0.2, Phi_10(23) = 0.32, each the
+    // largest double not above the exact decimal.
+    CHECK(is_floor_of_ratio(radical_inverse<double>(10, 1234), 4321, 10000));
+    CHECK(is_floor_of_ratio(radical_inverse<double>(10, 524), 425, 1000));
+    CHECK(is_floor_of_ratio(radical_inverse<double>(10, 2), 2, 10));
+    CHECK(is_floor_of_ratio(radical_inverse<double>(10, 23), 32, 100));
+    CHECK(radical_inverse<float>(10, 1234) <= 0.4321f);
+    CHECK(std::nextafter(radical_inverse<float>(10, 1234), 1.0f) > 0.4321);
+    // Base 2, eq. 6.2: {0, 1/2, 1/4, 3/4, 1/8, 3/8, 5/8, 7/8, 1/16, 3/16, 5/16, ...}. The thesis
+    // lists each level (indices b^k .. b^(k+1)-1) sorted; in index order level 3 is
+    // 1/8, 5/8, 3/8, 7/8. Checked: the exact sequence, and each level as a set.
+    const double base2[] = {0,     0.5,   0.25,   0.75,   0.125,  0.625,  0.375, 0.875,
+                            0.0625, 0.5625, 0.3125, 0.8125, 0.1875, 0.6875, 0.4375, 0.9375};
+    for (std::uint64_t i = 0; i < std::size(base2); ++i) {
+        CHECK(radical_inverse<double>(2, i) == base2[i]);
+        CHECK(radical_inverse<float>(2, i) == float(base2[i]));
+    }
+    for (std::uint64_t level = 1; level < 10; ++level) {
+        std::set<double> got, want;
+        for (std::uint64_t i = std::uint64_t(1) << (level - 1); i < (std::uint64_t(1) << level); ++i) {
+            got.insert(radical_inverse<double>(2, i));
+            want.insert(double(2 * (i - (std::uint64_t(1) << (level - 1))) + 1) /
+                        double(std::uint64_t(1) << level));
+        }
+        CHECK(got == want);
+    }
+    // Base 3: 0, 1/3, 2/3, 1/9, 4/9, 7/9, 2/9 (rounded down).
+    const std::uint64_t num3[] = {0, 1, 2, 1, 4, 7, 2}, den3[] = {1, 3, 3, 9, 9, 9, 9};
+    for (std::uint64_t i = 0; i < 7; ++i)
+        CHECK(is_floor_of_ratio(radical_inverse<double>(3, i), num3[i], den3[i]));
+}
+
+TEST_CASE("exact: radical inverse agrees with a rational reference for the first 1000 primes") {
+    Pcg32 rng(11);
+    for (std::size_t k = 0; k < 1000; ++k) {
+        const std::uint32_t b = primes[k];
+        for (int t = 0; t < 20; ++t) {
+            // Indices below 2^40 so that the reference's b^digits fits in 64 bits... or not:
+            // the reference builds p/q in 128 bits and compares exactly.
+            const std::uint64_t i = rng.next_u64() >> (24 + rng.bounded(40));
+            detail::u128 p = 0, q = 1;
+            for (std::uint64_t j = i; j; j /= b) {
+                p = p * b + j % b;
+                q *= b;
+            }
+            const double r = radical_inverse<double>(b, i);
+            REQUIRE(r < 1.0);
+            const auto kk = static_cast<std::uint64_t>(std::ldexp(r, 53));
+            // floor: k/2^53 <= p/q < (k+1)/2^53  <=>  k q <= p 2^53 < (k+1) q
+            REQUIRE(q < (detail::u128(1) << 74));
+            CHECK(detail::u128(kk) * q <= (p << 53));
+            CHECK((detail::u128(kk) + 1) * q > (p << 53));
+        }
+    }
+}
+
+TEST_CASE("stress: radical inverse of 64-bit indices stays strictly below 1") {
+    const std::uint64_t big[] = {~std::uint64_t(0), ~std::uint64_t(0) - 1, std::uint64_t(1) << 63,
+                                 0x123456789abcdef0ULL};
+    for (std::size_t k : {std::size_t(0), std::size_t(1), std::size_t(5), std::size_t(999),
+                          std::size_t(1023)}) {
+        for (std::uint64_t i : big) {
+            const float f = radical_inverse<float>(primes[k], i);
+            const double d = radical_inverse<double>(primes[k], i);
+            CHECK(f >= 0.0f);
+            CHECK(f < 1.0f);
+            CHECK(d >= 0.0);
+            CHECK(d < 1.0);
+            CHECK(double(f) <= d);
+        }
+    }
+    // The all-ones base-2 index maps to the largest value below 1.
+    CHECK(radical_inverse<double>(2, ~std::uint64_t(0)) == std::nextafter(1.0, 0.0));
+    CHECK(radical_inverse<float>(2, ~std::uint64_t(0)) == std::nextafter(1.0f, 0.0f));
+}
+
+TEST_CASE("exact: prime table and inverse radical inverse") {
+    CHECK(primes[0] == 2);
+    CHECK(primes[9] == 29);
+    CHECK(primes[999] == 7919);
+    for (std::size_t k = 1; k < prime_count; ++k) {
+        REQUIRE(primes[k] > primes[k - 1]);
+        for (std::uint32_t d = 2; d * d <= primes[k]; ++d) REQUIRE(primes[k] % d != 0);
+    }
+    for (std::uint32_t b : {2u, 3u, 5u, 7919u}) {
+        for (std::uint64_t i = 0; i < 200; ++i) {
+            const int digits = 3;
+            std::uint64_t bd = 1;
+            for (int j = 0; j < digits; ++j) bd *= b;
+            const std::uint64_t rev = radical_inverse_bits(b, i % bd);
+            // Phi_b(i mod b^3) * b^3 is an integer: the reversed digits.
+            const auto reversed = static_cast<std::uint64_t>(
+                (detail::u128(rev) * bd + (detail::u128(1) << 63)) >> 64);
+            CHECK(inverse_radical_inverse(reversed, b, digits) == i % bd);
+        }
+    }
+}
+
+TEST_CASE("exact: digit scramblings are bijections on digits and keep stratification") {
+    // Kensler's permutation is a bijection for every length.
+    for (std::uint32_t n : {2u, 3u, 5u, 7u, 31u, 100u, 7919u}) {
+        std::vector<bool> seen(n, false);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const std::uint32_t p = detail::permutation_element(i, n, 0x9e3779b9u * n);
+            REQUIRE(p < n);
+            CHECK_FALSE(seen[p]);
+            seen[p] = true;
+        }
+    }
+    // Each randomization keeps the first b^2 points of dimension k in distinct 1/b^2 strata
+    // (the van der Corput net property), for several bases.
+    for (auto r : {HaltonRandomization::none, HaltonRandomization::cranley_patterson,
+                   HaltonRandomization::digit_permutation, HaltonRandomization::owen}) {
+        Halton<double> h(8, r, 42);
+        for (std::size_t dim : {std::size_t(0), std::size_t(1), std::size_t(4), std::size_t(7)}) {
+            const std::uint64_t b = primes[dim], n = b * b;
+            std::vector<int> count(n, 0);
+            for (std::uint64_t i = 0; i < n; ++i) {
+                const double x = h.sample(i, dim);
+                REQUIRE(x >= 0.0);
+                REQUIRE(x < 1.0);
+                // Cranley-Patterson shifts the strata: count modulo the shift (and centre on the
+                // stratum). Values are rounded down, so an exact k/n may read as k/n - ulp:
+                // nudge by 2^-40, far below a stratum's width.
+                double y = x + 1.0 + 0x1p-40;
+                if (r == HaltonRandomization::cranley_patterson)
+                    y += 0.5 / double(n) - h.sample(0, dim);
+                count[std::size_t(y * double(n)) % n]++;
+            }
+            INFO("randomization " << std::string(short_name(r)) << " dim " << dim);
+            CHECK(std::all_of(count.begin(), count.end(), [](int c) { return c == 1; }));
+        }
+    }
+}
+
+TEST_CASE("statistics: randomized Halton points are uniform (unbiased integration)") {
+    // The mean of x^2 over the first 64 points, over independent seeds, has expectation 1/3
+    // for every randomization.
+    for (auto r : {HaltonRandomization::cranley_patterson, HaltonRandomization::digit_permutation,
+                   HaltonRandomization::owen}) {
+        for (std::size_t dim : {std::size_t(0), std::size_t(3), std::size_t(20)}) {
+            std::uint64_t seed = 1;
+            INFO("randomization " << std::string(short_name(r)) << " dim " << dim);
+            check_unbiased(
+                [&] {
+                    Halton<double> h(21, r, seed++);
+                    double s = 0;
+                    for (std::uint64_t i = 0; i < 7; ++i) s += std::pow(h.sample(i, dim), 2);
+                    return s / 7;
+                },
+                1.0 / 3.0, 2000);
+        }
+    }
+}
+
+TEST_CASE("exact: Hammersley set of N points has first coordinate i/N") {
+    Hammersley<double> h(1000, 3);
+    for (std::uint64_t i = 0; i < 1000; ++i) {
+        CHECK(is_floor_of_ratio(h.sample(i, 0), i, 1000));
+        CHECK(h.sample(i, 1) == radical_inverse<double>(2, i));
+        CHECK(h.sample(i, 2) == radical_inverse<double>(3, i));
+    }
+    CHECK_THROWS_AS(Hammersley<double>(0, 2), Error);
+}
+
+TEST_CASE("exact: HaltonSampler enumerates exactly the global points inside each pixel") {
+    for (auto [w, h] : {std::pair{8, 6}, std::pair{5, 7}, std::pair{130, 3}}) {
+        HaltonSampler<double> sampler(w, h, 6, HaltonRandomization::owen, 3);
+        const std::uint64_t stride = sampler.stride();
+        const std::uint64_t sx = sampler.scale(0), sy = sampler.scale(1);
+        CHECK(sx >= std::uint64_t(std::min(w, 128)));
+        CHECK(sy >= std::uint64_t(std::min(h, 128)));
+        std::set<std::uint64_t> indices;
+        for (int y = 0; y < int(sy); ++y) {
+            for (int x = 0; x < int(sx); ++x) {
+                for (std::uint64_t s = 0; s < 3; ++s) {
+                    const std::uint64_t g = sampler.global_index(x, y, s);
+                    indices.insert(g);
+                    // The global point, scaled to the image, lies in pixel (x, y) ...
+                    // (Phi is rounded down: an exact k/3 reads k/3 - ulp, hence the nudge.)
+                    const double gx = radical_inverse<double>(2, g) * double(sx) + 0x1p-40;
+                    const double gy = radical_inverse<double>(3, g) * double(sy) + 0x1p-40;
+                    REQUIRE(int(gx) == x);
+                    REQUIRE(int(gy) == y);
+                    // ... at the offset the sampler reports.
+                    const Vec2<double> o = sampler.pixel_offset(g);
+                    CHECK(std::abs(gx - x - o.x) < 1e-9);
+                    CHECK(std::abs(gy - y - o.y) < 1e-9);
+                    CHECK(o.x < 1.0);
+                    CHECK(o.y < 1.0);
+                }
+            }
+        }
+        // Three samples per pixel use exactly the first 3 * stride points of the sequence.
+        CHECK(indices.size() == 3 * stride);
+        CHECK(*indices.rbegin() == 3 * stride - 1);
+    }
+    // Sampler interface: dimensions >= 2 are the randomized Halton dimensions.
+    HaltonSampler<float> s(16, 16, 4, HaltonRandomization::cranley_patterson, 9);
+    static_assert(Sampler<HaltonSampler<float>, float>);
+    static_assert(Sampler<RandomSampler<float>, float>);
+    s.start_pixel_sample(3, 5, 2);
+    const std::uint64_t g = s.global_index(3, 5, 2);
+    CHECK(s.get_1d() == s.sample(g, 2));
+    CHECK(s.get_1d() == s.sample(g, 3));
+    CHECK(s.get_1d() == s.sample(g, 2));  // wraps to dimension 2
+    CHECK_THROWS_AS(HaltonSampler<float>(0, 4, 4), Error);
+    CHECK_THROWS_AS(Halton<float>(prime_count + 1), Error);
+    CHECK_THROWS_AS(Halton<float>(0), Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Warps
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("statistics: warps integrate known functions with their densities") {
+    Pcg32 rng(5);
+    const int n = 200000;
+    auto u2 = [&] {
+        const double a = rng.uniform<double>();
+        return Vec2<double>(a, rng.uniform<double>());
+    };
+    SUBCASE("cosine hemisphere: int z^2 dw = 2pi/3, int 1 dw = 2pi") {
+        check_unbiased([&] {
+            const Vec3<double> d = square_to_cosine_hemisphere(u2());
+            return d.z * d.z / cosine_hemisphere_pdf(d.z);
+        }, 2 * pi<double> / 3, n);
+        check_unbiased([&] {
+            const Vec3<double> d = square_to_cosine_hemisphere(u2());
+            return (d.x > 0 ? 1.0 : 0.0) / cosine_hemisphere_pdf(d.z);
+        }, pi<double>, n);
+    }
+    SUBCASE("uniform sphere: int x^2 dw = 4pi/3, int [z>0.5] dw = pi") {
+        check_unbiased([&] {
+            const Vec3<double> d = square_to_uniform_sphere(u2());
+            CHECK(std::abs(glm::length(d) - 1) < 1e-12);
+            return d.x * d.x / uniform_sphere_pdf<double>();
+        }, 4 * pi<double> / 3, n);
+        check_unbiased([&] {
+            const Vec3<double> d = square_to_uniform_sphere(u2());
+            return (d.z > 0.5 ? 1.0 : 0.0) / uniform_sphere_pdf<double>();
+        }, pi<double>, n);
+    }
+    SUBCASE("uniform hemisphere: int z dw = pi, int x^2 dw = 2pi/3") {
+        check_unbiased([&] {
+            const Vec3<double> d = square_to_uniform_hemisphere(u2());
+            CHECK(d.z > 0);
+            return d.z / uniform_hemisphere_pdf<double>();
+        }, pi<double>, n);
+        check_unbiased([&] {
+            const Vec3<double> d = square_to_uniform_hemisphere(u2());
+            return d.x * d.x / uniform_hemisphere_pdf<double>();
+        }, 2 * pi<double> / 3, n);
+    }
+    SUBCASE("triangle: int x^2 dA over (0,0),(2,0),(0,1) = 2/3") {
+        const Vec3<double> a(0, 0, 0), b(2, 0, 0), c(0, 1, 0);
+        const double area = triangle_area(a, b, c);
+        CHECK(area == doctest::Approx(1.0));
+        check_unbiased([&] {
+            const Vec3<double> p = sample_triangle(a, b, c, u2());
+            return p.x * p.x * area;
+        }, 2.0 / 3.0, n);
+    }
+    SUBCASE("polygon: a unit square split into fan triangles is sampled uniformly") {
+        const Vec3<double> v[] = {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0.5, 1.5, 1}, {0, 1, 1}};
+        PolygonSampler<double> poly(v);
+        CHECK(poly.area() == doctest::Approx(1.25));
+        CHECK(poly.normal().z == doctest::Approx(1.0));
+        // int x dA: square 1/2 + top triangle (area 1/4, centroid x 1/2) 1/8 = 5/8.
+        check_unbiased([&] {
+            const Vec3<double> p = poly.sample(u2());
+            return p.x * poly.area();
+        }, 5.0 / 8.0, n);
+        // int [y > 1] dA = 1/4.
+        check_unbiased([&] { return (poly.sample(u2()).y > 1 ? 1.0 : 0.0) * poly.area(); }, 0.25, n);
+        const std::vector<Vec3<double>> collinear = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+        CHECK_THROWS_AS(PolygonSampler<double>{collinear}, Error);
+        CHECK_THROWS_AS(PolygonSampler<double>{std::span<const Vec3<double>>(v, 2)}, Error);
+    }
+}
+
+TEST_CASE("stress: warps at the corners of the unit square give finite unit vectors") {
+    for (double x : {0.0, 1.0, std::nextafter(1.0, 0.0), 0.5}) {
+        for (double y : {0.0, 1.0, std::nextafter(1.0, 0.0), 0.5}) {
+            const Vec2<double> u(x, y);
+            for (const Vec3<double>& d :
+                 {square_to_cosine_hemisphere(u), square_to_uniform_sphere(u),
+                  square_to_uniform_hemisphere(u)}) {
+                CHECK(all_finite(d));
+                CHECK(std::abs(glm::length(d) - 1) < 1e-12);
+            }
+        }
+    }
+}
