@@ -10,7 +10,15 @@
 //   - the hit is inside when all three barycentrics are >= 0: one three-way sign test.
 // Repairs to the extracted text: eq. 4.5 is printed as (q.q - q.o)/(q.d), which is the same
 // after dividing numerator and denominator by q.q; we use the q' (= q / q.q) form so that
-// only M is stored.
+// only the IVM is stored.
+//
+// Which 9 scalars. We store the rows m0, m1 of M and q' = m0 + m1 + m2 instead of m2: the
+// same 9 numbers up to an exact linear recombination, so still exactly the IVM. Why:
+// summing the three rows in precision T cancels badly for slivers (each row is ~1/(L h)
+// for a triangle of size L and height h, their sum ~1/L), which tilted the plane by
+// eps * L / h and gave false hits hundreds of ulps from any edge in our sliver stress test.
+// Rounding q' once from double keeps the plane accurate; the third barycentric is then
+// b2 = q' . x - b0 - b1 = 1 - b0 - b1 on the plane, and the sign test is unchanged.
 //
 // The frame. V is singular when the triangle's plane passes through the origin, and
 // ill-conditioned when it passes near it. 000 asks for a modelling space that avoids this;
@@ -26,6 +34,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <type_traits>
 
 #include <glint/core/math.hpp>
 #include <glint/intersection/triangle.hpp>
@@ -40,37 +49,47 @@ struct Ivm {
     static constexpr bool uses_frame = true;
     static constexpr int field_count = 9;
 
-    // Rows of M = [v0 v1 v2]^-1: b_i = m[i] . x.
+    // m[0], m[1]: rows 0 and 1 of M = [v0 v1 v2]^-1 (b_i = m[i] . x); m[2]: q' = [1,1,1] M.
     Vec3<T> m[3]{};
 
-    /// Inverts the vertex matrix in double precision, then rounds to T. Triangles whose
-    /// area is below double rounding noise (|e1 x e2| <= 2^-60 * longest edge^2) are
-    /// degenerate and never hit.
+    /// Inverts the vertex matrix in extended precision (double for float records, long
+    /// double for double records), then rounds to T. Triangles whose area is below double
+    /// rounding noise (|e1 x e2| <= 2^-60 * longest edge^2) are degenerate and never hit.
     static Ivm build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         Ivm r;
         const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
         if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) return r;
+        using B = std::conditional_t<sizeof(T) < sizeof(double), double, long double>;
+        const B v[3][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}, {c.x, c.y, c.z}};
         // Rows of the inverse of the column matrix [a b c] are the cross products of pairs
-        // of columns divided by the determinant.
-        const double det = glm::dot(a, glm::cross(b, c));
-        if (!(std::abs(det) > 0.0) || !std::isfinite(det)) return r;
-        const Vec3d rows[3] = {glm::cross(b, c) / det, glm::cross(c, a) / det, glm::cross(a, b) / det};
+        // of columns divided by the determinant: row i = v[i+1] x v[i+2] / det.
+        B rows[3][3];
         for (int i = 0; i < 3; ++i) {
-            const Vec3<T> row(rows[i]);
-            if (!all_finite(row)) return Ivm{};
-            r.m[i] = row;
+            const B* p = v[(i + 1) % 3];
+            const B* q = v[(i + 2) % 3];
+            rows[i][0] = p[1] * q[2] - p[2] * q[1];
+            rows[i][1] = p[2] * q[0] - p[0] * q[2];
+            rows[i][2] = p[0] * q[1] - p[1] * q[0];
         }
+        const B det = v[0][0] * rows[0][0] + v[0][1] * rows[0][1] + v[0][2] * rows[0][2];
+        if (!(det != B(0)) || !std::isfinite(double(det))) return r;
+        for (int k = 0; k < 3; ++k) {
+            r.m[0][k] = T(rows[0][k] / det);
+            r.m[1][k] = T(rows[1][k] / det);
+            r.m[2][k] = T((rows[0][k] + rows[1][k] + rows[2][k]) / det);
+        }
+        for (const auto& row : r.m)
+            if (!all_finite(row)) return Ivm{};
         return r;
     }
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
 
     bool intersect(const RayData& r, TriangleHit<T>& hit) const {
-        const Vec3<T> q = m[0] + m[1] + m[2];  // q' = [1,1,1] M
-        const T t = (T(1) - glm::dot(q, r.o)) / glm::dot(q, r.d);
+        const T t = (T(1) - glm::dot(m[2], r.o)) / glm::dot(m[2], r.d);
         if (!(t > r.tmin && t < r.tmax)) return false;
         const Vec3<T> x = r.o + r.d * t;
-        const T b0 = glm::dot(m[0], x), b1 = glm::dot(m[1], x), b2 = glm::dot(m[2], x);
+        const T b0 = glm::dot(m[0], x), b1 = glm::dot(m[1], x), b2 = T(1) - b0 - b1;
         if (!(b0 >= T(0) && b1 >= T(0) && b2 >= T(0))) return false;
         hit.t = t;
         hit.u = b1;
@@ -93,15 +112,13 @@ struct Ivm {
         const T* f[9];
         for (int k = 0; k < 9; ++k) f[k] = v.fields[k] + first;
         for (std::size_t i = 0; i < n; ++i) {
-            const T qx = f[0][i] + f[3][i] + f[6][i];
-            const T qy = f[1][i] + f[4][i] + f[7][i];
-            const T qz = f[2][i] + f[5][i] + f[8][i];
+            const T qx = f[6][i], qy = f[7][i], qz = f[8][i];
             const T t = (T(1) - (qx * r.o.x + qy * r.o.y + qz * r.o.z)) /
                         (qx * r.d.x + qy * r.d.y + qz * r.d.z);
             const T x = r.o.x + r.d.x * t, y = r.o.y + r.d.y * t, z = r.o.z + r.d.z * t;
             const T b0 = f[0][i] * x + f[1][i] * y + f[2][i] * z;
             const T b1 = f[3][i] * x + f[4][i] * y + f[5][i] * z;
-            const T b2 = f[6][i] * x + f[7][i] * y + f[8][i] * z;
+            const T b2 = T(1) - b0 - b1;
             const bool ok = t > r.tmin && t < r.tmax && b0 >= T(0) && b1 >= T(0) && b2 >= T(0);
             ts[i] = ok ? t : infinity<T>;
             us[i] = b1;

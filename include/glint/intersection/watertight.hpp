@@ -20,7 +20,9 @@
 // both triangles).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstddef>
 #include <utility>
 
@@ -58,10 +60,18 @@ struct Watertight {
 
     Vec3<T> v[3]{};
 
-    /// Stores the vertices as given. Degenerate triangles need no special case: all edge
-    /// functions' sum (det) is 0 for them, which is a miss.
+    /// Stores the vertices as given. A degenerate triangle (|e1 x e2| <= 2^-60 * longest
+    /// edge^2, as for the other policies) is stored as NaN vertices, which every comparison
+    /// rejects: after shearing, an exactly collinear triangle may look non-degenerate by a
+    /// rounding error, and would then report hits.
     static Watertight build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         Watertight r;
+        const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) {
+            const T nan = std::numeric_limits<T>::quiet_NaN();
+            for (auto& p : r.v) p = Vec3<T>(nan);
+            return r;
+        }
         r.v[0] = Vec3<T>(a);
         r.v[1] = Vec3<T>(b);
         r.v[2] = Vec3<T>(c);
