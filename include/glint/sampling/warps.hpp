@@ -66,13 +66,33 @@ T cosine_hemisphere_pdf(T cos_theta) {
     return cos_theta > T(0) ? cos_theta / pi<T> : T(0);
 }
 
+namespace detail {
+/// Unit vector with height z and azimuth 2 pi v (Archimedes: uniform z gives uniform area).
+template <Scalar T>
+Vec3<T> direction_from_height(T z, T v) {
+    const T r = std::sqrt(std::max(T(0), T(1) - z * z));
+    const T phi = T(2) * pi<T> * v;
+    return Vec3<T>(r * std::cos(phi), r * std::sin(phi), z);
+}
+}  // namespace detail
+
+/// Direction about +z with density (e+1)/(2 pi) cos^e(theta) (a normalized Phong lobe); e >= 0.
+template <Scalar T>
+Vec3<T> square_to_cosine_power_hemisphere(const Vec2<T>& u, T exponent) {
+    // CDF of cos(theta): 1 - cos^(e+1); cos = (1 - u)^(1/(e+1)) keeps z > 0 for u < 1.
+    return detail::direction_from_height(std::pow(T(1) - u.x, T(1) / (exponent + T(1))), u.y);
+}
+template <Scalar T>
+T cosine_power_hemisphere_pdf(T cos_theta, T exponent) {
+    return cos_theta > T(0)
+               ? (exponent + T(1)) / (T(2) * pi<T>) * std::pow(cos_theta, exponent)
+               : T(0);
+}
+
 /// Uniform direction on the unit sphere; density 1/(4 pi).
 template <Scalar T>
 Vec3<T> square_to_uniform_sphere(const Vec2<T>& u) {
-    const T z = T(1) - T(2) * u.x;
-    const T r = std::sqrt(std::max(T(0), T(1) - z * z));
-    const T phi = T(2) * pi<T> * u.y;
-    return Vec3<T>(r * std::cos(phi), r * std::sin(phi), z);
+    return detail::direction_from_height(T(1) - T(2) * u.x, u.y);
 }
 template <Scalar T>
 constexpr T uniform_sphere_pdf() {
@@ -82,10 +102,7 @@ constexpr T uniform_sphere_pdf() {
 /// Uniform direction on the hemisphere about +z; density 1/(2 pi).
 template <Scalar T>
 Vec3<T> square_to_uniform_hemisphere(const Vec2<T>& u) {
-    const T z = T(1) - u.x;  // in (0, 1]
-    const T r = std::sqrt(std::max(T(0), T(1) - z * z));
-    const T phi = T(2) * pi<T> * u.y;
-    return Vec3<T>(r * std::cos(phi), r * std::sin(phi), z);
+    return detail::direction_from_height(T(1) - u.x, u.y);  // z in (0, 1]
 }
 template <Scalar T>
 constexpr T uniform_hemisphere_pdf() {
