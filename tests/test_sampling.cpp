@@ -19,6 +19,7 @@
 #include <glint/core/math.hpp>
 #include <glint/core/random.hpp>
 #include <glint/core/spectrum.hpp>
+#include <glint/sampling/correlated.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/primes.hpp>
 #include <glint/sampling/radical_inverse.hpp>
@@ -74,7 +75,7 @@ void check_unbiased(F&& estimator, double exact, int n) {
     Stats s;
     for (int i = 0; i < n; ++i) s.add(estimator());
     INFO("mean " << s.mean << " exact " << exact << " stderr " << s.stderr_mean());
-    CHECK(std::abs(s.mean - exact) < 4 * s.stderr_mean());
+    CHECK(std::abs(s.mean - exact) <= 4 * s.stderr_mean());  // <=: a zero integrand is exact
 }
 
 /// Is `r` the largest double not above p/q?  Exact integer comparison r = k / 2^53.
@@ -560,4 +561,287 @@ TEST_CASE("statistics: furnace walks are unbiased, spectral and radiance estimat
                              << " (se of difference " << diff_se << ")");
     CHECK(estimate.variance() + 4 * diff_se < spectral.variance());
     CHECK(steps_estimate == doctest::Approx(steps_spectral).epsilon(0.02));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Multiple correlated sampling (000 section 3)
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+/// Textbook form factor from a differential area to a parallel rectangle a x b at distance h,
+/// the area's normal through one corner of the rectangle (Howell's catalogue, case B-3).
+double corner_form_factor(double a, double b, double h) {
+    const double A = a / h, B = b / h;
+    const double sa = std::sqrt(1 + A * A), sb = std::sqrt(1 + B * B);
+    return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2 * pi<double>);
+}
+
+/// Monte Carlo estimate of the integral of G (clamped cosines) over a polygon.
+Stats geometry_integral_mc(const Vec3<double>& x, const Vec3<double>& n,
+                           std::span<const Vec3<double>> v, int samples, std::uint64_t seed) {
+    PolygonSampler<double> poly(v);
+    Pcg32 rng(seed);
+    Stats s;
+    for (int k = 0; k < samples; ++k) {
+        const Vec3<double> y = poly.sample(Vec2<double>(rng.uniform<double>(), rng.uniform<double>()));
+        const Vec3<double> d = y - x;
+        const double r2 = glm::dot(d, d);
+        const double cx = std::max(0.0, glm::dot(d, n)), cy = std::abs(glm::dot(d, poly.normal()));
+        s.add(cx * cy / (r2 * r2) * poly.area());
+    }
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("exact: eq. 3.4 form factor of a unit square from points on its axis") {
+    for (double h : {0.05, 0.3, 1.0, 2.5, 10.0}) {
+        // Square [-1/2, 1/2]^2 at height h, facing down; receiver at the origin facing up.
+        const Vec3<double> sq[] = {{-0.5, -0.5, h}, {-0.5, 0.5, h}, {0.5, 0.5, h}, {0.5, -0.5, h}};
+        const double exact = 4 * corner_form_factor(0.5, 0.5, h);
+        const Vec3<double> x(0, 0, 0), n(0, 0, 1);
+        INFO("h = " << h);
+        CHECK(point_to_polygon_form_factor<double>(x, n, sq) == doctest::Approx(exact).epsilon(1e-12));
+        // Winding does not matter.
+        const Vec3<double> rev[] = {sq[3], sq[2], sq[1], sq[0]};
+        CHECK(point_to_polygon_form_factor<double>(x, n, rev) == doctest::Approx(exact).epsilon(1e-12));
+        // Corner case of the catalogue directly: receiver under a corner of a 1 x 1 square.
+        const Vec3<double> c[] = {{0, 0, h}, {1, 0, h}, {1, 1, h}, {0, 1, h}};
+        CHECK(point_to_polygon_form_factor<double>(x, n, c) ==
+              doctest::Approx(corner_form_factor(1, 1, h)).epsilon(1e-12));
+        CHECK(point_to_polygon_form_factor<float>(Vec3<float>(0), Vec3<float>(0, 0, 1),
+                                                  std::vector<Vec3<float>>{{-0.5f, -0.5f, float(h)}, {-0.5f, 0.5f, float(h)},
+                                                   {0.5f, 0.5f, float(h)}, {0.5f, -0.5f, float(h)}}) ==
+              doctest::Approx(exact).epsilon(1e-5));
+    }
+    // A huge square close by covers the hemisphere: form factor -> 1.
+    const Vec3<double> big[] = {{-1e4, -1e4, 1}, {1e4, -1e4, 1}, {1e4, 1e4, 1}, {-1e4, 1e4, 1}};
+    CHECK(point_to_polygon_form_factor<double>(Vec3<double>(0), Vec3<double>(0, 0, 1), big) ==
+          doctest::Approx(1.0).epsilon(1e-4));
+}
+
+TEST_CASE("agreement: eq. 3.4 against Monte Carlo on tilted and horizon-straddling polygons") {
+    Pcg32 rng(77);
+    for (int t = 0; t < 12; ++t) {
+        const Vec3<double> x(0, 0, 0);
+        const Vec3<double> n = safe_normalize(Vec3<double>(rng.uniform<double>() - 0.5, rng.uniform<double>() - 0.5, 1.0));
+        // Random triangle around (0, 0, 1); some straddle the tangent plane of x.
+        std::vector<Vec3<double>> tri;
+        for (int k = 0; k < 3; ++k)
+            tri.emplace_back(4 * rng.uniform<double>() - 2, 4 * rng.uniform<double>() - 2,
+                             1.5 * rng.uniform<double>() - 0.3);
+        const double formula = polygon_geometry_integral<double>(x, n, tri);
+        const Stats mc = geometry_integral_mc(x, n, tri, 200000, 1000 + t);
+        INFO("triangle " << t << ": formula " << formula << " mc " << mc.mean << " se " << mc.stderr_mean());
+        CHECK(std::abs(formula - mc.mean) < 4 * mc.stderr_mean() + 1e-12);
+    }
+}
+
+namespace {
+
+struct DirectScene {
+    // Large light (side 2) close above the receiver, whose point x lies under one edge, so G
+    // varies strongly over the light.
+    std::vector<Vec3<double>> verts = {{-1, -1, 0.5}, {-1, 1, 0.5}, {1, 1, 0.5}, {1, -1, 0.5}};
+    PolygonLight<double, 3> light{verts, Rgbd(4.0, 2.0, 1.0)};
+    Vec3<double> x{-1, 0, 0}, n{0, 0, 1};
+    Rgbd albedo{0.7, 0.5, 0.3};
+    Rgbd fr() const { return albedo / pi<double>; }
+};
+
+}  // namespace
+
+TEST_CASE("exact: correlated direct lighting has zero variance for a fully visible diffuse light") {
+    DirectScene s;
+    const Rgbd J = s.light.radiance() * s.fr() * s.light.geometry_integral(s.x, s.n);
+    Pcg32 rng(8);
+    std::array<Vec2<double>, 16> u;
+    Stats is_stats;
+    for (int trial = 0; trial < 2000; ++trial) {
+        for (auto& v : u) v = Vec2<double>(rng.uniform<double>(), rng.uniform<double>());
+        const auto r = correlated_direct(s.light, s.x, s.n, [&](const Vec3<double>&) { return s.fr(); },
+                                         s.fr(), [](const Vec3<double>&, const Vec3<double>&) { return true; },
+                                         std::span<const Vec2<double>>(u));
+        for (int l = 0; l < 3; ++l) {
+            REQUIRE(r.lambda[l] == 1.0);
+            REQUIRE(std::abs(r.combined[l] - J[l]) <= 1e-13 * J[l]);
+            REQUIRE(std::abs(r.correlated[l] - J[l]) <= 1e-13 * J[l]);
+        }
+        is_stats.add(r.importance[0]);
+    }
+    // ... while importance sampling alone is noisy but unbiased around the same value.
+    CHECK(is_stats.variance() > 1e-4 * J[0] * J[0]);
+    CHECK(std::abs(is_stats.mean - J[0]) < 4 * is_stats.stderr_mean());
+    // The literal eq. 3.3 (denominator centred on J) gives lambda slightly below 1.
+    for (auto& v : u) v = Vec2<double>(rng.uniform<double>(), rng.uniform<double>());
+    const auto lit = correlated_direct(s.light, s.x, s.n, [&](const Vec3<double>&) { return s.fr(); },
+                                       s.fr(), [](const Vec3<double>&, const Vec3<double>&) { return true; },
+                                       std::span<const Vec2<double>>(u), LambdaEstimate::eq33);
+    CHECK(lit.lambda[0] < 1.0);
+    CHECK(lit.lambda[0] > 0.5);
+}
+
+TEST_CASE("exact: correlated direct lighting of a fully occluded light is the importance answer, 0") {
+    DirectScene s;
+    Pcg32 rng(9);
+    std::array<Vec2<double>, 16> u;
+    for (int trial = 0; trial < 200; ++trial) {
+        for (auto& v : u) v = Vec2<double>(rng.uniform<double>(), rng.uniform<double>());
+        for (auto form : {LambdaEstimate::regression, LambdaEstimate::eq33}) {
+            const auto r = correlated_direct(s.light, s.x, s.n, [&](const Vec3<double>&) { return s.fr(); },
+                                             s.fr(), [](const Vec3<double>&, const Vec3<double>&) { return false; },
+                                             std::span<const Vec2<double>>(u), form);
+            for (int l = 0; l < 3; ++l) {
+                REQUIRE(r.lambda[l] == 0.0);
+                REQUIRE(r.combined[l] == 0.0);
+                REQUIRE(r.importance[l] == 0.0);
+                REQUIRE(r.correlated[l] != 0.0);  // correlated sampling alone is wrong here
+            }
+        }
+    }
+}
+
+TEST_CASE("statistics: half-occluded light: the combination beats importance and correlated sampling") {
+    // Receiver under the centre of a large, close light (G strongly peaked); the half y.x > 0 is
+    // hidden. By symmetry importance sampling (lambda 0) and correlated sampling (lambda 1) have
+    // the same variance and the optimum is lambda = 1/2. Exact: eq. 3.4 on the visible half.
+    DirectScene s;
+    s.x = Vec3<double>(0, 0, 0.25);
+    const std::vector<Vec3<double>> visible_half = {{-1, -1, 0.5}, {-1, 1, 0.5}, {0, 1, 0.5}, {0, -1, 0.5}};
+    const double exact = (s.light.radiance() * s.fr())[0] * polygon_geometry_integral<double>(s.x, s.n, visible_half);
+    const int trials = 20000;
+    Pcg32 rng(10);
+    std::array<Vec2<double>, 32> u;
+    Stats err_combined, err_importance, err_correlated, diff_is, diff_cs, importance;
+    for (int trial = 0; trial < trials; ++trial) {
+        for (auto& v : u) v = Vec2<double>(rng.uniform<double>(), rng.uniform<double>());
+        const auto r = correlated_direct(s.light, s.x, s.n, [&](const Vec3<double>&) { return s.fr(); },
+                                         s.fr(), [](const Vec3<double>&, const Vec3<double>& y) { return y.x < 0; },
+                                         std::span<const Vec2<double>>(u));
+        const double ec = std::pow(r.combined[0] - exact, 2), ei = std::pow(r.importance[0] - exact, 2),
+                     es = std::pow(r.correlated[0] - exact, 2);
+        err_combined.add(ec);
+        err_importance.add(ei);
+        err_correlated.add(es);
+        diff_is.add(ec - ei);
+        diff_cs.add(ec - es);
+        importance.add(r.importance[0]);
+    }
+    INFO("MSE combined " << err_combined.mean << " importance " << err_importance.mean
+                         << " correlated " << err_correlated.mean);
+    // Paired comparison of squared errors (bias of the estimated lambda included): the
+    // combination's is smaller by more than 4 standard errors of the difference.
+    CHECK(diff_is.mean + 4 * diff_is.stderr_mean() < 0);
+    CHECK(diff_cs.mean + 4 * diff_cs.stderr_mean() < 0);
+    // The reference value is right: importance sampling is unbiased around it.
+    CHECK(std::abs(importance.mean - exact) < 4 * importance.stderr_mean());
+}
+
+TEST_CASE("exact: filter_lambda pools neighbouring pixels' co-moments") {
+    // Pixel k has samples (f, g) = (c_k g, g) for g in {1, 2, 3}: lambda_k = c_k alone.
+    const int w = 3, h = 2;
+    std::vector<CorrelatedStats<double>> stats(w * h);
+    std::vector<double> J(w * h, 2.0), lambda(w * h), pooled(w * h);
+    for (int k = 0; k < w * h; ++k)
+        for (double g : {1.0, 2.0, 3.0}) stats[std::size_t(k)].add(0.5 * (k + 1) * g, g);
+    filter_lambda<double>(stats, J, w, h, 0, lambda);
+    for (int k = 0; k < w * h; ++k) CHECK(lambda[std::size_t(k)] == doctest::Approx(0.5 * (k + 1)));
+    // Radius 1 on a 3x2 image: every g-variance is equal, so pooled lambda is the window mean.
+    filter_lambda<double>(stats, J, w, h, 1, pooled);
+    CHECK(pooled[0] == doctest::Approx((0.5 + 1.0 + 2.0 + 2.5) / 4));  // pixels 0,1,3,4
+    CHECK(pooled[1] == doctest::Approx((0.5 + 1.0 + 1.5 + 2.0 + 2.5 + 3.0) / 6));
+    CHECK_THROWS_AS(filter_lambda<double>(stats, J, w, h + 1, 1, pooled), Error);
+}
+
+TEST_CASE("exact: equal-solid-angle sphere cells and the closed-form diffuse a_d") {
+    for (bool hemi : {true, false}) {
+        SphereCells<double> cells(6, 4, hemi);
+        double omega = 0, cosine = 0;
+        for (std::size_t d = 0; d < cells.count(); ++d) {
+            omega += cells.solid_angle();
+            cosine += cells.cosine_integral(d);
+            CHECK(cells.cosine_integral(d) >= 0.0);
+        }
+        CHECK(omega == doctest::Approx(hemi ? 2 * pi<double> : 4 * pi<double>));
+        CHECK(cosine == doctest::Approx(pi<double>));  // integral of max(cos, 0) over the sphere
+        // Monte Carlo of cos over one cell agrees with the closed form.
+        Pcg32 rng(hemi ? 1 : 2);
+        for (std::size_t d : {std::size_t(0), std::size_t(7), std::size_t(13)}) {
+            check_unbiased([&] {
+                const Vec3<double> wv = cells.sample(d, Vec2<double>(rng.uniform<double>(), rng.uniform<double>()));
+                return std::max(wv.z, 0.0) * cells.solid_angle();
+            }, cells.cosine_integral(d), 100000);
+        }
+    }
+    CHECK_THROWS_AS(SphereCells<double>(0, 3), Error);
+}
+
+namespace {
+
+struct EnvScene {
+    SphereCells<double> cells{6, 4};
+    std::vector<Rgbd> averages, albedo;
+    Rgbd rho{0.8, 0.6, 0.4};
+    template <class Env>
+    explicit EnvScene(Env&& env) : averages(cells.count()), albedo(cells.count()) {
+        environment_cell_averages<double, 3>(cells, env, averages);
+        for (std::size_t d = 0; d < cells.count(); ++d) albedo[d] = rho / pi<double> * cells.cosine_integral(d);
+    }
+    Rgbd fr() const { return rho / pi<double>; }
+};
+
+}  // namespace
+
+TEST_CASE("exact: correlated environment lighting is exact for a cell-wise constant, visible sky") {
+    // Radiance constant in each cell: main part eq. 3.6 equals the integrand.
+    SphereCells<double> grid{6, 4};
+    auto env = [&](const Vec3<double>& w) {
+        const int j = std::min(3, int((1 - w.z) * 4));
+        const double phi = std::atan2(w.y, w.x) + (w.y < 0 ? 2 * pi<double> : 0.0);
+        const int i = std::min(5, int(phi / (2 * pi<double>) * 6));
+        return Rgbd(1.0 + j + 0.5 * i, 2.0, 0.5 + 0.1 * i);
+    };
+    EnvScene s(env);
+    Rgbd exact(0.0);
+    for (std::size_t d = 0; d < s.cells.count(); ++d) exact += s.averages[d] * s.albedo[d];
+    Pcg32 rng(21);
+    std::vector<Vec2<double>> u(s.cells.count() * 8);
+    for (int trial = 0; trial < 200; ++trial) {
+        // Keep samples inside the cells' interiors so the cell lookup of env() is unambiguous.
+        for (auto& v : u) v = Vec2<double>(0.01 + 0.98 * rng.uniform<double>(), 0.01 + 0.98 * rng.uniform<double>());
+        const auto r = correlated_environment<double, 3>(
+            s.cells, s.averages, s.albedo, env, [&](const Vec3<double>&) { return s.fr(); },
+            [](const Vec3<double>&) { return true; }, u, 8, EnvironmentMainPart::brdf);
+        for (int l = 0; l < 3; ++l) REQUIRE(std::abs(r.combined[l] - exact[l]) <= 1e-12 * exact[l]);
+    }
+}
+
+TEST_CASE("statistics: correlated environment lighting with both main parts, half occluded") {
+    // Smooth sky L = 1 + z, diffuse receiver, half the hemisphere (x < 0) occluded:
+    // exact = rho/pi (int_{x>0} z + z^2 dw) = rho/pi (pi/2 + pi/3) = 5 rho / 6.
+    auto env = [](const Vec3<double>& w) { return Rgbd(1.0 + w.z); };
+    EnvScene s(env);
+    const double exact = 5.0 * s.rho[0] / 6.0;
+    for (auto part : {EnvironmentMainPart::radiance, EnvironmentMainPart::brdf}) {
+        Pcg32 rng(part == EnvironmentMainPart::radiance ? 31 : 32);
+        std::vector<Vec2<double>> u(s.cells.count() * 16);
+        Stats comb, imp, corr;
+        for (int trial = 0; trial < 4000; ++trial) {
+            for (auto& v : u) v = Vec2<double>(rng.uniform<double>(), rng.uniform<double>());
+            const auto r = correlated_environment<double, 3>(
+                s.cells, s.averages, s.albedo, env, [&](const Vec3<double>&) { return s.fr(); },
+                [](const Vec3<double>& w) { return w.x > 0; }, u, 16, part);
+            comb.add(r.combined[0]);
+            imp.add(r.importance[0]);
+            corr.add(r.correlated[0]);
+        }
+        INFO("main part " << (part == EnvironmentMainPart::radiance ? "3.5" : "3.6") << ": combined "
+                          << comb.mean << " +- " << comb.stderr_mean() << ", importance " << imp.mean
+                          << " +- " << imp.stderr_mean() << ", exact " << exact);
+        CHECK(std::abs(imp.mean - exact) < 4 * imp.stderr_mean());
+        CHECK(std::abs(corr.mean - exact) < 4 * corr.stderr_mean());
+        CHECK(std::abs(comb.mean - exact) < 4 * comb.stderr_mean());
+        CHECK(comb.variance() < imp.variance());
+    }
 }
