@@ -83,9 +83,62 @@ std::vector<Case<T>> origin_plane_cases(std::uint64_t seed, std::size_t n) {
     return cases;
 }
 
+/// Zero-area triangles: a point, a repeated vertex, three exactly collinear points (small
+/// integer coordinates, so collinearity is exact). Every ray must miss.
+template <class T>
+std::vector<Case<T>> zero_area_cases(std::uint64_t seed, std::size_t n) {
+    Pcg32 rng(seed);
+    auto lattice = [&] {
+        return Vec3<T>(T(rng.bounded(16)) - 8, T(rng.bounded(16)) - 8, T(rng.bounded(16)) - 8);
+    };
+    std::vector<Case<T>> cases(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3<T> a = lattice(), e = lattice();
+        auto& tri = cases[i].tri;
+        switch (i % 3) {
+            case 0: tri = {a, a, a}; break;
+            case 1: tri = {a, a + e, a}; break;
+            default: tri = {a, a + e, a + e * T(2)}; break;
+        }
+        cases[i].ray = ray_towards(rng, tri, random_in_box<T>(rng, 3));
+    }
+    return cases;
+}
+
+/// Rays parallel to the triangle's plane z = 1: half exactly in the plane, half beside it.
+/// Every ray must miss.
+template <class T>
+std::vector<Case<T>> parallel_cases(std::uint64_t seed, std::size_t n) {
+    Pcg32 rng(seed);
+    std::vector<Case<T>> cases(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const T z = (i % 2) ? T(1) : T(1) + (rng.uniform<T>() - T(0.5));
+        cases[i].tri = {Vec3<T>(0, 0, 1), Vec3<T>(2, 0, 1), Vec3<T>(0, 2, 1)};
+        cases[i].ray = Ray<T>{{rng.uniform<T>() * 6 - 3, rng.uniform<T>() * 6 - 3, z},
+                              {rng.uniform<T>() - T(0.5), rng.uniform<T>() - T(0.5), 0}};
+    }
+    return cases;
+}
+
+/// Rays with NaN or infinite origin, direction or interval, and a zero direction, against
+/// an ordinary triangle. Every ray must miss.
+template <class T>
+std::vector<Case<T>> nonfinite_cases() {
+    const T nan = std::numeric_limits<T>::quiet_NaN(), inf = infinity<T>;
+    const TriangleVertices<T> tri{Vec3<T>(-1, -1, 1), Vec3<T>(1, -1, 1), Vec3<T>(0, 1, 1)};
+    const Ray<T> rays[] = {
+        {{nan, 0, 0}, {0, 0, 1}}, {{0, 0, 0}, {0, nan, 1}}, {{0, 0, 0}, {0, 0, nan}},
+        {{inf, 0, 0}, {0, 0, 1}}, {{0, 0, -inf}, {0, 0, 1}}, {{0, 0, 0}, {0, 0, inf}},
+        {{0, 0, 0}, {inf, inf, inf}}, {{0, 0, 0}, {0, 0, 0}}, {{0, 0, 0}, {0, 0, 1}, nan, inf},
+        {{0, 0, 0}, {0, 0, 1}, 0, nan}};
+    std::vector<Case<T>> cases;
+    for (const auto& r : rays) cases.push_back({r, tri});
+    return cases;
+}
+
 /// How a policy's decisions compare with the reference on a set of cases.
 struct Agreement {
-    std::size_t pairs = 0, undefined = 0, reference_hits = 0;
+    std::size_t pairs = 0, undefined = 0, reference_hits = 0;  // undefined: must miss
     std::size_t false_miss = 0, false_hit = 0;            // any disagreement
     std::size_t false_miss_far = 0, false_hit_far = 0;    // disagreements outside the band
     double max_disagreement_ulps = 0;                     // widest edge distance of a disagreement
@@ -93,7 +146,9 @@ struct Agreement {
     bool nan_out = false;                                 // NaN in a reported hit
 };
 
-/// Tests every case with Triangle<P> (the world-space API: IVM gets its own frame).
+/// Tests every case with Triangle<P> (the world-space API: IVM gets its own frame). Where
+/// the reference is undefined (zero area, ray in or parallel to the plane, non-finite
+/// input) the only right answer is a miss, and any hit counts as a far false hit.
 template <class P>
 Agreement measure_agreement(const std::vector<Case<typename P::scalar_type>>& cases, double band) {
     using T = typename P::scalar_type;
@@ -101,13 +156,14 @@ Agreement measure_agreement(const std::vector<Case<typename P::scalar_type>>& ca
     for (const auto& c : cases) {
         const ReferenceHit ref = reference_intersect(c.ray, c.tri[0], c.tri[1], c.tri[2]);
         ++a.pairs;
-        if (!ref.defined) {
-            ++a.undefined;
-            continue;
-        }
         TriangleHit<T> h;
         const bool hit = Triangle<P>(c.tri[0], c.tri[1], c.tri[2]).intersect(c.ray, h);
         if (hit && !(std::isfinite(h.t) && std::isfinite(h.u) && std::isfinite(h.v))) a.nan_out = true;
+        if (!ref.defined) {
+            ++a.undefined;
+            if (hit) ++a.false_hit, ++a.false_hit_far;
+            continue;
+        }
         a.reference_hits += ref.hit;
         if (hit != ref.hit) {
             (ref.hit ? a.false_miss : a.false_hit)++;
@@ -230,6 +286,25 @@ double leak_rate(const ClosedMesh<typename P::scalar_type>& m,
         if (!store.closest_hit(block, r, h)) ++leaks;
     }
     return rays.empty() ? 0.0 : double(leaks) / double(rays.size());
+}
+
+/// The closed-mesh leak test: icospheres at the origin, off-centre and 10^4 away, rays
+/// aimed at their edges and vertices. Returns the number of leaks; `rays` gets the total.
+template <class P>
+std::size_t closed_mesh_leaks(std::size_t& rays) {
+    using T = typename P::scalar_type;
+    std::size_t leaks_total = 0;
+    rays = 0;
+    for (const Vec3<T> centre : {Vec3<T>(0), Vec3<T>(T(0.3), T(-0.7), T(0.1)),
+                                 Vec3<T>(T(1e4), T(-2e4), T(5e3))}) {
+        const auto mesh = icosphere<T>(2, centre, T(1));
+        const auto shot = edge_vertex_rays(mesh, 3, 4);
+        std::size_t leaks = 0;
+        leak_rate<P>(mesh, shot, leaks);
+        rays += shot.size();
+        leaks_total += leaks;
+    }
+    return leaks_total;
 }
 
 }  // namespace glint::testing

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
@@ -48,7 +49,9 @@ struct SoaView {
     std::size_t count = 0;
 };
 
-/// Maximum number of records a batch kernel processes at once (its local arrays' size).
+/// Number of records a batch kernel processes at once. TriangleStore pads every group to a
+/// multiple of it with degenerate records (which never hit), so the kernel always runs a
+/// loop of exactly this many lanes, which the compiler turns into straight SIMD code.
 inline constexpr std::size_t batch_width = 8;
 
 /// Everything a composite (tree leaf, brute force) needs from a ray-triangle test.
@@ -60,7 +63,7 @@ inline constexpr std::size_t batch_width = 8;
 ///   computed once per ray and frame.
 /// - `p.intersect(rd, hit)`: true and hit filled when the ray meets the triangle with
 ///   t in the open interval (tmin, tmax). NaN or infinite rays give false, never NaN.
-/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for n <= batch_width records
+/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for n records
 ///   of a structure-of-arrays block, branch-free so that the compiler vectorizes it;
 ///   writes t = +inf for a miss.
 /// - `store(out)`, `load(view, i)` and `field_count`: the record's scalars, for the SoA
@@ -210,7 +213,7 @@ public:
 
     struct Group {
         Vec3<T> origin;
-        std::uint32_t begin, end;  // record range
+        std::uint32_t begin, end;  // record range, padded to a multiple of batch_width
     };
     struct BlockRef {
         std::uint32_t group_begin = 0, group_end = 0;
@@ -229,7 +232,10 @@ public:
         return ref;
     }
 
-    std::size_t size() const { return ids_.size(); }
+    /// Number of triangles stored (not counting padding records).
+    std::size_t size() const { return triangles_; }
+    /// Number of records, padding included.
+    std::size_t record_count() const { return ids_.size(); }
     std::size_t group_count() const { return groups_.size(); }
     const Group& group(std::size_t g) const { return groups_[g]; }
     std::uint32_t id(std::size_t record) const { return ids_[record]; }
@@ -263,9 +269,27 @@ private:
             double quality;
             origin = detail::choose_frame<T>(tris, quality);
             if (quality < detail::min_frame_quality && tris.size() > 1) {
+                // Split at the median centroid along the longest axis, so that each half is
+                // spatially compact and likely to share one good frame.
+                AABB<T> box;
+                for (const auto& t : tris) box.extend((t[0] + t[1] + t[2]) / T(3));
+                const int axis = box.longest_axis();
+                std::vector<std::size_t> order(tris.size());
+                for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
                 const std::size_t half = tris.size() / 2;
-                add_groups(tris.first(half), ids.first(half));
-                add_groups(tris.subspan(half), ids.subspan(half));
+                auto key = [&](std::size_t i) { return tris[i][0][axis] + tris[i][1][axis] + tris[i][2][axis]; };
+                std::nth_element(order.begin(), order.begin() + half, order.end(),
+                                 [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+                std::vector<TriangleVertices<T>> sorted_tris;
+                std::vector<std::uint32_t> sorted_ids;
+                for (std::size_t i : order) {
+                    sorted_tris.push_back(tris[i]);
+                    sorted_ids.push_back(ids[i]);
+                }
+                const std::span<const TriangleVertices<T>> st(sorted_tris);
+                const std::span<const std::uint32_t> si(sorted_ids);
+                add_groups(st.first(half), si.first(half));
+                add_groups(st.subspan(half), si.subspan(half));
                 return;
             }
         }
@@ -279,6 +303,13 @@ private:
             rec.store(scalars);
             for (int k = 0; k < F; ++k) fields_[k].push_back(scalars[k]);
             ids_.push_back(ids[i]);
+        }
+        triangles_ += tris.size();
+        // Pad to a whole number of kernel lanes with records that never hit.
+        P::build(Vec3d(0), Vec3d(0), Vec3d(0)).store(scalars);
+        while ((ids_.size() - g.begin) % batch_width != 0) {
+            for (int k = 0; k < F; ++k) fields_[k].push_back(scalars[k]);
+            ids_.push_back(std::numeric_limits<std::uint32_t>::max());
         }
         g.end = static_cast<std::uint32_t>(ids_.size());
         groups_.push_back(g);
@@ -296,9 +327,8 @@ private:
             local.origin = ray.origin - g.origin;
             const auto rd = P::prepare(local);
             for (std::size_t first = g.begin; first < g.end; first += batch_width) {
-                const std::size_t n = std::min<std::size_t>(batch_width, g.end - first);
-                P::batch(v, first, n, rd, ts, us, vs);
-                for (std::size_t k = 0; k < n; ++k) {
+                P::batch(v, first, batch_width, rd, ts, us, vs);
+                for (std::size_t k = 0; k < batch_width; ++k) {
                     if (ts[k] < local.tmax) {
                         if constexpr (Any) return true;
                         local.tmax = ts[k];
@@ -317,6 +347,7 @@ private:
     std::array<std::vector<T>, F> fields_;
     std::vector<std::uint32_t> ids_;
     std::vector<Group> groups_;
+    std::size_t triangles_ = 0;
 };
 
 }  // namespace glint
