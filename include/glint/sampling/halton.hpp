@@ -91,6 +91,7 @@ public:
                     total += std::size_t(d.digits[k]) * primes[k];
                 }
                 d.perms.resize(total);
+                d.tails.resize(dims * 65);
                 for (std::size_t k = 0; k < dims; ++k) {
                     const std::uint32_t b = primes[k];
                     for (int j = 0; j < d.digits[k]; ++j) {
@@ -103,6 +104,8 @@ public:
                             p[r] = t;
                         }
                     }
+                    permuted_digit_tails(b, d.perms.data() + d.offsets[k], d.digits[k],
+                                         d.tails.data() + k * 65);
                 }
                 break;
             }
@@ -123,7 +126,7 @@ public:
                 return radical_inverse_bits(base, index) + d.keys[dim];  // wraps modulo 1
             case HaltonRandomization::digit_permutation:
                 return permuted_radical_inverse_bits(base, index, d.perms.data() + d.offsets[dim],
-                                                     d.digits[dim]);
+                                                     d.tails.data() + dim * 65, d.digits[dim]);
             case HaltonRandomization::owen:
                 return owen_scrambled_radical_inverse_bits(base, index, d.keys[dim], d.digits[dim]);
         }
@@ -143,6 +146,7 @@ private:
         std::vector<int> digits;            // scrambled digit count per dimension
         std::vector<std::size_t> offsets;   // start of each dimension's permutations
         std::vector<std::uint16_t> perms;   // [dim][digit position][digit]
+        std::vector<std::uint64_t> tails;   // [dim][65]: permuted_digit_tails
     };
     std::shared_ptr<const Data> data_;
 };

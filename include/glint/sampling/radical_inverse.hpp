@@ -151,31 +151,56 @@ constexpr int scrambled_digit_count(std::uint32_t base) {
 }
 
 /// Radical inverse with every digit position j mapped through its own permutation
-/// perm[j * base + digit] (random digit permutation; Faure / Tezuka style). All
-/// scrambled_digit_count(base) digit positions are permuted (leading zeros included, since a
-/// permutation need not fix 0), so indices must be below base^digits.
+/// perm[j * base + digit] (random digit permutation; Faure / Tezuka style). All `digits` =
+/// scrambled_digit_count(base) positions are permuted (leading zeros included, since a
+/// permutation need not fix 0), so indices must be below base^digits. Once the index has no
+/// digits left the rest is the constant tail[j] = sum_{t >= j} perm_t(0) base^(digits-1-t),
+/// precomputed by permuted_digit_tails (tail has digits + 1 entries, tail[digits] = 0).
 constexpr std::uint64_t permuted_radical_inverse_bits(std::uint32_t base, std::uint64_t index,
-                                                      const std::uint16_t* perm, int digits) {
+                                                      const std::uint16_t* perm,
+                                                      const std::uint64_t* tail, int digits) {
     detail::u128 reversed = 0, denominator = 1;
-    for (int j = 0; j < digits; ++j) {
+    int j = 0;
+    for (; j < digits && index != 0; ++j) {
         const std::uint64_t next = index / base;
         const auto digit = static_cast<std::uint32_t>(index - next * base);
         reversed = reversed * base + perm[std::size_t(j) * base + digit];
         denominator *= base;
         index = next;
     }
-    return detail::floor_fraction(reversed, denominator);
+    // Shift the j reversed digits up by the remaining digits - j places and add the tail.
+    detail::u128 full_denominator = denominator;
+    for (int t = j; t < digits; ++t) {
+        reversed *= base;
+        full_denominator *= base;
+    }
+    return detail::floor_fraction(reversed + tail[j], full_denominator);
+}
+
+/// tail[j] for permuted_radical_inverse_bits: the value of digit positions j .. digits-1 when
+/// all of them are zero, i.e. sum_{t >= j} perm_t(0) base^(digits-1-t).
+constexpr void permuted_digit_tails(std::uint32_t base, const std::uint16_t* perm, int digits,
+                                    std::uint64_t* tail) {
+    tail[digits] = 0;
+    std::uint64_t place = 1;  // base^(digits-1-t)
+    for (int t = digits - 1; t >= 0; --t) {
+        tail[t] = tail[t + 1] + perm[std::size_t(t) * base] * place;
+        if (t > 0) place *= base;
+    }
 }
 
 /// Owen's nested uniform scrambling: output digit j is permuted by a random permutation
 /// chosen by hashing (seed, j, the j preceding digits), i.e. index mod base^j. Every node of the
 /// base-b digit tree gets its own permutation, which keeps the net structure and makes each
-/// point uniform on [0,1).
+/// point uniform on [0,1). All `digits` positions are scrambled: a digit 0 beyond the index's
+/// own digits lies in a node shared with larger indices, so it cannot be replaced by an
+/// independent random digit without breaking the stratification.
 constexpr std::uint64_t owen_scrambled_radical_inverse_bits(std::uint32_t base,
                                                             std::uint64_t index,
                                                             std::uint64_t seed, int digits) {
-    detail::u128 reversed = 0, denominator = 1;
-    std::uint64_t prefix = 0, place = 1;  // prefix = index mod base^j, place = base^j
+    // base^digits < 2^64, so everything fits in 64 bits until the final division.
+    std::uint64_t reversed = 0, denominator = 1;  // denominator = base^j, also the place of digit j
+    std::uint64_t prefix = 0;                      // index mod base^j
     for (int j = 0; j < digits; ++j) {
         const std::uint64_t next = index / base;
         const auto digit = static_cast<std::uint32_t>(index - next * base);
@@ -183,9 +208,8 @@ constexpr std::uint64_t owen_scrambled_radical_inverse_bits(std::uint32_t base,
             detail::mix_bits(seed ^ detail::mix_bits(prefix + (std::uint64_t(j) << 56)));
         reversed = reversed * base +
                    detail::permutation_element(digit, base, static_cast<std::uint32_t>(key));
+        prefix += digit * denominator;
         denominator *= base;
-        prefix += digit * place;
-        place *= base;
         index = next;
     }
     return detail::floor_fraction(reversed, denominator);
