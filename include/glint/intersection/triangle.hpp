@@ -328,9 +328,13 @@ private:
             const auto rd = P::prepare(local);
             for (std::size_t first = g.begin; first < g.end; first += batch_width) {
                 P::batch(v, first, batch_width, rd, ts, us, vs);
+                // Most blocks have no hit closer than tmax: one vectorizable test first.
+                bool any = false;
+                for (std::size_t k = 0; k < batch_width; ++k) any |= ts[k] < local.tmax;
+                if (!any) continue;
+                if constexpr (Any) return true;
                 for (std::size_t k = 0; k < batch_width; ++k) {
                     if (ts[k] < local.tmax) {
-                        if constexpr (Any) return true;
                         local.tmax = ts[k];
                         hit.t = ts[k];
                         hit.u = us[k];

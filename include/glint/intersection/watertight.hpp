@@ -130,18 +130,23 @@ struct Watertight {
         }
         const T ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz];
         for (std::size_t j = 0; j < n; ++j) {
-            T x[3], y[3], z[3];
-            for (int i = 0; i < 3; ++i) {
-                const T pz = fz[i][j] - oz;
-                x[i] = (fx[i][j] - ox) - r.sx * pz;
-                y[i] = (fy[i][j] - oy) - r.sy * pz;
-                z[i] = r.sz * pz;
-            }
-            T t, u, w;
-            const bool ok = solve(x, y, z, r, t, u, w);
+            const T az = fz[0][j] - oz, bz = fz[1][j] - oz, cz = fz[2][j] - oz;
+            const T ax = (fx[0][j] - ox) - r.sx * az, ay = (fy[0][j] - oy) - r.sy * az;
+            const T bx = (fx[1][j] - ox) - r.sx * bz, by = (fy[1][j] - oy) - r.sy * bz;
+            const T cx = (fx[2][j] - ox) - r.sx * cz, cy = (fy[2][j] - oy) - r.sy * cz;
+            const double e0 = detail::edge_function(cx, by, cy, bx);
+            const double e1 = detail::edge_function(ax, cy, ay, cx);
+            const double e2 = detail::edge_function(bx, ay, by, ax);
+            // Bitwise (not short-circuit) logic keeps the loop branch-free.
+            const bool has_neg = (e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0);
+            const bool has_pos = (e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0);
+            const double det = e0 + e1 + e2;
+            const double inv = 1.0 / det;
+            const T t = T((e0 * double(r.sz * az) + e1 * double(r.sz * bz) + e2 * double(r.sz * cz)) * inv);
+            const bool ok = !(has_neg & has_pos) & (det != 0.0) & (t > r.tmin) & (t < r.tmax);
             ts[j] = ok ? t : infinity<T>;
-            us[j] = u;
-            vs[j] = w;
+            us[j] = T(e1 * inv);
+            vs[j] = T(e2 * inv);
         }
     }
 
