@@ -1,0 +1,203 @@
+// glint/trees/traversal.hpp: the tree accelerator (builder x intersector x layout) and its
+// closest-hit and any-hit traversal.
+//
+// 000 section 4.3 (lines 2597-2631): starting at the root, at a split node the children are
+// labelled near and far by the sign of the ray direction on the split axis; the ray
+// segments inside the two cells come from one ray-plane intersection (kd-tree) or two
+// (BIH; 000 says "four", counting the GPU BIH's four planes, lines 2681-2683). If only one
+// cell has a non-empty segment it is entered; otherwise the far cell and its segment are
+// pushed on a stack and the near cell is entered. At a leaf all its triangles are tested
+// and the nearest kept; a popped cell whose segment starts beyond the best hit is skipped.
+// Repair: the extracted text stops at a leaf "if we have found a suitable hit"; glint
+// stops only when the stack holds nothing nearer, which also covers BIH cells that overlap.
+//
+// Robustness (issue 3): the segment [t0, t1] starts as the ray's (tmin, tmax) clipped to the
+// scene box, so rays starting inside the scene and finite tmin/tmax work unchanged. A cell
+// is entered unless its plane distance proves the segment misses it; comparisons are
+// written !(t < t0) so that the NaN of a ray parallel to a split plane and lying in it
+// ((p - o) * inf with p == o) enters both children, and the +-inf of a parallel ray off the
+// plane enters exactly the side the origin is on. Leaves test their triangles over the whole
+// ray interval (tmin, best t), never the cell's segment, so rounding of the segments can only
+// cost time, never a hit inside an entered cell.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <type_traits>
+#include <vector>
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/trees/bih_builder.hpp>
+#include <glint/trees/kdtree_builder.hpp>
+#include <glint/trees/layouts.hpp>
+#include <glint/trees/tree.hpp>
+
+namespace glint {
+
+/// A tree built by B over triangles of intersector P, encoded with layout L.
+/// Leaves are blocks of one TriangleStore<P> (kd-tree leaves may repeat triangles); hits
+/// report the original triangle index in StoreHit::id.
+template <TreeBuilder B, TriangleIntersector P, class L>
+    requires std::same_as<typename B::scalar_type, typename P::scalar_type>
+class TreeAccelerator {
+public:
+    using scalar_type = typename P::scalar_type;
+    using T = scalar_type;
+    using Node = std::conditional_t<B::kind == TreeKind::kd, KdNode<T>, BihNode<T>>;
+    using builder_type = B;
+    using intersector_type = P;
+    using layout_type = L;
+    static constexpr int max_stack = 64;
+
+    explicit TreeAccelerator(std::span<const TriangleVertices<T>> tris, const B& builder = B{}) {
+        BuiltTree<T> tree = builder.build(tris);
+        build_seconds_ = tree.build_seconds;
+        const auto t0 = std::chrono::steady_clock::now();
+        bounds_ = tree.bounds;
+        std::vector<std::array<std::uint32_t, 2>> groups(tree.nodes.size(), {0u, 0u});
+        std::vector<TriangleVertices<T>> leaf_tris;
+        for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+            const BuildNode<T>& n = tree.nodes[i];
+            if (!n.leaf || n.prim_count == 0) continue;
+            const std::span<const std::uint32_t> ids(tree.prims.data() + n.prim_begin, n.prim_count);
+            leaf_tris.clear();
+            for (std::uint32_t id : ids) leaf_tris.push_back(tris[id]);
+            const auto ref = store_.add_block(leaf_tris, ids);
+            groups[i] = {ref.group_begin, ref.group_end - ref.group_begin};
+            detail::check_index(ref.group_end);
+        }
+        stats_ = L::encode(tree, std::span<const std::array<std::uint32_t, 2>>(groups), nodes_);
+        build_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+
+    /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
+    bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const { return trace<false>(ray, hit); }
+    /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
+    bool any_hit(const Ray<T>& ray) const {
+        StoreHit<T> hit;
+        return trace<true>(ray, hit);
+    }
+
+    const LayoutStats& stats() const { return stats_; }
+    const TriangleStore<P>& store() const { return store_; }
+    const std::vector<Node>& nodes() const { return nodes_; }
+    const AABB<T>& bounds() const { return bounds_; }
+    /// Builder time plus leaf-record and layout encoding time, in seconds.
+    double build_seconds() const { return build_seconds_; }
+    /// Node bytes plus triangle-record bytes.
+    std::size_t total_bytes() const { return stats_.node_bytes() + store_.bytes(); }
+
+private:
+    struct Entry {
+        std::uint32_t index, base;
+        T t0, t1;
+    };
+
+    template <bool Any>
+    bool trace(const Ray<T>& ray, StoreHit<T>& hit) const {
+        const Vec3<T> inv(T(1) / ray.direction.x, T(1) / ray.direction.y, T(1) / ray.direction.z);
+        const std::uint32_t neg[3] = {std::signbit(ray.direction.x) ? 1u : 0u,
+                                      std::signbit(ray.direction.y) ? 1u : 0u,
+                                      std::signbit(ray.direction.z) ? 1u : 0u};
+        // Clip (tmin, tmax) to the scene box. Entry and exit planes are chosen by the sign
+        // of the direction, not by comparing the two distances, so that a ray parallel to a
+        // face and lying in it ((face - o) * inf = NaN) keeps its interval: such a ray can
+        // hit triangles in that face. (AABB::intersect swaps by comparison and rejects it.)
+        T t0 = ray.tmin, t1 = ray.tmax;
+        for (int a = 0; a < 3; ++a) {
+            const T tl = (bounds_.lo[a] - ray.origin[a]) * inv[a], th = (bounds_.hi[a] - ray.origin[a]) * inv[a];
+            const T tn = neg[a] ? th : tl, tf = neg[a] ? tl : th;
+            t0 = tn > t0 ? tn : t0;
+            t1 = tf < t1 ? tf : t1;
+        }
+        if constexpr (!Any) t1 = t1 < hit.t ? t1 : hit.t;
+        if (!(t0 <= t1)) return false;
+        const Node* nodes = nodes_.data();
+        Entry stack[max_stack];
+        int sp = 0;
+        std::uint32_t index = 0, base = 0;
+        bool found = false;
+        for (;;) {
+            const Node* n = nodes + index;
+            while (!n->is_leaf()) {
+                if (n->is_pointer()) {
+                    index = n->target();
+                    base = L::block_base(index);
+                    n = nodes + index;
+                    continue;
+                }
+                const int axis = n->axis();
+                const std::uint32_t first = L::first_child(*n, index, base);
+                const std::uint32_t ng = neg[axis];
+                T tn, tf;
+                if constexpr (B::kind == TreeKind::kd) {
+                    tn = tf = (n->plane[0] - ray.origin[axis]) * inv[axis];
+                } else {
+                    const T tl = (n->plane[0] - ray.origin[axis]) * inv[axis];
+                    const T tr = (n->plane[1] - ray.origin[axis]) * inv[axis];
+                    tn = ng ? tr : tl;
+                    tf = ng ? tl : tr;
+                }
+                const bool visit_near = !(tn < t0);
+                const bool visit_far = !(tf > t1);
+                const std::uint32_t near = first + ng, far = first + 1 - ng;
+                if (visit_near) {
+                    if (visit_far) stack[sp++] = Entry{far, base, tf > t0 ? tf : t0, t1};
+                    t1 = tn < t1 ? tn : t1;
+                    index = near;
+                } else if (visit_far) {
+                    t0 = tf > t0 ? tf : t0;
+                    index = far;
+                } else {
+                    goto pop;
+                }
+                n = nodes + index;
+            }
+            if (const std::uint32_t count = n->group_count()) {
+                const std::uint32_t g = n->group_begin();
+                const typename TriangleStore<P>::BlockRef ref{g, g + count};
+                if constexpr (Any) {
+                    if (store_.any_hit(ref, ray)) return true;
+                } else {
+                    found |= store_.closest_hit(ref, ray, hit);
+                }
+            }
+        pop:
+            for (;;) {
+                if (sp == 0) return found;
+                const Entry& e = stack[--sp];
+                if constexpr (!Any) {
+                    if (e.t0 > hit.t) continue;
+                }
+                index = e.index;
+                base = e.base;
+                t0 = e.t0;
+                t1 = e.t1;
+                if constexpr (!Any) t1 = t1 < hit.t ? t1 : hit.t;
+                break;
+            }
+        }
+    }
+
+    std::vector<Node> nodes_;
+    TriangleStore<P> store_;
+    AABB<T> bounds_;
+    LayoutStats stats_;
+    double build_seconds_ = 0;
+};
+
+/// SAH kd-tree over intersector P in layout L, e.g. KdTree<float, Ivm<float>, CompactSubtrees<31>>.
+template <Scalar T, TriangleIntersector P, class L>
+using KdTree = TreeAccelerator<KdTreeBuilder<T>, P, L>;
+
+/// Bounding interval hierarchy over intersector P in layout L.
+template <Scalar T, TriangleIntersector P, class L>
+using Bih = TreeAccelerator<BihBuilder<T>, P, L>;
+
+}  // namespace glint

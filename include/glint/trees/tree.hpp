@@ -1,0 +1,222 @@
+// glint/trees/tree.hpp: the layout-independent built tree shared by the kd-tree and BIH
+// builders, the equal-size node formats the layouts encode it into, and the concepts that
+// connect builders, layouts and accelerators.
+//
+// 000 section 4.2 (lines 2522-2560): a kd-tree splits a cell with one axis-aligned plane into
+// two disjoint cells, so a triangle crossing the plane is referenced from both; a BIH
+// (bounding interval hierarchy) stores two planes per node, the left child's maximum and the
+// right child's minimum along the axis, so every triangle is referenced once and the children
+// may overlap or leave a gap. The conclusions for kd-trees carry over to the BIH.
+//
+// A builder produces a BuiltTree: nodes in depth-first order (a split node is followed by
+// its left subtree), each leaf owning a range of `prims` (original triangle indices). The
+// layouts (layouts.hpp) then encode this tree into arrays of equal-size nodes.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/math.hpp>
+#include <glint/intersection/triangle.hpp>
+
+namespace glint {
+
+/// What kind of binary partitioning tree a builder makes (it decides the node format).
+enum class TreeKind : std::uint8_t { kd, bih };
+
+/// One node of a built (not yet encoded) tree.
+/// - kd split: `plane[0]` is the split position on `axis`; left child holds x <= plane.
+/// - BIH split: `plane[0]` = maximum of the left child's triangles on `axis`,
+///   `plane[1]` = minimum of the right child's triangles (may be +-inf for an empty side).
+/// - leaf: `prim_begin`, `prim_count` index BuiltTree::prims.
+template <class T>
+struct BuildNode {
+    bool leaf = true;
+    std::uint8_t axis = 0;
+    T plane[2] = {T(0), T(0)};
+    std::uint32_t left = 0, right = 0;  // indices into BuiltTree::nodes
+    std::uint32_t prim_begin = 0, prim_count = 0;
+};
+
+/// The tree as a builder leaves it, independent of the node layout.
+template <class T>
+struct BuiltTree {
+    TreeKind kind = TreeKind::kd;
+    std::vector<BuildNode<T>> nodes;    // nodes[0] is the root
+    std::vector<std::uint32_t> prims;   // leaf contents, original triangle indices
+    AABB<T> bounds;                     // of all (finite) triangles
+    std::size_t triangle_count = 0;     // input triangles, including dropped ones
+    double build_seconds = 0;
+
+    std::size_t leaf_count() const {
+        std::size_t n = 0;
+        for (const auto& nd : nodes) n += nd.leaf;
+        return n;
+    }
+    /// Number of levels (a single leaf has height 1).
+    std::uint32_t height(std::uint32_t node = 0) const {
+        const BuildNode<T>& n = nodes[node];
+        if (n.leaf) return 1;
+        return 1 + std::max(height(n.left), height(n.right));
+    }
+};
+
+namespace detail {
+
+/// Runs a builder's work and records its wall time in build_seconds.
+template <class F>
+auto timed_build(F&& build) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto tree = build();
+    tree.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return tree;
+}
+
+}  // namespace detail
+
+/// A builder: a policy that turns triangles into a BuiltTree.
+template <class B>
+concept TreeBuilder = requires(const B b, std::span<const TriangleVertices<typename B::scalar_type>> tris) {
+    { B::name } -> std::convertible_to<const char*>;
+    { B::kind } -> std::convertible_to<TreeKind>;
+    { b.build(tris) } -> std::same_as<BuiltTree<typename B::scalar_type>>;
+};
+
+// ---------------------------------------------------------------------------------------
+// Encoded nodes. 000 section 4.4 (lines 2672-2686): "Every element has the same size, but it
+// can be of three different types": a leaf (triangle count and start of its block in the
+// leaf list), a splitting node (plane position(s) and axis) and a pointer node (an index to
+// another node). glint's nodes describe themselves in the low bits of one 32-bit word:
+//   word & 3 in {0, 1, 2}: split node on that axis; word >> 2 is the first child's index
+//                          for PointerLayout (unused by the subtree layouts);
+//   word & 7 == 3:         leaf; word >> 3 = number of triangle-store groups (0: empty leaf),
+//                          the first group index is stored in the plane slot's bits;
+//   word & 7 == 7:         pointer; word >> 3 = index of the node it stands for.
+// A kd node is 8 bytes for float (one plane), a BIH node 12 (two planes). Repair: 000 says
+// one bit marks a leaf and the position inside the subtree tells pointers from splits; we
+// spend one more bit so that traversal needs no position arithmetic to tell them apart.
+// ---------------------------------------------------------------------------------------
+
+namespace detail {
+
+/// Unsigned integer of the same size as T, to keep a leaf's first group in a plane slot.
+template <class T>
+using PlaneBits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+
+template <class T>
+T pack_index(std::uint32_t i) {
+    return std::bit_cast<T>(static_cast<PlaneBits<T>>(i));
+}
+template <class T>
+std::uint32_t unpack_index(T v) {
+    return static_cast<std::uint32_t>(std::bit_cast<PlaneBits<T>>(v));
+}
+
+/// Builders leave out triangles that no intersector may hit (the TriangleIntersector
+/// contract: degenerate triangles never hit): a non-finite vertex, or zero area (the cross
+/// product of two edges is exactly zero in double precision, e.g. a repeated vertex).
+template <class T>
+bool can_be_hit(const TriangleVertices<T>& t) {
+    if (!all_finite(t[0]) || !all_finite(t[1]) || !all_finite(t[2])) return false;
+    const Vec3d n = glm::cross(Vec3d(t[1]) - Vec3d(t[0]), Vec3d(t[2]) - Vec3d(t[0]));
+    return n.x != 0 || n.y != 0 || n.z != 0;
+}
+
+inline constexpr std::uint32_t node_leaf_tag = 3u;
+inline constexpr std::uint32_t node_pointer_tag = 7u;
+/// Largest index or group count a node word can hold (29 bits).
+inline constexpr std::uint32_t node_max_index = (1u << 29) - 1u;
+
+}  // namespace detail
+
+/// Equal-size node with P planes (1 for kd-trees, 2 for BIHs).
+template <class T, int Planes>
+struct EncodedNode {
+    T plane[Planes];
+    std::uint32_t word;
+
+    bool is_split() const { return (word & 3u) != 3u; }
+    bool is_leaf() const { return (word & 7u) == detail::node_leaf_tag; }
+    bool is_pointer() const { return (word & 7u) == detail::node_pointer_tag; }
+    int axis() const { return static_cast<int>(word & 3u); }
+    std::uint32_t child() const { return word >> 2; }     // PointerLayout split nodes
+    std::uint32_t target() const { return word >> 3; }    // pointer nodes
+    std::uint32_t group_count() const { return word >> 3; }  // leaves
+    std::uint32_t group_begin() const { return detail::unpack_index<T>(plane[0]); }
+
+    static EncodedNode split(const BuildNode<T>& b, std::uint32_t child) {
+        EncodedNode n{};
+        for (int i = 0; i < Planes; ++i) n.plane[i] = b.plane[i];
+        n.word = (child << 2) | b.axis;
+        return n;
+    }
+    static EncodedNode leaf(std::uint32_t group_begin, std::uint32_t group_count) {
+        EncodedNode n{};
+        n.plane[0] = detail::pack_index<T>(group_begin);
+        n.word = (group_count << 3) | detail::node_leaf_tag;
+        return n;
+    }
+    static EncodedNode pointer(std::uint32_t target) {
+        EncodedNode n{};
+        n.word = (target << 3) | detail::node_pointer_tag;
+        return n;
+    }
+};
+
+template <class T> using KdNode = EncodedNode<T, 1>;
+template <class T> using BihNode = EncodedNode<T, 2>;
+
+static_assert(sizeof(KdNode<float>) == 8, "kd nodes are 8 bytes for float");
+static_assert(sizeof(BihNode<float>) == 12, "BIH nodes are 12 bytes for float");
+
+/// Accounting of an encoded tree (issue 3: node count, node bytes, wasted slots, bytes per
+/// triangle). `slots` is the allocated array length; every slot is one node in size.
+struct LayoutStats {
+    std::size_t slots = 0;          // allocated nodes (node count)
+    std::size_t split_nodes = 0;
+    std::size_t leaf_nodes = 0;
+    std::size_t pointer_nodes = 0;
+    std::size_t wasted_slots = 0;   // allocated but unused (fragmentation)
+    std::size_t node_size = 0;      // bytes per node
+    std::size_t triangles = 0;      // input triangles
+    std::size_t node_bytes() const { return slots * node_size; }
+    /// Node memory per input triangle (triangle records are not included: they are the
+    /// same for every layout).
+    double bytes_per_triangle() const {
+        return triangles ? double(node_bytes()) / double(triangles) : 0.0;
+    }
+};
+
+/// A node layout policy: encodes a BuiltTree into equal-size nodes and tells traversal
+/// where a split node's children are (the right child is always first_child + 1).
+/// `leaf_groups[i]` is the triangle-store group range of built node i (leaves only).
+template <class L>
+concept NodeLayout = requires(const BuiltTree<float>& t, std::vector<KdNode<float>>& out,
+                              std::span<const std::array<std::uint32_t, 2>> leaf_groups,
+                              const KdNode<float>& n, std::uint32_t i) {
+    { L::label() } -> std::convertible_to<std::string>;
+    { L::encode(t, leaf_groups, out) } -> std::same_as<LayoutStats>;
+    { L::first_child(n, i, i) } -> std::same_as<std::uint32_t>;
+    { L::block_base(i) } -> std::same_as<std::uint32_t>;
+};
+
+/// A ray accelerator: the interface shared by the trees and the brute-force reference.
+template <class A>
+concept RayAccelerator = requires(const A a, const Ray<typename A::scalar_type>& r,
+                                  StoreHit<typename A::scalar_type>& h) {
+    { a.closest_hit(r, h) } -> std::same_as<bool>;
+    { a.any_hit(r) } -> std::same_as<bool>;
+};
+
+}  // namespace glint
