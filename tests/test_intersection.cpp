@@ -219,7 +219,6 @@ TEST_CASE("IVM frames: blocks get well-conditioned frames, split only when neede
         const auto& grp = store.group(g);
         for (std::uint32_t i = grp.begin; i < grp.end; ++i) {
             const std::uint32_t id = store.id(i);
-            if (id == ~0u) continue;  // padding record
             const Vec3d o(grp.origin);
             CHECK(detail::frame_quality(o, Vec3d(tris[id][0]), Vec3d(tris[id][1]), Vec3d(tris[id][2])) >=
                   detail::min_frame_quality);

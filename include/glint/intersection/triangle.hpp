@@ -49,9 +49,9 @@ struct SoaView {
     std::size_t count = 0;
 };
 
-/// Number of records a batch kernel processes at once. TriangleStore pads every group to a
-/// multiple of it with degenerate records (which never hit), so the kernel always runs a
-/// loop of exactly this many lanes, which the compiler turns into straight SIMD code.
+/// Largest number of records a batch kernel call processes (the size of its output arrays).
+/// Groups are not padded: padding every leaf of a kd-tree (often 1 to 4 triangles) to 8
+/// records cost memory and measured no faster than the kernel's own remainder loop.
 inline constexpr std::size_t batch_width = 8;
 
 /// Everything a composite (tree leaf, brute force) needs from a ray-triangle test.
@@ -63,7 +63,7 @@ inline constexpr std::size_t batch_width = 8;
 ///   computed once per ray and frame.
 /// - `p.intersect(rd, hit)`: true and hit filled when the ray meets the triangle with
 ///   t in the open interval (tmin, tmax). NaN or infinite rays give false, never NaN.
-/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for n records
+/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for n <= batch_width records
 ///   of a structure-of-arrays block, branch-free so that the compiler vectorizes it;
 ///   writes t = +inf for a miss.
 /// - `store(out)`, `load(view, i)` and `field_count`: the record's scalars, for the SoA
@@ -213,7 +213,7 @@ public:
 
     struct Group {
         Vec3<T> origin;
-        std::uint32_t begin, end;  // record range, padded to a multiple of batch_width
+        std::uint32_t begin, end;  // record range
     };
     struct BlockRef {
         std::uint32_t group_begin = 0, group_end = 0;
@@ -232,10 +232,8 @@ public:
         return ref;
     }
 
-    /// Number of triangles stored (not counting padding records).
-    std::size_t size() const { return triangles_; }
-    /// Number of records, padding included.
-    std::size_t record_count() const { return ids_.size(); }
+    /// Number of triangle records stored.
+    std::size_t size() const { return ids_.size(); }
     std::size_t group_count() const { return groups_.size(); }
     const Group& group(std::size_t g) const { return groups_[g]; }
     std::uint32_t id(std::size_t record) const { return ids_[record]; }
@@ -304,13 +302,6 @@ private:
             for (int k = 0; k < F; ++k) fields_[k].push_back(scalars[k]);
             ids_.push_back(ids[i]);
         }
-        triangles_ += tris.size();
-        // Pad to a whole number of kernel lanes with records that never hit.
-        P::build(Vec3d(0), Vec3d(0), Vec3d(0)).store(scalars);
-        while ((ids_.size() - g.begin) % batch_width != 0) {
-            for (int k = 0; k < F; ++k) fields_[k].push_back(scalars[k]);
-            ids_.push_back(std::numeric_limits<std::uint32_t>::max());
-        }
         g.end = static_cast<std::uint32_t>(ids_.size());
         groups_.push_back(g);
     }
@@ -327,13 +318,14 @@ private:
             local.origin = ray.origin - g.origin;
             const auto rd = P::prepare(local);
             for (std::size_t first = g.begin; first < g.end; first += batch_width) {
-                P::batch(v, first, batch_width, rd, ts, us, vs);
-                // Most blocks have no hit closer than tmax: one vectorizable test first.
+                const std::size_t n = std::min<std::size_t>(batch_width, g.end - first);
+                P::batch(v, first, n, rd, ts, us, vs);
+                // Most blocks have no hit closer than tmax: one cheap test first.
                 bool any = false;
-                for (std::size_t k = 0; k < batch_width; ++k) any |= ts[k] < local.tmax;
+                for (std::size_t k = 0; k < n; ++k) any |= ts[k] < local.tmax;
                 if (!any) continue;
                 if constexpr (Any) return true;
-                for (std::size_t k = 0; k < batch_width; ++k) {
+                for (std::size_t k = 0; k < n; ++k) {
                     if (ts[k] < local.tmax) {
                         local.tmax = ts[k];
                         hit.t = ts[k];
@@ -351,7 +343,6 @@ private:
     std::array<std::vector<T>, F> fields_;
     std::vector<std::uint32_t> ids_;
     std::vector<Group> groups_;
-    std::size_t triangles_ = 0;
 };
 
 }  // namespace glint
