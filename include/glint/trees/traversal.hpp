@@ -26,10 +26,12 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <type_traits>
 #include <vector>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
@@ -55,8 +57,15 @@ public:
     using layout_type = L;
     static constexpr int max_stack = 64;
 
-    explicit TreeAccelerator(std::span<const TriangleVertices<T>> tris, const B& builder = B{}) {
-        BuiltTree<T> tree = builder.build(tris);
+    explicit TreeAccelerator(std::span<const TriangleVertices<T>> tris, const B& builder = B{})
+        : TreeAccelerator(tris, builder.build(tris)) {}
+
+    /// From a tree B built over the same triangles (to encode one build in several layouts
+    /// or for several intersectors).
+    TreeAccelerator(std::span<const TriangleVertices<T>> tris, const BuiltTree<T>& tree) {
+        if (tree.kind != B::kind || tree.triangle_count != tris.size())
+            throw Error(std::string("TreeAccelerator: the built tree is not a ") + B::name + " tree over these " +
+                        std::to_string(tris.size()) + " triangles");
         build_seconds_ = tree.build_seconds;
         const auto t0 = std::chrono::steady_clock::now();
         bounds_ = tree.bounds;
@@ -101,7 +110,10 @@ private:
 
     template <bool Any>
     bool trace(const Ray<T>& ray, StoreHit<T>& hit) const {
-        const Vec3<T> inv(T(1) / ray.direction.x, T(1) / ray.direction.y, T(1) / ray.direction.z);
+        // Plain arrays: glm's operator[] with a run-time index is a switch, i.e. a branch on
+        // the split axis that incoherent rays mispredict.
+        const T org[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+        const T inv[3] = {T(1) / ray.direction.x, T(1) / ray.direction.y, T(1) / ray.direction.z};
         const std::uint32_t neg[3] = {std::signbit(ray.direction.x) ? 1u : 0u,
                                       std::signbit(ray.direction.y) ? 1u : 0u,
                                       std::signbit(ray.direction.z) ? 1u : 0u};
@@ -111,7 +123,7 @@ private:
         // hit triangles in that face. (AABB::intersect swaps by comparison and rejects it.)
         T t0 = ray.tmin, t1 = ray.tmax;
         for (int a = 0; a < 3; ++a) {
-            const T tl = (bounds_.lo[a] - ray.origin[a]) * inv[a], th = (bounds_.hi[a] - ray.origin[a]) * inv[a];
+            const T tl = (bounds_.lo[a] - org[a]) * inv[a], th = (bounds_.hi[a] - org[a]) * inv[a];
             const T tn = neg[a] ? th : tl, tf = neg[a] ? tl : th;
             t0 = tn > t0 ? tn : t0;
             t1 = tf < t1 ? tf : t1;
@@ -137,26 +149,24 @@ private:
                 const std::uint32_t ng = neg[axis];
                 T tn, tf;
                 if constexpr (B::kind == TreeKind::kd) {
-                    tn = tf = (n->plane[0] - ray.origin[axis]) * inv[axis];
+                    tn = tf = (n->plane[0] - org[axis]) * inv[axis];
                 } else {
-                    const T tl = (n->plane[0] - ray.origin[axis]) * inv[axis];
-                    const T tr = (n->plane[1] - ray.origin[axis]) * inv[axis];
+                    const T tl = (n->plane[0] - org[axis]) * inv[axis];
+                    const T tr = (n->plane[1] - org[axis]) * inv[axis];
                     tn = ng ? tr : tl;
                     tf = ng ? tl : tr;
                 }
                 const bool visit_near = !(tn < t0);
                 const bool visit_far = !(tf > t1);
                 const std::uint32_t near = first + ng, far = first + 1 - ng;
-                if (visit_near) {
-                    if (visit_far) stack[sp++] = Entry{far, base, tf > t0 ? tf : t0, t1};
-                    t1 = tn < t1 ? tn : t1;
-                    index = near;
-                } else if (visit_far) {
-                    t0 = tf > t0 ? tf : t0;
-                    index = far;
-                } else {
-                    goto pop;
-                }
+                if (visit_near & visit_far) stack[sp++] = Entry{far, base, tf > t0 ? tf : t0, t1};
+                else if (!(visit_near | visit_far)) goto pop;  // only for NaN t0 or t1
+                // One cell to enter: the near one (with the far one pushed, or alone), else
+                // the far one; selected without a branch.
+                index = visit_near ? near : far;
+                const T near_t1 = tn < t1 ? tn : t1, far_t0 = tf > t0 ? tf : t0;
+                t1 = visit_near ? near_t1 : t1;
+                t0 = visit_near ? t0 : far_t0;
                 n = nodes + index;
             }
             if (const std::uint32_t count = n->group_count()) {

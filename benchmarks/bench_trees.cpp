@@ -1,0 +1,363 @@
+// bench_trees: ray-shooting throughput of glint's trees (000 sections 4.2-4.4) against
+// Embree 3's rtcIntersect1 on the very same rays, single thread.
+//
+//   bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N]
+//               [--no-generated] [--all]
+//
+// For every scene (generated: the 2880-triangle torus knot of 000 section 5, "teapot in a
+// stadium", a 128k-triangle torus knot; plus each --mesh) and two ray sets (primary camera
+// rays; incoherent diffuse rays leaving surface points on both sides), it builds every
+// tree x layout x intersector combination, traces every ray for its closest hit and prints
+// Mrays/s, build time, node memory and the ratio to Embree measured in the same run. The
+// time of a combination is the best of --reps passes (default 3; 1 with --quick).
+// --csv writes scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,
+// bytes_per_triangle,embree_mrays_per_s (embree_mrays_per_s is empty without Embree).
+// --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
+// --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <glint/core/error.hpp>
+#include <glint/intersection/ivm.hpp>
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/intersection/wald.hpp>
+#include <glint/intersection/watertight.hpp>
+#include <glint/trees/layouts.hpp>
+#include <glint/trees/scenes.hpp>
+#include <glint/trees/traversal.hpp>
+
+#ifdef GLINT_HAVE_EMBREE
+#include <embree3/rtcore.h>
+#endif
+
+using namespace glint;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Minimal OBJ reader: `v x y z` and `f i j k ...` (i, i/t, i//n, i/t/n, negative indices),
+/// polygons fan-triangulated; every other line is ignored.
+Mesh<float> read_obj(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error("bench_trees: cannot open mesh '" + path + "'");
+    std::vector<Vec3f> v;
+    Mesh<float> m;
+    std::string line;
+    int lineno = 0;
+    while (std::getline(in, line)) {
+        ++lineno;
+        std::istringstream ss(line);
+        std::string tag;
+        ss >> tag;
+        if (tag == "v") {
+            Vec3f p;
+            if (!(ss >> p.x >> p.y >> p.z))
+                throw Error(path + ":" + std::to_string(lineno) + ": expected 'v x y z'");
+            v.push_back(p);
+        } else if (tag == "f") {
+            std::vector<std::size_t> idx;
+            std::string tok;
+            while (ss >> tok) {
+                long i = 0;
+                try {
+                    i = std::stol(tok.substr(0, tok.find('/')));
+                } catch (const std::exception&) {
+                    throw Error(path + ":" + std::to_string(lineno) + ": bad face index '" + tok + "'");
+                }
+                const long k = i > 0 ? i - 1 : long(v.size()) + i;
+                if (i == 0 || k < 0 || k >= long(v.size()))
+                    throw Error(path + ":" + std::to_string(lineno) + ": face index " + std::to_string(i) +
+                                " outside the " + std::to_string(v.size()) + " vertices read so far");
+                idx.push_back(std::size_t(k));
+            }
+            if (idx.size() < 3) throw Error(path + ":" + std::to_string(lineno) + ": a face needs 3 vertices");
+            for (std::size_t j = 1; j + 1 < idx.size(); ++j) m.push_back({v[idx[0]], v[idx[j]], v[idx[j + 1]]});
+        }
+    }
+    if (m.empty()) throw Error("bench_trees: '" + path + "' has no faces");
+    return m;
+}
+
+struct RaySet {
+    std::string name;
+    std::vector<Ray<float>> rays;
+};
+
+struct Scene {
+    std::string name;
+    Mesh<float> mesh;
+    std::vector<RaySet> sets;
+    std::vector<double> embree_mrays;   // per ray set; 0 without Embree
+    std::vector<std::vector<float>> embree_t;  // per ray set, per ray: Embree's closest t
+};
+
+#ifdef GLINT_HAVE_EMBREE
+class Embree {
+public:
+    explicit Embree(const Mesh<float>& m) {
+        device_ = rtcNewDevice("threads=1");
+        if (!device_) throw Error("bench_trees: rtcNewDevice failed");
+        const auto t0 = Clock::now();
+        scene_ = rtcNewScene(device_);
+        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* vb = static_cast<float*>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * m.size()));
+        auto* ib = static_cast<unsigned*>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), m.size()));
+        for (std::size_t i = 0; i < m.size(); ++i)
+            for (int k = 0; k < 3; ++k) {
+                for (int c = 0; c < 3; ++c) vb[9 * i + 3 * k + c] = m[i][k][c];
+                ib[3 * i + k] = unsigned(3 * i + k);
+            }
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(scene_, g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(scene_);
+        build_seconds = seconds_since(t0);
+    }
+    ~Embree() {
+        rtcReleaseScene(scene_);
+        rtcReleaseDevice(device_);
+    }
+    Embree(const Embree&) = delete;
+    Embree& operator=(const Embree&) = delete;
+
+    /// Closest-hit t per ray (inf for a miss).
+    void trace(const std::vector<Ray<float>>& rays, std::vector<float>& t) const {
+        t.resize(rays.size());
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const Ray<float>& r = rays[i];
+            RTCRayHit rh;
+            rh.ray.org_x = r.origin.x;
+            rh.ray.org_y = r.origin.y;
+            rh.ray.org_z = r.origin.z;
+            rh.ray.dir_x = r.direction.x;
+            rh.ray.dir_y = r.direction.y;
+            rh.ray.dir_z = r.direction.z;
+            rh.ray.tnear = r.tmin;
+            rh.ray.tfar = r.tmax;
+            rh.ray.time = 0;
+            rh.ray.mask = 0xffffffffu;
+            rh.ray.id = 0;
+            rh.ray.flags = 0;
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(scene_, &ctx, &rh);
+            t[i] = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? rh.ray.tfar : infinity<float>;
+        }
+    }
+    double build_seconds = 0;
+
+private:
+    RTCDevice device_ = nullptr;
+    RTCScene scene_ = nullptr;
+};
+#endif
+
+struct Options {
+    std::vector<std::string> meshes;
+    std::string csv;
+    bool quick = false, generated = true, all = false;
+    std::size_t rays = 1'000'000;
+    int reps = 3;
+};
+
+struct Row {
+    std::string scene, rays, tree, layout, intersector;
+    double mrays = 0, build_s = 0, embree = 0;
+    std::size_t node_bytes = 0;
+    double bytes_per_tri = 0;
+    double agree = 0;  // fraction of rays whose hit/miss and t agree with Embree
+};
+
+/// Traces every ray set of the scene with one accelerator; returns one row per set.
+template <class Accel>
+void run_combination(const Scene& sc, const BuiltTree<float>& built, const Options& opt, std::vector<Row>& rows) {
+    const auto t0 = Clock::now();
+    const Accel acc(sc.mesh, built);
+    const double encode_s = seconds_since(t0);
+    for (std::size_t s = 0; s < sc.sets.size(); ++s) {
+        const auto& rays = sc.sets[s].rays;
+        double best = infinity<double>;
+        std::size_t agree = 0;
+        for (int rep = 0; rep < opt.reps; ++rep) {
+            std::size_t hits = 0;
+            const auto t1 = Clock::now();
+            for (const auto& r : rays) {
+                StoreHit<float> h;
+                hits += acc.closest_hit(r, h);
+            }
+            best = std::min(best, seconds_since(t1));
+            if (hits == std::size_t(-1)) std::puts("");  // keep the loop
+        }
+        if (!sc.embree_t.empty()) {
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                StoreHit<float> h;
+                acc.closest_hit(rays[i], h);
+                const float te = sc.embree_t[s][i];
+                agree += (std::isinf(te) && std::isinf(h.t)) || std::abs(te - h.t) <= 1e-3f * std::max(1.f, te);
+            }
+        }
+        Row row;
+        row.scene = sc.name;
+        row.rays = sc.sets[s].name;
+        row.tree = Accel::builder_type::name;
+        row.layout = Accel::layout_type::label();
+        row.intersector = Accel::intersector_type::name;
+        row.mrays = double(rays.size()) / best * 1e-6;
+        row.build_s = built.build_seconds + encode_s;
+        row.node_bytes = acc.stats().node_bytes();
+        row.bytes_per_tri = acc.stats().bytes_per_triangle();
+        row.embree = sc.embree_mrays[s];
+        row.agree = sc.embree_t.empty() ? -1 : double(agree) / double(rays.size());
+        std::printf("%-12s %-10s %-4s %-11s %-14s %8.3f Mrays/s  build %7.3f s  nodes %10zu B (%6.1f B/tri)", row.scene.c_str(),
+                    row.rays.c_str(), row.tree.c_str(), row.layout.c_str(), row.intersector.c_str(), row.mrays, row.build_s,
+                    row.node_bytes, row.bytes_per_tri);
+        if (row.embree > 0) std::printf("  x%.3f of Embree  agree %.4f", row.mrays / row.embree, row.agree);
+        std::printf("\n");
+        std::fflush(stdout);
+        rows.push_back(row);
+    }
+}
+
+template <class P, class... Layouts>
+void run_layouts(const Scene& sc, const BuiltTree<float>& kd, const BuiltTree<float>& bih, const Options& opt,
+                 std::vector<Row>& rows) {
+    (run_combination<KdTree<float, P, Layouts>>(sc, kd, opt, rows), ...);
+    (run_combination<Bih<float, P, Layouts>>(sc, bih, opt, rows), ...);
+}
+
+template <class P>
+void run_intersector(const Scene& sc, const BuiltTree<float>& kd, const BuiltTree<float>& bih, const Options& opt,
+                     std::vector<Row>& rows) {
+    if (opt.quick) {
+        run_layouts<P, PointerLayout, CompactSubtrees<31>>(sc, kd, bih, opt, rows);
+    } else if (opt.all) {
+        run_layouts<P, PointerLayout, HavranSubtrees<3>, CompactSubtrees<3>, HavranSubtrees<7>, CompactSubtrees<7>,
+                    HavranSubtrees<15>, CompactSubtrees<15>, HavranSubtrees<31>, CompactSubtrees<31>,
+                    HavranSubtrees<63>, CompactSubtrees<63>>(sc, kd, bih, opt, rows);
+    } else {
+        run_layouts<P, PointerLayout, HavranSubtrees<7>, CompactSubtrees<7>, HavranSubtrees<31>, CompactSubtrees<31>>(
+            sc, kd, bih, opt, rows);
+    }
+}
+
+Options parse(int argc, char** argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw Error("bench_trees: " + a + " needs a value");
+            return argv[++i];
+        };
+        if (a == "--mesh") o.meshes.push_back(value());
+        else if (a == "--csv") o.csv = value();
+        else if (a == "--quick") o.quick = true;
+        else if (a == "--all") o.all = true;
+        else if (a == "--no-generated") o.generated = false;
+        else if (a == "--rays") o.rays = std::stoul(value());
+        else if (a == "--reps") o.reps = std::max(1, std::stoi(value()));
+        else if (a == "--help" || a == "-h") {
+            std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] [--all]");
+            std::exit(0);
+        } else {
+            throw Error("bench_trees: unknown option '" + a + "' (try --help)");
+        }
+    }
+    if (o.quick) {
+        o.rays = std::min<std::size_t>(o.rays, 20'000);
+        o.reps = 1;
+    }
+    return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+    const Options opt = parse(argc, argv);
+    std::vector<Scene> scenes;
+    if (opt.generated) {
+        scenes.push_back({"torus-knot", make_torus_knot<float>(), {}, {}, {}});
+        if (!opt.quick) {
+            scenes.push_back({"stadium", make_teapot_in_stadium<float>(), {}, {}, {}});
+            scenes.push_back({"knot-128k", make_torus_knot<float>(2000, 32), {}, {}, {}});
+        }
+    }
+    for (const auto& path : opt.meshes) {
+        std::string name = path.substr(path.find_last_of('/') + 1);
+        name = name.substr(0, name.find_last_of('.'));
+        scenes.push_back({name, read_obj(path), {}, {}, {}});
+    }
+    std::vector<Row> rows;
+    for (Scene& sc : scenes) {
+        const int width = 1024, height = std::max<int>(1, int(opt.rays / width));
+        sc.sets.push_back({"primary", make_primary_rays<float>(sc.mesh, width, height)});
+        sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
+        std::printf("# scene %s: %zu triangles, %zu primary and %zu incoherent rays\n", sc.name.c_str(), sc.mesh.size(),
+                    sc.sets[0].rays.size(), sc.sets[1].rays.size());
+#ifdef GLINT_HAVE_EMBREE
+        {
+            const Embree e(sc.mesh);
+            std::printf("# Embree %d.%d.%d build %.3f s (threads=1)\n", RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
+                        RTC_VERSION_PATCH, e.build_seconds);
+            sc.embree_t.resize(sc.sets.size());
+            for (std::size_t s = 0; s < sc.sets.size(); ++s) {
+                double best = infinity<double>;
+                for (int rep = 0; rep < opt.reps; ++rep) {
+                    const auto t0 = Clock::now();
+                    e.trace(sc.sets[s].rays, sc.embree_t[s]);
+                    best = std::min(best, seconds_since(t0));
+                }
+                sc.embree_mrays.push_back(double(sc.sets[s].rays.size()) / best * 1e-6);
+                std::printf("%-12s %-10s embree rtcIntersect1            %8.3f Mrays/s\n", sc.name.c_str(),
+                            sc.sets[s].name.c_str(), sc.embree_mrays.back());
+            }
+        }
+#else
+        sc.embree_mrays.assign(sc.sets.size(), 0.0);
+        std::puts("# Embree 3 not found: no peer comparison");
+#endif
+        const BuiltTree<float> kd = KdTreeBuilder<float>{}.build(sc.mesh);
+        const BuiltTree<float> bih = BihBuilder<float>{}.build(sc.mesh);
+        run_intersector<Ivm<float>>(sc, kd, bih, opt, rows);
+        run_intersector<MollerTrumbore<float>>(sc, kd, bih, opt, rows);
+        run_intersector<Wald<float>>(sc, kd, bih, opt, rows);
+        run_intersector<Watertight<float>>(sc, kd, bih, opt, rows);
+        for (std::size_t s = 0; s < sc.sets.size(); ++s) {
+            const Row* best = nullptr;
+            for (const Row& r : rows)
+                if (r.scene == sc.name && r.rays == sc.sets[s].name && (!best || r.mrays > best->mrays)) best = &r;
+            if (best)
+                std::printf("# best on %s/%s: %s %s %s %.3f Mrays/s%s\n", sc.name.c_str(), best->rays.c_str(),
+                            best->tree.c_str(), best->layout.c_str(), best->intersector.c_str(), best->mrays,
+                            best->embree > 0 ? (", " + std::to_string(best->mrays / best->embree) + " x Embree").c_str() : "");
+        }
+    }
+    if (!opt.csv.empty()) {
+        std::ofstream out(opt.csv);
+        if (!out) throw Error("bench_trees: cannot write '" + opt.csv + "'");
+        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s\n";
+        for (const Row& r : rows) {
+            out << r.scene << ',' << r.rays << ',' << r.tree << ',' << r.layout << ',' << r.intersector << ',' << r.mrays
+                << ',' << r.build_s << ',' << r.node_bytes << ',' << r.bytes_per_tri << ',';
+            if (r.embree > 0) out << r.embree;
+            out << '\n';
+        }
+        std::printf("# wrote %s (%zu rows)\n", opt.csv.c_str(), rows.size());
+    }
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+}
