@@ -1,0 +1,294 @@
+// glint/cones/ray_tiles.hpp: the hierarchical ray engine on the CPU: a hierarchy over rays
+// (tiles of an image, one enclosing cone each) instead of over objects.
+//
+// 000 chapter 6 (lines 3105-3530). The ray engine (lines 3128-3160) tests every ray against
+// every triangle. Section 6.1 (lines 3163-3238) splits the ray array into tiles and, for
+// every triangle and tile, first tests the triangle's enclosing sphere against the tile's
+// enclosing cone; only tiles that pass run the ray-triangle tests. Section 6.3 (lines
+// 3333-3390, 3438-3455) iterates passes for multiple refractions and reflections: in every
+// pass the cones are rebuilt for the new generation of rays, and rays whose path has
+// terminated (no hit, or the shader ends it) drop out (000 uses the stencil buffer for this,
+// lines 3444-3455; here an active flag per ray). Per 000 section 6.3.1 the triangle record
+// is the IVM (any TriangleIntersector policy works) plus its bounding sphere (sphere.hpp).
+//
+// CPU form of the GPU passes: the loop is tile-major (for every tile: its cone, then every
+// triangle's sphere against it, then the tile's active rays against each triangle that
+// passes), so a tile's rays stay in cache. Within a ray, triangles are tested in index order
+// with the same records, frames and kernel as BruteForce<P> (one store block per
+// triangle), and a triangle is culled only when it cannot be hit (the cone holds every
+// point of every ray of the tile, the sphere every point of the triangle, and the test is
+// conservative), so every hit is bit-for-bit the brute-force hit (tests/test_cones.cpp).
+//
+// Hot paths do not allocate: per-frame buffers live in a TileWorkspace the caller keeps.
+#pragma once
+
+#include <algorithm>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glint/cones/cone.hpp>
+#include <glint/cones/sphere.hpp>
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/intersection/triangle.hpp>
+
+namespace glint {
+
+/// A width x height array of rays (row-major, ray (x, y) at index y * width + x) split into
+/// square tiles of `tile` x `tile` rays (the last row and column of tiles may be partial).
+/// 000 section 6.4 uses 256 x 256 rays in 16 x 16 tiles.
+struct TileGrid {
+    int width = 0, height = 0, tile = 16;
+
+    TileGrid() = default;
+    TileGrid(int w, int h, int t = 16) : width(w), height(h), tile(t) {
+        if (w <= 0 || h <= 0 || t <= 0 || std::int64_t(w) * h > std::int64_t(std::numeric_limits<std::uint32_t>::max()))
+            throw Error("TileGrid: need width, height, tile > 0 and at most 2^32 rays, got " + std::to_string(w) + " x " +
+                        std::to_string(h) + " rays in tiles of " + std::to_string(t));
+    }
+    int tiles_x() const { return (width + tile - 1) / tile; }
+    int tiles_y() const { return (height + tile - 1) / tile; }
+    std::size_t tile_count() const { return std::size_t(tiles_x()) * tiles_y(); }
+    std::size_t ray_count() const { return std::size_t(width) * height; }
+};
+
+/// Counts of one or more passes.
+struct PassStats {
+    int passes = 0;                  // passes run
+    std::uint64_t rays = 0;          // ray segments traced (active rays summed over passes)
+    std::uint64_t hits = 0;          // of which hit a triangle
+    std::uint64_t tests = 0;         // ray-triangle tests (0 where the accelerator cannot count)
+    std::uint64_t sphere_tests = 0;  // cone-sphere tests
+    std::uint64_t tiles = 0;         // tiles with active rays (one cone each)
+    std::uint64_t tiles_all = 0;     // of which got the cone that admits every ray
+
+    double tests_per_ray() const { return rays ? double(tests) / double(rays) : 0.0; }
+    PassStats& operator+=(const PassStats& o) {
+        passes += o.passes;
+        rays += o.rays;
+        hits += o.hits;
+        tests += o.tests;
+        sphere_tests += o.sphere_tests;
+        tiles += o.tiles;
+        tiles_all += o.tiles_all;
+        return *this;
+    }
+};
+
+/// Per-frame buffers, kept by the caller and reused (they grow once, then never allocate).
+template <Scalar T>
+struct TileWorkspace {
+    std::vector<std::uint8_t> active;    // per ray: still on its path
+    std::vector<StoreHit<T>> hits;       // per ray: the closest hit of the last pass
+    std::vector<Cone<T>> cones;          // per tile: the cone of the last pass
+    std::vector<std::uint32_t> index;    // one tile's active rays
+    std::vector<std::uint8_t> pass;      // one chunk of cone-sphere results
+};
+
+/// A shader for trace_passes: `shade(i, ray, hit, found)` is called after every pass for
+/// every active ray i; it may replace `ray` with the next segment of the path and returns
+/// whether the path goes on (a ray without a hit normally ends: 000 line 3440).
+template <class S, class T>
+concept PassShader = requires(S s, std::size_t i, Ray<T>& r, const StoreHit<T>& h, bool f) {
+    { s(i, r, h, f) } -> std::convertible_to<bool>;
+};
+
+namespace detail {
+
+/// The pass loop shared by the engine and by per-ray accelerators: `find_hits(rays,
+/// active, hits)` fills hits for the active rays and returns the pass's counts.
+template <class T, class Find, class Shade>
+PassStats run_passes(std::span<Ray<T>> rays, int max_passes, TileWorkspace<T>& ws, Find&& find_hits,
+                     Shade&& shade) {
+    if (max_passes < 0) throw Error("trace_passes: max_passes must be >= 0, got " + std::to_string(max_passes));
+    ws.active.assign(rays.size(), 1);
+    ws.hits.resize(rays.size());
+    PassStats total;
+    for (int pass = 0; pass < max_passes; ++pass) {
+        std::uint64_t live = 0;
+        for (std::uint8_t a : ws.active) live += a;
+        if (live == 0) break;
+        PassStats s = find_hits(std::span<const Ray<T>>(rays), std::span<const std::uint8_t>(ws.active),
+                                std::span<StoreHit<T>>(ws.hits));
+        s.passes = 1;
+        s.rays = live;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            if (!ws.active[i]) continue;
+            const bool found = ws.hits[i].id != std::numeric_limits<std::uint32_t>::max();
+            s.hits += found;
+            ws.active[i] = shade(i, rays[i], std::as_const(ws.hits[i]), found) ? 1 : 0;
+        }
+        total += s;
+    }
+    return total;
+}
+
+}  // namespace detail
+
+/// The hierarchical ray engine over triangles with intersector P (000 chapter 6).
+template <TriangleIntersector P>
+class RayTileEngine {
+public:
+    using scalar_type = typename P::scalar_type;
+    using T = scalar_type;
+    /// Triangles whose spheres are tested against a cone at once (branch-free, vectorized).
+    static constexpr std::size_t chunk = 64;
+
+    explicit RayTileEngine(std::span<const TriangleVertices<T>> tris, const ConeOptions& opt = {}) : opt_(opt) {
+        opt_.validate();
+        if (tris.size() >= std::numeric_limits<std::uint32_t>::max())
+            throw Error("RayTileEngine: at most 2^32 - 2 triangles, got " + std::to_string(tris.size()));
+        const std::size_t n = tris.size();
+        refs_.reserve(n);
+        cx_.resize(n);
+        cy_.resize(n);
+        cz_.resize(n);
+        cr_.resize(n);
+        constexpr T eps = std::numeric_limits<T>::epsilon();
+        for (std::size_t i = 0; i < n; ++i) {
+            // One block per triangle, exactly as BruteForce<P> stores them, so that the
+            // records, frames and therefore the hits are the same.
+            const std::uint32_t id = static_cast<std::uint32_t>(i);
+            refs_.push_back(store_.add_block(tris.subspan(i, 1), std::span(&id, 1)));
+            const BoundingSphere<T> s = min_enclosing_sphere(tris[i]);
+            cx_[i] = s.center.x;
+            cy_[i] = s.center.y;
+            cz_[i] = s.center.z;
+            // The part of cone_test_radius that depends on the triangle only.
+            cr_[i] = s.radius >= T(0) ? s.radius + T(16) * eps * glm::length(s.center) : -infinity<T>;
+        }
+    }
+
+    std::size_t triangle_count() const { return refs_.size(); }
+    const TriangleStore<P>& store() const { return store_; }
+    const ConeOptions& options() const { return opt_; }
+
+    /// One pass: for every ray i with active[i] != 0, hits[i] becomes its closest hit (id =
+    /// max when none); other entries are left alone. ws.cones holds the tiles' cones.
+    PassStats trace(std::span<const Ray<T>> rays, std::span<const std::uint8_t> active, const TileGrid& grid,
+                    std::span<StoreHit<T>> hits, TileWorkspace<T>& ws) const {
+        if (rays.size() != grid.ray_count() || active.size() != rays.size() || hits.size() != rays.size())
+            throw Error("RayTileEngine::trace: the grid has " + std::to_string(grid.ray_count()) + " rays but got " +
+                        std::to_string(rays.size()) + " rays, " + std::to_string(active.size()) + " flags, " +
+                        std::to_string(hits.size()) + " hits");
+        ws.cones.resize(grid.tile_count());
+        ws.index.resize(std::size_t(grid.tile) * grid.tile);
+        ws.pass.resize(chunk);
+        PassStats s;
+        constexpr T eps = std::numeric_limits<T>::epsilon();
+        const std::size_t n = refs_.size();
+        for (int ty = 0; ty < grid.tiles_y(); ++ty)
+            for (int tx = 0; tx < grid.tiles_x(); ++tx) {
+                Cone<T>& cone = ws.cones[std::size_t(ty) * grid.tiles_x() + tx];
+                cone = Cone<T>{};
+                // Gather the tile's active rays; reset their hits.
+                std::size_t m = 0;
+                const int x1 = std::min(grid.width, (tx + 1) * grid.tile), y1 = std::min(grid.height, (ty + 1) * grid.tile);
+                for (int y = ty * grid.tile; y < y1; ++y)
+                    for (int x = tx * grid.tile; x < x1; ++x) {
+                        const std::size_t i = std::size_t(y) * grid.width + x;
+                        if (!active[i]) continue;
+                        hits[i] = StoreHit<T>{};
+                        if (ray_can_hit(rays[i])) ws.index[m++] = static_cast<std::uint32_t>(i);
+                    }
+                if (m == 0) continue;
+                const std::span<const std::uint32_t> idx(ws.index.data(), m);
+                cone = detail::enclosing_cone_of<T>(
+                    m, [&](std::size_t k) -> const Ray<T>& { return rays[idx[k]]; }, opt_);
+                ++s.tiles;
+                s.tiles_all += cone.all;
+                s.sphere_tests += n;
+                const T tile_r = cone.slack + T(16) * eps * glm::length(cone.apex);
+                for (std::size_t first = 0; first < n; first += chunk) {
+                    const std::size_t cnt = std::min(chunk, n - first);
+                    std::uint8_t* pass = ws.pass.data();
+                    if (cone.all) {
+                        std::fill(pass, pass + cnt, std::uint8_t(1));
+                    } else {
+                        sphere_chunk(cone, tile_r, first, cnt, pass);
+                    }
+                    for (std::size_t j = 0; j < cnt; ++j) {
+                        if (!pass[j]) continue;
+                        const auto ref = refs_[first + j];
+                        for (std::uint32_t k : idx) store_.closest_hit(ref, rays[k], hits[k]);
+                        s.tests += m;
+                    }
+                }
+            }
+        return s;
+    }
+
+    /// Up to max_passes passes of trace + shade (000 section 6.3): the rays are replaced in
+    /// place by the shader; paths it ends drop out of later passes.
+    template <class Shade>
+        requires PassShader<Shade, T>
+    PassStats trace_passes(std::span<Ray<T>> rays, const TileGrid& grid, int max_passes, Shade&& shade,
+                           TileWorkspace<T>& ws) const {
+        return detail::run_passes<T>(
+            rays, max_passes, ws,
+            [&](std::span<const Ray<T>> r, std::span<const std::uint8_t> a, std::span<StoreHit<T>> h) {
+                return trace(r, a, grid, h, ws);
+            },
+            shade);
+    }
+
+private:
+    /// Cone-sphere test (sphere.hpp, cone_meets_sphere) for triangles first .. first+cnt-1,
+    /// written over the structure-of-arrays spheres without branches so that it vectorizes.
+    void sphere_chunk(const Cone<T>& cone, T tile_r, std::size_t first, std::size_t cnt, std::uint8_t* pass) const {
+        constexpr T eps = std::numeric_limits<T>::epsilon();
+        const T ax = cone.apex.x, ay = cone.apex.y, az = cone.apex.z;
+        const T xx = cone.axis.x, xy = cone.axis.y, xz = cone.axis.z;
+        const T cs = cone.cos_half, sn = cone.sin_half;
+        const T *px = cx_.data() + first, *py = cy_.data() + first, *pz = cz_.data() + first, *pr = cr_.data() + first;
+        for (std::size_t j = 0; j < cnt; ++j) {
+            const T wx = px[j] - ax, wy = py[j] - ay, wz = pz[j] - az;
+            const T h = wx * xx + wy * xy + wz * xz;
+            const T kx = wy * xz - wz * xy, ky = wz * xx - wx * xz, kz = wx * xy - wy * xx;
+            const T rho = std::sqrt(kx * kx + ky * ky + kz * kz);
+            const T r = pr[j] + tile_r + T(16) * eps * (rho + std::abs(h));
+            const bool side = rho * sn + h * cs >= T(0);
+            const bool near_generator = rho * cs - h * sn <= r;
+            const bool near_apex = r >= T(0) && h * h + rho * rho <= r * r;  // r = -inf: empty sphere
+            pass[j] = static_cast<std::uint8_t>(side ? near_generator : near_apex);
+        }
+    }
+
+    ConeOptions opt_;
+    TriangleStore<P> store_;
+    std::vector<typename TriangleStore<P>::BlockRef> refs_;
+    std::vector<T> cx_, cy_, cz_, cr_;  // sphere centres and radii (with the triangle's rounding margin)
+};
+
+/// The same passes with a per-ray accelerator (BruteForce, a KdTree: any RayAccelerator),
+/// the reference the engine is compared with. PassStats::tests is left 0 (per-ray
+/// accelerators do not count their tests).
+template <class A, class Shade>
+    requires requires(const A a, const Ray<typename A::scalar_type>& r, StoreHit<typename A::scalar_type>& h) {
+        { a.closest_hit(r, h) } -> std::same_as<bool>;
+    } && PassShader<Shade, typename A::scalar_type>
+PassStats trace_passes(const A& accel, std::span<Ray<typename A::scalar_type>> rays, int max_passes, Shade&& shade,
+                       TileWorkspace<typename A::scalar_type>& ws) {
+    using T = typename A::scalar_type;
+    return detail::run_passes<T>(
+        rays, max_passes, ws,
+        [&](std::span<const Ray<T>> r, std::span<const std::uint8_t> a, std::span<StoreHit<T>> h) {
+            for (std::size_t i = 0; i < r.size(); ++i) {
+                if (!a[i]) continue;
+                h[i] = StoreHit<T>{};
+                accel.closest_hit(r[i], h[i]);
+            }
+            return PassStats{};
+        },
+        shade);
+}
+
+}  // namespace glint
