@@ -2,7 +2,8 @@
 # Installs the Debian packages glint's build, tests, benchmarks and examples need.
 # Runs apt-get only when something is missing; needs root (or sudo) for that.
 set -euo pipefail
-packages=(g++ cmake make libglm-dev doctest-dev libbenchmark-dev libembree-dev gnuplot-nox)
+packages=(g++ cmake make libglm-dev doctest-dev libbenchmark-dev libembree-dev libopenexr-dev
+          libtinyobjloader-dev libstb-dev gnuplot-nox)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

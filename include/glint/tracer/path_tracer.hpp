@@ -1,0 +1,438 @@
+// glint/tracer/path_tracer.hpp: the bundled reference path tracer, composed of policies.
+//
+// 000 section 1.3 (lines 200-735): the rendering equation L = Le + T L is estimated by random
+// walks; at every diffuse or glossy vertex the direct illumination is estimated by a
+// direct-lighting policy (next-event estimation), and the walk continues or stops by a
+// Russian-roulette policy with a BRDF-selection estimator (000 sections 2.1-2.3 through
+// glint::scatter). Policies:
+//   Accel    anything with closest_hit(ray, StoreHit&) and any_hit(ray) (trees/, BruteForce);
+//   Sampler  glint::Sampler (RandomSampler, HaltonSampler);
+//   Roulette glint::RoulettePolicy (classic, spectral, radiance estimate);
+//   Direct   BrdfOnlyDirect (no next-event estimation: emission is collected where paths hit
+//            it), MisDirect (light sampling and BRDF sampling combined by the balance
+//            heuristic, Veach 1995), CorrelatedDirect (000 section 3.2: multiple correlated
+//            sampling of polygon lights, with the importance, correlated or combined
+//            estimator chosen at run time so that the three are compared on equal code).
+//   Env, Points  compile-time switches: a scene without an environment map or point lights
+//            gets a tracer with no environment or point-light code on the path.
+// Specular (mirror, dielectric) vertices are followed deterministically (Fresnel choice for
+// dielectrics) and count emission on the next hit, as camera rays do.
+//
+// Rendering is multithreaded over 16x16 tiles with std::thread; every pixel sample draws from
+// the sampler's stream for (x, y, sample index), so the image does not depend on the thread
+// count or the order tiles are rendered in.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <mutex>
+#include <span>
+#include <thread>
+#include <vector>
+
+#include <glint/core/image.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/sampling/correlated.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/sampling/sampler.hpp>
+#include <glint/sampling/warps.hpp>
+#include <glint/tracer/brdf.hpp>
+#include <glint/tracer/scene.hpp>
+
+namespace glint {
+
+/// Which estimator CorrelatedDirect returns (000 section 3.2): lambda = 0, lambda = 1, or
+/// lambda estimated from the samples (eq. 3.3).
+enum class DirectEstimator { importance, correlated, combined };
+
+struct RenderSettings {
+    int width = 256, height = 256;
+    int spp = 16;
+    int max_depth = 64;          // hard cap; roulette usually stops walks much earlier
+    int light_samples = 1;       // per area light and vertex (CorrelatedDirect, MisDirect)
+    int threads = 0;             // 0: std::thread::hardware_concurrency()
+    BrdfSelection selection = BrdfSelection::mis;
+    DirectEstimator estimator = DirectEstimator::combined;
+    bool progress = false;       // progress bar on stderr
+};
+
+struct RenderResult {
+    Image<Rgb<float>> image;     // mean radiance per pixel
+    Image<Rgb<float>> variance;  // variance of that mean (sample variance / spp)
+    Image<float> lambda;         // mean lambda of the primary vertices (CorrelatedDirect)
+    double seconds = 0;
+    std::uint64_t rays = 0;      // closest-hit plus shadow rays
+};
+
+/// The per-vertex inputs of a direct-lighting policy.
+template <Scalar T>
+struct ShadingPoint {
+    Vec3<T> x;          // position
+    Vec3<T> n;          // normal on the side of the outgoing direction
+    Frame<T> frame;     // local frame about n
+    const SurfaceBrdf<T>* brdf;
+};
+
+/// No next-event estimation: the walk collects emission wherever it hits it.
+struct BrdfOnlyDirect {
+    static constexpr const char* name = "brdf";
+    static constexpr bool collects_emission = true;
+};
+
+/// Light sampling (area lights by power, then uniform area; the environment by its map) and
+/// one BRDF sample, combined by the balance heuristic.
+struct MisDirect {
+    static constexpr const char* name = "mis";
+    static constexpr bool collects_emission = false;
+};
+
+/// 000 section 3.2: per area light, K points uniform on the polygon; f = Le fr G V,
+/// main part g = Le fr~ G (V dropped, fr~ = kd / pi) with J from the point-to-polygon form
+/// factor (eq. 3.4); the estimator (importance, correlated, combined) is a run-time setting.
+/// The environment, if any, is sampled as in MisDirect.
+struct CorrelatedDirect {
+    static constexpr const char* name = "correlated";
+    static constexpr bool collects_emission = false;
+};
+
+template <class D>
+concept DirectLighting = requires {
+    { D::name } -> std::convertible_to<const char*>;
+    { D::collects_emission } -> std::convertible_to<bool>;
+};
+
+template <class Accel, class S, class R, DirectLighting D, bool Env, bool Points, Scalar T = float>
+    requires Sampler<S, T> && RoulettePolicy<R, T, 3>
+class PathTracer {
+public:
+    PathTracer(const Scene<T>& scene, const Accel& accel, const R& roulette, const RenderSettings& settings)
+        : scene_(scene), accel_(accel), roulette_(roulette), settings_(settings) {
+        scene.validate();
+        for (const auto& l : scene.area_lights) {
+            lights_.emplace_back(std::span<const Vec3<T>>(l.vertices), l.emission);
+            light_power_ += l.emission.luminance() * l.area;
+            light_cdf_.push_back(light_power_);
+        }
+    }
+
+    /// Renders with one sampler per thread, copied from `prototype`.
+    RenderResult render(const S& prototype) const {
+        const int w = settings_.width, h = settings_.height, spp = std::max(1, settings_.spp);
+        RenderResult out{Image<Rgb<float>>(w, h), Image<Rgb<float>>(w, h), Image<float>(w, h), 0, 0};
+        const int tile = 16, tx = (w + tile - 1) / tile, ty = (h + tile - 1) / tile, tiles = tx * ty;
+        std::atomic<int> next{0}, done{0};
+        std::atomic<std::uint64_t> rays{0};
+        std::mutex progress_mutex;
+        const auto start = std::chrono::steady_clock::now();
+        auto worker = [&] {
+            S sampler = prototype;
+            std::uint64_t local_rays = 0;
+            for (int t = next++; t < tiles; t = next++) {
+                const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
+                for (int y = y0; y < std::min(y0 + tile, h); ++y)
+                    for (int x = x0; x < std::min(x0 + tile, w); ++x) render_pixel(x, y, spp, sampler, out, local_rays);
+                const int d = ++done;
+                if (settings_.progress) {
+                    std::lock_guard lock(progress_mutex);
+                    const int bar = 40 * d / tiles;
+                    std::fprintf(stderr, "\r[%.*s%.*s] %3d%%", bar, "########################################",
+                                 40 - bar, "                                        ", 100 * d / tiles);
+                    if (d == tiles) std::fprintf(stderr, "\n");
+                }
+            }
+            rays += local_rays;
+        };
+        int threads = settings_.threads > 0 ? settings_.threads : int(std::thread::hardware_concurrency());
+        threads = std::clamp(threads, 1, tiles);
+        std::vector<std::thread> pool;
+        for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+        worker();
+        for (auto& th : pool) th.join();
+        out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        out.rays = rays;
+        return out;
+    }
+
+    /// Radiance along one camera ray (for tests); `rays` counts traced rays.
+    Rgb<T> radiance(Ray<T> ray, S& sampler, std::uint64_t& rays, T* lambda_out = nullptr) const {
+        Rgb<T> L(T(0)), F(T(1));
+        bool count_emission = true;
+        for (int depth = 0; depth < settings_.max_depth; ++depth) {
+            StoreHit<T> hit;
+            ++rays;
+            if (!accel_.closest_hit(ray, hit)) {
+                if constexpr (Env)
+                    if (count_emission) L += F * scene_.environment->eval(ray.direction);
+                break;
+            }
+            const std::uint32_t tri = hit.id;
+            const Material<T>& m = scene_.materials[scene_.material_of[tri]];
+            const Vec3<T> ng = scene_.normal(tri);
+            const bool front = glm::dot(ng, ray.direction) < T(0);
+            const Vec3<T> n = front ? ng : -ng;
+            const Vec3<T> x = ray.at(hit.t);
+            if (count_emission && front && m.emissive()) L += F * m.emission;
+
+            if (m.specular()) {
+                Vec3<T> wi;
+                Rgb<T> albedo = m.ks;
+                if (m.kind == MaterialKind::mirror) {
+                    wi = ray.direction - n * (T(2) * glm::dot(ray.direction, n));
+                } else {
+                    wi = refract_or_reflect(ray.direction, ng, m.ior, sampler.get_1d());
+                    albedo = Rgb<T>(T(1));
+                }
+                const std::array<Rgb<T>, 1> lobes{albedo};
+                const auto sel = select_lobe(roulette_, F, std::span<const Rgb<T>>(lobes), sampler.get_1d());
+                if constexpr (R::has_radiance_estimate) L += F * sel.offset;
+                if (sel.terminated()) break;
+                F *= albedo / sel.probability[0];
+                ray = spawn(x, ng, wi);
+                count_emission = true;
+                continue;
+            }
+
+            const Frame<T> frame = Frame<T>::from_normal(n);
+            const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
+            const ShadingPoint<T> sp{x, n, frame, &brdf};
+            if constexpr (!D::collects_emission) {
+                L += F * direct(sp, sampler, rays, depth == 0 ? lambda_out : nullptr);
+            }
+            if constexpr (Points) L += F * point_lights(sp, rays);
+
+            const T u_select = sampler.get_1d();
+            const Vec2<T> u_dir = sampler.get_2d();
+            ScatterSample<T, 3> s;
+            switch (settings_.selection) {
+                case BrdfSelection::decomposition:
+                    s = scatter<BrdfSelection::decomposition>(brdf, roulette_, F, u_select, u_dir);
+                    break;
+                case BrdfSelection::weighted:
+                    s = scatter<BrdfSelection::weighted>(brdf, roulette_, F, u_select, u_dir);
+                    break;
+                default: s = scatter<BrdfSelection::mis>(brdf, roulette_, F, u_select, u_dir); break;
+            }
+            if constexpr (R::has_radiance_estimate) L += F * s.offset;
+            if (s.terminated()) break;
+            F *= s.weight;
+            if (F.max() <= T(0) || !F.is_finite()) break;  // nothing more can contribute
+            ray = spawn(x, ng, frame.to_world(s.direction));
+            count_emission = D::collects_emission;
+        }
+        return L;
+    }
+
+private:
+    void render_pixel(int x, int y, int spp, S& sampler, RenderResult& out, std::uint64_t& rays) const {
+        const T aspect = T(settings_.width) / T(settings_.height);
+        Rgb<T> mean(T(0)), m2(T(0));
+        T lambda_sum = 0;
+        int lambda_count = 0;
+        for (int i = 0; i < spp; ++i) {
+            sampler.start_pixel_sample(x, y, std::uint64_t(i));
+            const Vec2<T> p = sampler.get_pixel_2d();
+            const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
+            T lambda = std::numeric_limits<T>::quiet_NaN();
+            Rgb<T> L = radiance(ray, sampler, rays, &lambda);
+            if (!L.is_finite()) L = Rgb<T>(T(0));  // never let one sample poison a pixel
+            if (!std::isnan(lambda)) {
+                lambda_sum += lambda;
+                ++lambda_count;
+            }
+            const Rgb<T> delta = L - mean;
+            mean += delta / T(i + 1);
+            m2 += delta * (L - mean);
+        }
+        for (std::size_t c = 0; c < 3; ++c) {
+            out.image.at(x, y)[c] = float(mean[c]);
+            out.variance.at(x, y)[c] = spp > 1 ? float(m2[c] / T(spp - 1) / T(spp)) : 0.0f;
+        }
+        out.lambda.at(x, y) = lambda_count ? float(lambda_sum / T(lambda_count)) : 0.0f;
+    }
+
+    /// Offset origin on the side of the surface the new direction leaves to.
+    static Ray<T> spawn(const Vec3<T>& x, const Vec3<T>& ng, const Vec3<T>& dir) {
+        const T scale = T(1) + std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z)});
+        const T eps = scale * T(sizeof(T) == 4 ? 2e-5 : 1e-10);
+        const Vec3<T> side = glm::dot(dir, ng) >= T(0) ? ng : -ng;
+        return Ray<T>{x + side * eps, dir, T(0), infinity<T>};
+    }
+    /// Shadow ray from x (offset along n) to y, stopping short of y.
+    bool visible(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& y, std::uint64_t& rays) const {
+        const Ray<T> r = spawn(x, n, y - x);
+        ++rays;
+        return !accel_.any_hit(Ray<T>{r.origin, y - r.origin, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)});
+    }
+
+    static T balance(T a, T b) { return a + b > T(0) ? a / (a + b) : T(0); }
+
+    /// Dielectric: Fresnel reflectance chooses reflection or refraction (ior relative to
+    /// the side the normal points away from).
+    static Vec3<T> refract_or_reflect(const Vec3<T>& d, const Vec3<T>& ng, T ior, T u) {
+        const Vec3<T> dn = safe_normalize(d);
+        T cos_i = -glm::dot(dn, ng);
+        Vec3<T> n = ng;
+        T eta = T(1) / ior;
+        if (cos_i < T(0)) {
+            cos_i = -cos_i;
+            n = -ng;
+            eta = ior;
+        }
+        const T sin2_t = eta * eta * std::max(T(0), T(1) - cos_i * cos_i);
+        const Vec3<T> reflected = dn + n * (T(2) * cos_i);
+        if (sin2_t >= T(1)) return reflected;
+        const T cos_t = std::sqrt(T(1) - sin2_t);
+        const T rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t), rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+        const T fresnel = T(0.5) * (rs * rs + rp * rp);
+        if (u < fresnel) return reflected;
+        return dn * eta + n * (eta * cos_i - cos_t);
+    }
+
+    /// Index of the area light chosen by u (proportional to power); its probability.
+    std::size_t pick_light(T u, T& prob) const {
+        const T target = u * light_power_;
+        std::size_t i = std::size_t(std::upper_bound(light_cdf_.begin(), light_cdf_.end(), target) - light_cdf_.begin());
+        i = std::min(i, lights_.size() - 1);
+        prob = (light_cdf_[i] - (i ? light_cdf_[i - 1] : T(0))) / light_power_;
+        return i;
+    }
+
+    Rgb<T> direct(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays, T* lambda_out) const {
+        Rgb<T> L(T(0));
+        if constexpr (std::is_same_v<D, CorrelatedDirect>) {
+            if (!lights_.empty()) {
+                std::array<Vec2<T>, 64> u;
+                const std::size_t k = std::size_t(std::clamp(settings_.light_samples, 1, 64));
+                T lambda_sum = 0;
+                for (const auto& light : lights_) {
+                    for (std::size_t i = 0; i < k; ++i) u[i] = sampler.get_2d();
+                    const Rgb<T> fr_approx = sp.brdf->kd() / pi<T>;
+                    const auto res = correlated_direct(
+                        light, sp.x, sp.n, [&](const Vec3<T>& wi) { return sp.brdf->f(sp.frame.to_local(wi)); },
+                        fr_approx, [&](const Vec3<T>& a, const Vec3<T>& b) { return visible(a, sp.n, b, rays); },
+                        std::span<const Vec2<T>>(u.data(), k));
+                    switch (settings_.estimator) {
+                        case DirectEstimator::importance: L += res.importance; break;
+                        case DirectEstimator::correlated: L += res.correlated; break;
+                        default: L += res.combined; break;
+                    }
+                    lambda_sum += res.lambda.mean();
+                }
+                if (lambda_out) *lambda_out = lambda_sum / T(lights_.size());
+            }
+        } else if constexpr (std::is_same_v<D, MisDirect>) {
+            const int k = std::max(1, settings_.light_samples);
+            for (int i = 0; i < k; ++i) L += mis_area_light(sp, sampler, rays) / T(k);
+        }
+        if constexpr (Env) L += mis_environment(sp, sampler, rays);
+        return L;
+    }
+
+    /// One light sample and one BRDF sample for the area lights, balance heuristic.
+    Rgb<T> mis_area_light(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays) const {
+        Rgb<T> L(T(0));
+        const T u_light = sampler.get_1d();
+        const Vec2<T> u_point = sampler.get_2d();
+        const Vec2<T> u_dir = sampler.get_2d();
+        if (lights_.empty()) return L;
+        // Light sampling.
+        T prob;
+        const std::size_t li = pick_light(u_light, prob);
+        const auto& light = lights_[li];
+        const Vec3<T> y = light.sampler().sample(u_point);
+        const Vec3<T> d = y - sp.x;
+        const T r2 = glm::dot(d, d);
+        const Vec3<T> wi = d / std::sqrt(r2);
+        const T cos_l = -glm::dot(wi, light.sampler().normal());
+        const Vec3<T> wl = sp.frame.to_local(wi);
+        if (cos_l > T(0) && wl.z > T(0)) {
+            const T pdf_light = prob / light.sampler().area() * r2 / cos_l;
+            const Rgb<T> f = sp.brdf->f(wl);
+            if (f.max() > T(0) && visible(sp.x, sp.n, y, rays))
+                L += light.radiance() * f * (wl.z * balance(pdf_light, sp.brdf->sampling_pdf(wl)) / pdf_light);
+        }
+        // BRDF sampling: a lobe by the luminance of its albedo, then its direction.
+        const Vec3<T> wb = sample_brdf(*sp.brdf, u_dir);
+        const T pdf_brdf = sp.brdf->sampling_pdf(wb);
+        if (!(pdf_brdf > T(0)) || wb.z <= T(0)) return L;
+        const Ray<T> r = spawn(sp.x, sp.n, sp.frame.to_world(wb));
+        StoreHit<T> h;
+        ++rays;
+        if (!accel_.closest_hit(r, h)) return L;
+        const std::int32_t hit_light = scene_.light_of[h.id];
+        if (hit_light < 0) return L;
+        const auto& al = scene_.area_lights[std::size_t(hit_light)];
+        const T cos_l2 = -glm::dot(r.direction, al.normal) / glm::length(r.direction);
+        if (cos_l2 <= T(0)) return L;
+        const T dist2 = h.t * h.t * glm::dot(r.direction, r.direction);
+        const T p_pick = al.emission.luminance() * al.area / light_power_;
+        const T pdf_light = p_pick / al.area * dist2 / cos_l2;
+        L += al.emission * sp.brdf->f(wb) * (wb.z * balance(pdf_brdf, pdf_light) / pdf_brdf);
+        return L;
+    }
+
+    static Vec3<T> sample_brdf(const SurfaceBrdf<T>& brdf, Vec2<T> u) {
+        if (brdf.lobe_count() == 1) return brdf.sample(0, u);
+        const T a0 = brdf.albedo(0).luminance(), a1 = brdf.albedo(1).luminance();
+        const T p0 = a0 + a1 > T(0) ? a0 / (a0 + a1) : T(1);
+        if (u.x < p0) {
+            u.x = std::min(u.x / p0, T(1) - std::numeric_limits<T>::epsilon());
+            return brdf.sample(0, u);
+        }
+        u.x = std::min((u.x - p0) / (T(1) - p0), T(1) - std::numeric_limits<T>::epsilon());
+        return brdf.sample(1, u);
+    }
+
+    Rgb<T> mis_environment(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays) const {
+        Rgb<T> L(T(0));
+        const auto& env = *scene_.environment;
+        const Vec2<T> u_env = sampler.get_2d(), u_dir = sampler.get_2d();
+        T pdf_env;
+        const Vec3<T> we = env.sample(u_env, pdf_env);
+        const Vec3<T> wl = sp.frame.to_local(we);
+        if (pdf_env > T(0) && wl.z > T(0)) {
+            const Rgb<T> f = sp.brdf->f(wl);
+            ++rays;
+            if (f.max() > T(0) && !accel_.any_hit(spawn(sp.x, sp.n, we)))
+                L += env.eval(we) * f * (wl.z * balance(pdf_env, sp.brdf->sampling_pdf(wl)) / pdf_env);
+        }
+        const Vec3<T> wb = sample_brdf(*sp.brdf, u_dir);
+        const T pdf_brdf = sp.brdf->sampling_pdf(wb);
+        if (pdf_brdf > T(0) && wb.z > T(0)) {
+            const Vec3<T> w = sp.frame.to_world(wb);
+            ++rays;
+            if (!accel_.any_hit(spawn(sp.x, sp.n, w)))
+                L += env.eval(w) * sp.brdf->f(wb) * (wb.z * balance(pdf_brdf, env.pdf(w)) / pdf_brdf);
+        }
+        return L;
+    }
+
+    Rgb<T> point_lights(const ShadingPoint<T>& sp, std::uint64_t& rays) const {
+        Rgb<T> L(T(0));
+        for (const auto& pl : scene_.point_lights) {
+            const Vec3<T> d = pl.position - sp.x;
+            const T r2 = glm::dot(d, d);
+            const Vec3<T> wl = sp.frame.to_local(d / std::sqrt(r2));
+            if (wl.z <= T(0)) continue;  // behind the shading plane: culled before any ray
+            if (visible(sp.x, sp.n, pl.position, rays)) L += pl.intensity * sp.brdf->f(wl) * (wl.z / r2);
+        }
+        return L;
+    }
+
+    const Scene<T>& scene_;
+    const Accel& accel_;
+    R roulette_;
+    RenderSettings settings_;
+    std::vector<PolygonLight<T, 3>> lights_;
+    std::vector<T> light_cdf_;
+    T light_power_ = 0;
+};
+
+}  // namespace glint

@@ -1,0 +1,202 @@
+// glint/tracer/scene.hpp: what the reference path tracer renders: triangle meshes with
+// per-face materials, polygon area lights, point lights, an optional environment map and a
+// pinhole camera; plus the scene features the tracer checks once, before rendering, to
+// choose the variant that skips what the scene does not need.
+//
+// Materials (000 section 1.3, lines 200-735, and section 2.1 for the combined BRDF):
+//   lambertian  f = kd / pi;
+//   glossy      kd / pi + ks (n + 2) / (2 pi) cos^n(alpha), alpha = angle to the mirror
+//               direction (the energy-normalized Phong lobe, Lafortune and Willems 1994):
+//               the two-lobe BRDF of 000's BRDF-selection experiments (Fig. 2.1);
+//   mirror      ideal reflection with reflectance ks;
+//   dielectric  ideal refraction and reflection with Fresnel weights (index ior).
+// Any material may emit (emission = radiance leaving the front face).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/tracer/environment.hpp>
+
+namespace glint {
+
+enum class MaterialKind : std::uint8_t { lambertian, glossy, mirror, dielectric };
+
+template <Scalar T>
+struct Material {
+    MaterialKind kind = MaterialKind::lambertian;
+    Rgb<T> kd{T(0.5)};
+    Rgb<T> ks{T(0)};
+    T exponent = T(20);
+    Rgb<T> emission{T(0)};
+    T ior = T(1.5);
+
+    bool emissive() const { return emission.max() > T(0); }
+    bool specular() const { return kind == MaterialKind::mirror || kind == MaterialKind::dielectric; }
+
+    static Material lambertian(const Rgb<T>& kd, const Rgb<T>& emission = Rgb<T>(T(0))) {
+        return Material{MaterialKind::lambertian, kd, Rgb<T>(T(0)), T(20), emission, T(1.5)};
+    }
+    static Material glossy(const Rgb<T>& kd, const Rgb<T>& ks, T exponent) {
+        return Material{MaterialKind::glossy, kd, ks, exponent, Rgb<T>(T(0)), T(1.5)};
+    }
+    static Material mirror(const Rgb<T>& ks) {
+        return Material{MaterialKind::mirror, Rgb<T>(T(0)), ks, T(0), Rgb<T>(T(0)), T(1.5)};
+    }
+    static Material dielectric(T ior) {
+        return Material{MaterialKind::dielectric, Rgb<T>(T(0)), Rgb<T>(T(1)), T(0), Rgb<T>(T(0)), ior};
+    }
+};
+
+/// A planar convex polygon that emits `emission` from its front side (the side its normal,
+/// from the vertices' counter-clockwise order, points to).
+template <Scalar T>
+struct AreaLight {
+    std::vector<Vec3<T>> vertices;
+    Rgb<T> emission{T(0)};
+    Vec3<T> normal{0, 0, 1};
+    T area = 0;
+};
+
+template <Scalar T>
+struct PointLight {
+    Vec3<T> position{0};
+    Rgb<T> intensity{T(0)};  // W/sr per band: irradiance I cos / r^2
+};
+
+/// Pinhole camera: `fov_y` is the full vertical field of view in radians.
+template <Scalar T>
+struct Camera {
+    Vec3<T> eye{0, 0, 5}, target{0}, up{0, 1, 0};
+    T fov_y = T(0.7);
+
+    /// Ray through film position (sx, sy) in [0,1]^2, (0,0) at the top left.
+    Ray<T> ray(T sx, T sy, T aspect) const {
+        const Vec3<T> w = safe_normalize(target - eye);
+        const Vec3<T> u = safe_normalize(glm::cross(w, up), Vec3<T>(1, 0, 0));
+        const Vec3<T> v = glm::cross(u, w);
+        const T h = std::tan(fov_y * T(0.5));
+        const Vec3<T> d = w + u * ((T(2) * sx - T(1)) * h * aspect) + v * ((T(1) - T(2) * sy) * h);
+        return Ray<T>{eye, safe_normalize(d), T(0), infinity<T>};
+    }
+};
+
+/// Which capabilities a scene uses; the tracer instantiates the variant that has exactly
+/// these, so that a scene without them does not pay for them.
+struct SceneFeatures {
+    bool environment = false;
+    bool point_lights = false;
+    bool area_lights = false;
+    bool specular = false;
+    bool grey = true;  // every reflectance and emission equal in all bands
+};
+
+template <Scalar T>
+class Scene {
+public:
+    std::string name = "scene";
+    std::vector<TriangleVertices<T>> triangles;
+    std::vector<std::uint32_t> material_of;  // per triangle
+    std::vector<Material<T>> materials;
+    std::vector<AreaLight<T>> area_lights;
+    std::vector<std::int32_t> light_of;  // per triangle: index of its area light, or -1
+    std::vector<PointLight<T>> point_lights;
+    std::optional<EnvironmentMap<T>> environment;
+    Camera<T> camera;
+
+    /// Adds a material, returns its index.
+    std::uint32_t add_material(const Material<T>& m) {
+        materials.push_back(m);
+        return static_cast<std::uint32_t>(materials.size() - 1);
+    }
+
+    /// Adds a planar convex polygon (counter-clockwise seen from its front) as triangles of
+    /// material `m`; an emissive material also makes it an area light.
+    void add_polygon(std::span<const Vec3<T>> poly, std::uint32_t m) {
+        if (poly.size() < 3) throw Error("Scene::add_polygon: a polygon needs at least 3 vertices");
+        if (m >= materials.size()) throw Error("Scene::add_polygon: material " + std::to_string(m) + " does not exist");
+        std::int32_t light = -1;
+        if (materials[m].emissive()) {
+            AreaLight<T> l;
+            l.vertices.assign(poly.begin(), poly.end());
+            l.emission = materials[m].emission;
+            Vec3<T> n(0);
+            for (std::size_t i = 1; i + 1 < poly.size(); ++i) n += glm::cross(poly[i] - poly[0], poly[i + 1] - poly[0]);
+            l.area = glm::length(n) * T(0.5);
+            l.normal = safe_normalize(n);
+            if (!(l.area > T(0))) throw Error("Scene::add_polygon: emissive polygon has zero area");
+            area_lights.push_back(std::move(l));
+            light = static_cast<std::int32_t>(area_lights.size() - 1);
+        }
+        for (std::size_t i = 1; i + 1 < poly.size(); ++i) {
+            triangles.push_back({poly[0], poly[i], poly[i + 1]});
+            material_of.push_back(m);
+            light_of.push_back(light);
+        }
+    }
+    void add_quad(const Vec3<T>& a, const Vec3<T>& b, const Vec3<T>& c, const Vec3<T>& d, std::uint32_t m) {
+        const std::array<Vec3<T>, 4> q{a, b, c, d};
+        add_polygon(q, m);
+    }
+
+    /// Checks consistency; throws glint::Error with what is wrong.
+    void validate() const {
+        if (triangles.empty()) throw Error("scene '" + name + "' has no triangles");
+        if (material_of.size() != triangles.size() || light_of.size() != triangles.size())
+            throw Error("scene '" + name + "': per-triangle arrays disagree in size");
+        for (std::uint32_t m : material_of)
+            if (m >= materials.size()) throw Error("scene '" + name + "': a triangle has no material");
+    }
+
+    SceneFeatures features() const {
+        SceneFeatures f;
+        f.environment = environment.has_value();
+        f.point_lights = !point_lights.empty();
+        f.area_lights = !area_lights.empty();
+        auto grey = [](const Rgb<T>& s) { return s[0] == s[1] && s[1] == s[2]; };
+        for (const auto& m : materials) {
+            f.specular |= m.specular();
+            f.grey &= grey(m.kd) && grey(m.ks) && grey(m.emission);
+        }
+        return f;
+    }
+
+    /// Unit geometric normal of triangle i (from its vertex order).
+    Vec3<T> normal(std::size_t i) const {
+        const auto& t = triangles[i];
+        return safe_normalize(glm::cross(t[1] - t[0], t[2] - t[0]));
+    }
+
+    /// Total emitted power of the area lights per band (Phi = pi Le A for a Lambertian
+    /// emitter), the total surface area and the area-weighted mean albedo: the inputs of
+    /// 000 section 2.3's scene-wide radiance estimate.
+    void radiance_estimate_inputs(Rgb<T>& power, T& area, Rgb<T>& mean_albedo) const {
+        power = Rgb<T>(T(0));
+        for (const auto& l : area_lights) power += l.emission * (pi<T> * l.area);
+        area = 0;
+        mean_albedo = Rgb<T>(T(0));
+        for (std::size_t i = 0; i < triangles.size(); ++i) {
+            const auto& t = triangles[i];
+            const T a = glm::length(glm::cross(t[1] - t[0], t[2] - t[0])) * T(0.5);
+            const Material<T>& m = materials[material_of[i]];
+            area += a;
+            mean_albedo += (m.kd + m.ks) * a;
+        }
+        if (area > T(0)) mean_albedo /= area;
+        mean_albedo = min(mean_albedo, Rgb<T>(T(0.999)));
+    }
+};
+
+}  // namespace glint

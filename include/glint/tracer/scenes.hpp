@@ -1,0 +1,203 @@
+// glint/tracer/scenes.hpp: the built-in scenes, generated in code so that tests need no
+// files, and scenes made from OBJ meshes.
+//
+//   cornell         the Cornell box, measured geometry (Cornell University Program of
+//                   Computer Graphics, as converted by Cardenas and McGuire 2011) and
+//                   measured reflectances (white 0.725 0.71 0.68, red 0.63 0.065 0.05,
+//                   green 0.14 0.45 0.091; light 17 12 4);
+//   cornell-glossy  the same box with diffuse + Phong materials, for the BRDF-selection
+//                   experiment of 000 section 2.1 (Fig. 2.1);
+//   furnace         000 section 2.2's saturated furnace: a closed room whose six walls carry
+//                   the six permutations of the albedo (1.0, 0.5, 0.2) over RGB and emit
+//                   1 - albedo, so the radiance is exactly 1 everywhere in every band
+//                   (L = E + a L has the solution L = 1 when E = 1 - a);
+//   arealight       a room lit by one large area light covering a wall, with occluding
+//                   columns (000 section 3.2, Fig. 3.4);
+//   envmap          a sphere and a box on a ground plane under a procedural sky with a sun
+//                   (000 section 3.3, Fig. 3.7), or under a given lat-long EXR.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/tracer/environment.hpp>
+#include <glint/tracer/scene.hpp>
+
+namespace glint {
+
+namespace detail {
+
+/// An axis-aligned box [lo, hi] rotated by `angle` about the vertical axis through its
+/// centre; faces counter-clockwise from outside.
+template <Scalar T>
+void add_box(Scene<T>& s, const Vec3<T>& lo, const Vec3<T>& hi, T angle, std::uint32_t m) {
+    const Vec3<T> c = (lo + hi) * T(0.5);
+    const T ca = std::cos(angle), sa = std::sin(angle);
+    auto p = [&](int i) {
+        const Vec3<T> q((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z);
+        const Vec3<T> r = q - c;
+        return c + Vec3<T>(ca * r.x + sa * r.z, r.y, -sa * r.x + ca * r.z);
+    };
+    const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& f : faces) s.add_quad(p(f[0]), p(f[1]), p(f[2]), p(f[3]), m);
+}
+
+/// A UV sphere of `rings` x `segments` quads (split into triangles).
+template <Scalar T>
+void add_sphere(Scene<T>& s, const Vec3<T>& centre, T radius, int rings, int segments, std::uint32_t m) {
+    auto p = [&](int i, int j) {
+        const T theta = pi<T> * T(i) / T(rings), phi = T(2) * pi<T> * T(j) / T(segments);
+        return centre + Vec3<T>(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)) * radius;
+    };
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const std::array<Vec3<T>, 3> a{p(i, j), p(i, j + 1), p(i + 1, j + 1)};
+            const std::array<Vec3<T>, 3> b{p(i, j), p(i + 1, j + 1), p(i + 1, j)};
+            if (i != 0) s.add_polygon(a, m);
+            if (i != rings - 1) s.add_polygon(b, m);
+        }
+}
+
+/// A quad whose vertex order is flipped, if needed, so that its normal points to `toward`.
+template <Scalar T>
+void add_quad_facing(Scene<T>& s, Vec3<T> a, Vec3<T> b, Vec3<T> c, Vec3<T> d, const Vec3<T>& toward,
+                     std::uint32_t m) {
+    if (glm::dot(glm::cross(b - a, c - a), toward - a) < T(0)) std::swap(b, d);
+    s.add_quad(a, b, c, d, m);
+}
+
+template <Scalar T>
+Scene<T> cornell(bool glossy) {
+    Scene<T> s;
+    s.name = glossy ? "cornell-glossy" : "cornell";
+    const Rgb<T> white(T(0.725), T(0.71), T(0.68)), red(T(0.63), T(0.065), T(0.05)),
+        green(T(0.14), T(0.45), T(0.091));
+    auto surface = [&](const Rgb<T>& kd) {
+        // Glossy variant: the same total reflectance split 60/40 between a diffuse and a
+        // Phong lobe of exponent 40.
+        return s.add_material(glossy ? Material<T>::glossy(kd * T(0.6), kd * T(0.4), T(40)) : Material<T>::lambertian(kd));
+    };
+    const auto w = surface(white), r = surface(red), g = surface(green);
+    const auto light = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.78)), Rgb<T>(T(17), T(12), T(4))));
+    using V = Vec3<T>;
+    s.add_quad(V(-1.01, 0, 0.99), V(1.00, 0, 0.99), V(1.00, 0, -1.04), V(-0.99, 0, -1.04), w);         // floor
+    s.add_quad(V(-1.02, 1.99, 0.99), V(-1.02, 1.99, -1.04), V(1.00, 1.99, -1.04), V(1.00, 1.99, 0.99), w);  // ceiling
+    s.add_quad(V(-0.99, 0, -1.04), V(1.00, 0, -1.04), V(1.00, 1.99, -1.04), V(-1.02, 1.99, -1.04), w); // back
+    s.add_quad(V(1.00, 0, -1.04), V(1.00, 0, 0.99), V(1.00, 1.99, 0.99), V(1.00, 1.99, -1.04), g);      // right
+    s.add_quad(V(-1.01, 0, 0.99), V(-0.99, 0, -1.04), V(-1.02, 1.99, -1.04), V(-1.02, 1.99, 0.99), r);  // left
+    // Short box.
+    s.add_quad(V(0.53, 0.60, 0.75), V(0.70, 0.60, 0.17), V(0.13, 0.60, 0.00), V(-0.05, 0.60, 0.57), w);
+    s.add_quad(V(-0.05, 0, 0.57), V(-0.05, 0.60, 0.57), V(0.13, 0.60, 0.00), V(0.13, 0, 0.00), w);
+    s.add_quad(V(0.53, 0, 0.75), V(0.53, 0.60, 0.75), V(-0.05, 0.60, 0.57), V(-0.05, 0, 0.57), w);
+    s.add_quad(V(0.70, 0, 0.17), V(0.70, 0.60, 0.17), V(0.53, 0.60, 0.75), V(0.53, 0, 0.75), w);
+    s.add_quad(V(0.13, 0, 0.00), V(0.13, 0.60, 0.00), V(0.70, 0.60, 0.17), V(0.70, 0, 0.17), w);
+    // Tall box.
+    s.add_quad(V(-0.53, 1.20, 0.09), V(0.04, 1.20, -0.09), V(-0.14, 1.20, -0.67), V(-0.71, 1.20, -0.49), w);
+    s.add_quad(V(-0.53, 0, 0.09), V(-0.53, 1.20, 0.09), V(-0.71, 1.20, -0.49), V(-0.71, 0, -0.49), w);
+    s.add_quad(V(-0.71, 0, -0.49), V(-0.71, 1.20, -0.49), V(-0.14, 1.20, -0.67), V(-0.14, 0, -0.67), w);
+    s.add_quad(V(-0.14, 0, -0.67), V(-0.14, 1.20, -0.67), V(0.04, 1.20, -0.09), V(0.04, 0, -0.09), w);
+    s.add_quad(V(0.04, 0, -0.09), V(0.04, 1.20, -0.09), V(-0.53, 1.20, 0.09), V(-0.53, 0, 0.09), w);
+    // Light, facing down, just below the ceiling.
+    add_quad_facing(s, V(-0.24, 1.98, 0.16), V(-0.24, 1.98, -0.22), V(0.23, 1.98, -0.22), V(0.23, 1.98, 0.16),
+                    V(0, 0, 0), light);
+    s.camera = Camera<T>{V(0, 1, 3.9), V(0, 1, 0), V(0, 1, 0), T(0.68)};
+    return s;
+}
+
+template <Scalar T>
+Scene<T> furnace() {
+    Scene<T> s;
+    s.name = "furnace";
+    const T a[3] = {T(1.0), T(0.5), T(0.2)};
+    const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    std::uint32_t m[6];
+    for (int i = 0; i < 6; ++i) {
+        const Rgb<T> albedo(a[perms[i][0]], a[perms[i][1]], a[perms[i][2]]);
+        m[i] = s.add_material(Material<T>::lambertian(albedo, Rgb<T>(T(1)) - albedo));
+    }
+    using V = Vec3<T>;
+    // Faces of the cube [-1,1]^3, emitting towards its centre.
+    const V o(0);
+    add_quad_facing(s, V(-1, -1, -1), V(1, -1, -1), V(1, -1, 1), V(-1, -1, 1), o, m[0]);  // floor
+    add_quad_facing(s, V(-1, 1, -1), V(-1, 1, 1), V(1, 1, 1), V(1, 1, -1), o, m[1]);      // ceiling
+    add_quad_facing(s, V(-1, -1, -1), V(-1, 1, -1), V(1, 1, -1), V(1, -1, -1), o, m[2]);  // back
+    add_quad_facing(s, V(-1, -1, 1), V(1, -1, 1), V(1, 1, 1), V(-1, 1, 1), o, m[3]);      // front
+    add_quad_facing(s, V(-1, -1, -1), V(-1, -1, 1), V(-1, 1, 1), V(-1, 1, -1), o, m[4]);  // left
+    add_quad_facing(s, V(1, -1, -1), V(1, 1, -1), V(1, 1, 1), V(1, -1, 1), o, m[5]);      // right
+    s.camera = Camera<T>{V(0, 0, 0.5), V(0.2, -0.1, -1), V(0, 1, 0), T(1.2)};
+    return s;
+}
+
+template <Scalar T>
+Scene<T> arealight() {
+    Scene<T> s;
+    s.name = "arealight";
+    const auto w = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.7))));
+    const auto col = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.6), T(0.55), T(0.5))));
+    const auto light = s.add_material(Material<T>::lambertian(Rgb<T>(T(0)), Rgb<T>(T(3))));
+    using V = Vec3<T>;
+    // Room [-3,3] x [0,3] x [-3,3]; the wall x = -3 is entirely an area light facing +x.
+    s.add_quad(V(-3, 0, -3), V(-3, 0, 3), V(3, 0, 3), V(3, 0, -3), w);  // floor (up)
+    s.add_quad(V(-3, 3, -3), V(3, 3, -3), V(3, 3, 3), V(-3, 3, 3), w);  // ceiling
+    s.add_quad(V(-3, 0, -3), V(3, 0, -3), V(3, 3, -3), V(-3, 3, -3), w);  // back
+    s.add_quad(V(3, 0, -3), V(3, 0, 3), V(3, 3, 3), V(3, 3, -3), w);    // right
+    s.add_quad(V(-3, 0, 3), V(3, 0, 3), V(3, 3, 3), V(-3, 3, 3), w);    // front (behind the camera)
+    add_quad_facing(s, V(-3, 0, -3), V(-3, 3, -3), V(-3, 3, 3), V(-3, 0, 3), V(0, 1.5, 0), light);  // light wall
+    // Columns between the light and the room.
+    for (int i = 0; i < 4; ++i) {
+        const T z = T(-2.25) + T(1.5) * T(i);
+        add_box(s, V(-1.8, 0, z - 0.2), V(-1.4, 2.6, z + 0.2), T(0.3) * T(i), col);
+    }
+    s.camera = Camera<T>{V(2.6, 2.4, 2.6), V(-0.8, 0.6, -0.4), V(0, 1, 0), T(1.0)};
+    return s;
+}
+
+template <Scalar T>
+Scene<T> envmap(std::optional<EnvironmentMap<T>> map = std::nullopt) {
+    Scene<T> s;
+    s.name = "envmap";
+    const auto ground = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.5))));
+    const auto ball = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.8), T(0.3), T(0.2))));
+    const auto box = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.3), T(0.5), T(0.8))));
+    using V = Vec3<T>;
+    s.add_quad(V(-6, 0, -6), V(-6, 0, 6), V(6, 0, 6), V(6, 0, -6), ground);
+    add_sphere(s, V(-0.7, 1, 0), T(1), 24, 48, ball);
+    add_box(s, V(0.7, 0, -0.6), V(1.9, 1.2, 0.6), T(0.5), box);
+    if (map) {
+        s.environment = std::move(map);
+    } else {
+        s.environment = EnvironmentMap<T>::sky(256, 128, V(0.5, 0.6, 0.3), Rgb<float>(4000.0f, 3600.0f, 3000.0f),
+                                               0.03f, Rgb<float>(0.25f, 0.45f, 0.9f),
+                                               Rgb<float>(0.8f, 0.85f, 0.95f), Rgb<float>(0.15f));
+    }
+    s.camera = Camera<T>{V(0, 2.2, 6), V(0, 0.8, 0), V(0, 1, 0), T(0.75)};
+    return s;
+}
+
+}  // namespace detail
+
+/// Names accepted by builtin_scene().
+inline const std::vector<std::string>& builtin_scene_names() {
+    static const std::vector<std::string> names{"cornell", "cornell-glossy", "furnace", "arealight", "envmap"};
+    return names;
+}
+
+/// A built-in scene by name; throws glint::Error listing the names for an unknown one.
+template <Scalar T>
+Scene<T> builtin_scene(const std::string& name) {
+    if (name == "cornell") return detail::cornell<T>(false);
+    if (name == "cornell-glossy") return detail::cornell<T>(true);
+    if (name == "furnace") return detail::furnace<T>();
+    if (name == "arealight") return detail::arealight<T>();
+    if (name == "envmap") return detail::envmap<T>();
+    std::string list;
+    for (const auto& n : builtin_scene_names()) list += (list.empty() ? "" : ", ") + n;
+    throw Error("unknown scene '" + name + "' (built-in scenes: " + list + ")");
+}
+
+}  // namespace glint
