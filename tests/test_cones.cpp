@@ -441,11 +441,9 @@ namespace {
 /// every pass to be identical. Returns the engine's counts.
 template <class P>
 PassStats compare_passes(const Mesh<typename P::scalar_type>& mesh, std::vector<Ray<typename P::scalar_type>> rays,
-                         const TileGrid& grid, int passes, ConeOrder order = ConeOrder::directions_first) {
+                         const TileGrid& grid, int passes, const TileOptions& opt = TileOptions{}) {
     using T = typename P::scalar_type;
     const std::span<const TriangleVertices<T>> tris(mesh);
-    ConeOptions opt;
-    opt.order = order;
     const RayTileEngine<P> engine(tris, opt);
     const BruteForce<P> brute(tris);
     const AABB<T> box = mesh_bounds(tris);
@@ -496,17 +494,22 @@ std::vector<Ray<T>> camera(const Mesh<T>& mesh, int w, int h) {
 TEST_CASE("agreement: glass passes of the ray-tile engine are identical to brute force") {
     const Mesh<float> knot = make_torus_knot<float>(60, 10);  // 1200 triangles
     const int n = image_size;
-    for (int tile : {8, 16}) {
-        CAPTURE(tile);
-        const PassStats s = compare_passes<Ivm<float>>(knot, camera(knot, n, n), TileGrid(n, n, tile), 5);
-        MESSAGE("tile " << tile << ": " << s.passes << " passes, " << s.rays << " rays, tests per ray "
-                        << s.tests_per_ray() << " of " << knot.size() << ", fallback cones " << s.tiles_all << "/"
-                        << s.tiles);
-        CHECK(s.passes >= 3);
-        CHECK(s.tests_per_ray() < 0.5 * double(knot.size()));  // the cones cull
-    }
+    for (int tile : {8, 16})
+        for (bool split : {false, true}) {
+            CAPTURE(tile);
+            CAPTURE(split);
+            const TileOptions opt = split ? TileOptions{} : TileOptions::fixed();
+            const PassStats s = compare_passes<Ivm<float>>(knot, camera(knot, n, n), TileGrid(n, n, tile), 5, opt);
+            MESSAGE("tile " << tile << (split ? " split" : " fixed") << ": " << s.passes << " passes, " << s.rays
+                            << " rays, tests per ray " << s.tests_per_ray() << " of " << knot.size()
+                            << ", fallback cones " << s.tiles_all << "/" << s.tiles);
+            CHECK(s.passes >= 3);
+            CHECK(s.tests_per_ray() < 0.5 * double(knot.size()));  // the cones cull
+        }
     // 000's interleaved order, double precision, another intersector, a partial last tile.
-    compare_passes<Ivm<float>>(knot, camera(knot, n, n), TileGrid(n, n, 16), 4, ConeOrder::interleaved);
+    TileOptions interleaved = TileOptions::fixed();
+    interleaved.cone.order = ConeOrder::interleaved;
+    compare_passes<Ivm<float>>(knot, camera(knot, n, n), TileGrid(n, n, 16), 4, interleaved);
     const Mesh<double> knot_d = make_torus_knot<double>(40, 8);
     compare_passes<Ivm<double>>(knot_d, camera(knot_d, 37, 29), TileGrid(37, 29, 8), 5);
     compare_passes<MollerTrumbore<float>>(knot, camera(knot, 37, 29), TileGrid(37, 29, 16), 5);
@@ -548,7 +551,10 @@ TEST_CASE("stress: incoherent, parallel, identical and broken rays in the engine
             }
         }
     compare_passes<Ivm<float>>(soup, rays, TileGrid(w, h, 8), 4);
-    compare_passes<Ivm<float>>(soup, rays, TileGrid(w, h, 16), 4, ConeOrder::interleaved);
+    TileOptions interleaved;
+    interleaved.cone.order = ConeOrder::interleaved;
+    compare_passes<Ivm<float>>(soup, rays, TileGrid(w, h, 16), 4, interleaved);
+    compare_passes<Ivm<float>>(soup, rays, TileGrid(w, h, 16), 4, TileOptions::fixed());
     // Degenerate and non-finite triangles in the mesh.
     Mesh<float> bad = soup;
     bad[3] = {Vec3f(0.5f), Vec3f(0.5f), Vec3f(0.6f)};
@@ -560,6 +566,9 @@ TEST_CASE("stress: incoherent, parallel, identical and broken rays in the engine
 TEST_CASE("stress: bad input throws glint::Error") {
     CHECK_THROWS_AS(TileGrid(0, 4, 8), Error);
     CHECK_THROWS_AS(TileGrid(4, 4, 0), Error);
+    TileOptions bad;
+    bad.min_tile = 0;
+    CHECK_THROWS_AS(RayTileEngine<Ivm<float>>(std::span<const TriangleVertices<float>>(), bad), Error);
     const Mesh<float> soup = make_soup<float>(10, 3);
     const RayTileEngine<Ivm<float>> engine{std::span<const TriangleVertices<float>>(soup)};
     std::vector<Ray<float>> rays(10);

@@ -60,6 +60,32 @@ struct TileGrid {
     std::size_t ray_count() const { return std::size_t(width) * height; }
 };
 
+/// Options of the ray-tile engine.
+///
+/// 000's hierarchy has two levels (rays and tiles). Adaptive split is an extension in the
+/// direction of 000 section 6.7 (lines 3512-3529, multi-level ray hierarchies of Roger et
+/// al.): a tile whose cone opens wider than `split_half_angle` (or falls back to admitting
+/// every ray) is split into quadrants, recursively, down to `min_tile` rays on a side. With
+/// `min_tile` at least the grid's tile size (TileOptions::fixed()) it is 000's scheme.
+struct TileOptions {
+    ConeOptions cone;
+    int min_tile = 4;
+    double split_half_angle = 0.25;  // radians
+
+    /// 000's fixed tiles: no split.
+    static TileOptions fixed() {
+        TileOptions o;
+        o.min_tile = std::numeric_limits<int>::max();
+        return o;
+    }
+    void validate() const {
+        cone.validate();
+        if (min_tile < 1) throw Error("TileOptions::min_tile must be >= 1, got " + std::to_string(min_tile));
+        if (!(split_half_angle >= 0.0))
+            throw Error("TileOptions::split_half_angle must be >= 0, got " + std::to_string(split_half_angle));
+    }
+};
+
 /// Counts of one or more passes.
 struct PassStats {
     int passes = 0;                  // passes run
@@ -94,7 +120,7 @@ struct TileWorkspace {
 };
 
 /// A shader for trace_passes: `shade(i, ray, hit, found)` is called after every pass for
-/// every active ray i; it may replace `ray` with the next segment of the path and returns
+/// every active ray i (rays that cannot hit anything are never active); it may replace `ray` with the next segment of the path and returns
 /// whether the path goes on (a ray without a hit normally ends: 000 line 3440).
 template <class S, class T>
 concept PassShader = requires(S s, std::size_t i, Ray<T>& r, const StoreHit<T>& h, bool f) {
@@ -109,7 +135,10 @@ template <class T, class Find, class Shade>
 PassStats run_passes(std::span<Ray<T>> rays, int max_passes, TileWorkspace<T>& ws, Find&& find_hits,
                      Shade&& shade) {
     if (max_passes < 0) throw Error("trace_passes: max_passes must be >= 0, got " + std::to_string(max_passes));
-    ws.active.assign(rays.size(), 1);
+    // Rays that cannot hit anything (ray_can_hit: NaN, infinite or zero) are inactive from
+    // the start, like pixels where no refractive surface is visible (000 line 3443).
+    ws.active.resize(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) ws.active[i] = ray_can_hit(rays[i]) ? 1 : 0;
     ws.hits.resize(rays.size());
     PassStats total;
     for (int pass = 0; pass < max_passes; ++pass) {
@@ -142,7 +171,7 @@ public:
     /// Triangles whose spheres are tested against a cone at once (branch-free, vectorized).
     static constexpr std::size_t chunk = 64;
 
-    explicit RayTileEngine(std::span<const TriangleVertices<T>> tris, const ConeOptions& opt = {}) : opt_(opt) {
+    explicit RayTileEngine(std::span<const TriangleVertices<T>> tris, const TileOptions& opt = {}) : opt_(opt) {
         opt_.validate();
         if (tris.size() >= std::numeric_limits<std::uint32_t>::max())
             throw Error("RayTileEngine: at most 2^32 - 2 triangles, got " + std::to_string(tris.size()));
@@ -169,60 +198,28 @@ public:
 
     std::size_t triangle_count() const { return refs_.size(); }
     const TriangleStore<P>& store() const { return store_; }
-    const ConeOptions& options() const { return opt_; }
+    const TileOptions& options() const { return opt_; }
 
     /// One pass: for every ray i with active[i] != 0, hits[i] becomes its closest hit (id =
-    /// max when none); other entries are left alone. ws.cones holds the tiles' cones.
+    /// max when none); other entries are left alone. ws.cones holds the cones of the tiles
+    /// (and sub-tiles) that were tested.
     PassStats trace(std::span<const Ray<T>> rays, std::span<const std::uint8_t> active, const TileGrid& grid,
                     std::span<StoreHit<T>> hits, TileWorkspace<T>& ws) const {
         if (rays.size() != grid.ray_count() || active.size() != rays.size() || hits.size() != rays.size())
             throw Error("RayTileEngine::trace: the grid has " + std::to_string(grid.ray_count()) + " rays but got " +
                         std::to_string(rays.size()) + " rays, " + std::to_string(active.size()) + " flags, " +
                         std::to_string(hits.size()) + " hits");
-        ws.cones.resize(grid.tile_count());
+        ws.cones.clear();
         ws.index.resize(std::size_t(grid.tile) * grid.tile);
         ws.pass.resize(chunk);
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            if (active[i]) hits[i] = StoreHit<T>{};
         PassStats s;
-        constexpr T eps = std::numeric_limits<T>::epsilon();
-        const std::size_t n = refs_.size();
+        const Pass pass{rays, active, hits, grid, store_.view()};
         for (int ty = 0; ty < grid.tiles_y(); ++ty)
-            for (int tx = 0; tx < grid.tiles_x(); ++tx) {
-                Cone<T>& cone = ws.cones[std::size_t(ty) * grid.tiles_x() + tx];
-                cone = Cone<T>{};
-                // Gather the tile's active rays; reset their hits.
-                std::size_t m = 0;
-                const int x1 = std::min(grid.width, (tx + 1) * grid.tile), y1 = std::min(grid.height, (ty + 1) * grid.tile);
-                for (int y = ty * grid.tile; y < y1; ++y)
-                    for (int x = tx * grid.tile; x < x1; ++x) {
-                        const std::size_t i = std::size_t(y) * grid.width + x;
-                        if (!active[i]) continue;
-                        hits[i] = StoreHit<T>{};
-                        if (ray_can_hit(rays[i])) ws.index[m++] = static_cast<std::uint32_t>(i);
-                    }
-                if (m == 0) continue;
-                const std::span<const std::uint32_t> idx(ws.index.data(), m);
-                cone = detail::enclosing_cone_of<T>(
-                    m, [&](std::size_t k) -> const Ray<T>& { return rays[idx[k]]; }, opt_);
-                ++s.tiles;
-                s.tiles_all += cone.all;
-                s.sphere_tests += n;
-                const T tile_r = cone.slack + T(16) * eps * glm::length(cone.apex);
-                for (std::size_t first = 0; first < n; first += chunk) {
-                    const std::size_t cnt = std::min(chunk, n - first);
-                    std::uint8_t* pass = ws.pass.data();
-                    if (cone.all) {
-                        std::fill(pass, pass + cnt, std::uint8_t(1));
-                    } else {
-                        sphere_chunk(cone, tile_r, first, cnt, pass);
-                    }
-                    for (std::size_t j = 0; j < cnt; ++j) {
-                        if (!pass[j]) continue;
-                        const auto ref = refs_[first + j];
-                        for (std::uint32_t k : idx) store_.closest_hit(ref, rays[k], hits[k]);
-                        s.tests += m;
-                    }
-                }
-            }
+            for (int tx = 0; tx < grid.tiles_x(); ++tx)
+                trace_tile(pass, tx * grid.tile, ty * grid.tile, std::min(grid.width, (tx + 1) * grid.tile),
+                           std::min(grid.height, (ty + 1) * grid.tile), ws, s);
         return s;
     }
 
@@ -241,6 +238,94 @@ public:
     }
 
 private:
+    struct Pass {
+        std::span<const Ray<T>> rays;
+        std::span<const std::uint8_t> active;
+        std::span<StoreHit<T>> hits;
+        const TileGrid& grid;
+        SoaView<T, P::field_count> view;
+    };
+
+    /// The rays of the rectangle [x0, x1) x [y0, y1): their cone, then every triangle's
+    /// sphere against it, then the rays against the triangles that pass. A cone wider than
+    /// TileOptions::split_half_angle splits the rectangle into quadrants (down to min_tile).
+    void trace_tile(const Pass& p, int x0, int y0, int x1, int y1, TileWorkspace<T>& ws, PassStats& s) const {
+        std::size_t m = 0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const std::size_t i = std::size_t(y) * p.grid.width + x;
+                if (p.active[i] && ray_can_hit(p.rays[i])) ws.index[m++] = static_cast<std::uint32_t>(i);
+            }
+        if (m == 0) return;
+        const std::span<const std::uint32_t> idx(ws.index.data(), m);
+        const Cone<T> cone = detail::enclosing_cone_of<T>(
+            m, [&](std::size_t k) -> const Ray<T>& { return p.rays[idx[k]]; }, opt_.cone);
+        if ((cone.all || double(cone.half_angle) > opt_.split_half_angle) &&
+            (x1 - x0 > opt_.min_tile || y1 - y0 > opt_.min_tile)) {
+            const int xm = x1 - x0 > opt_.min_tile ? x0 + (x1 - x0 + 1) / 2 : x1;
+            const int ym = y1 - y0 > opt_.min_tile ? y0 + (y1 - y0 + 1) / 2 : y1;
+            trace_tile(p, x0, y0, xm, ym, ws, s);
+            if (xm < x1) trace_tile(p, xm, y0, x1, ym, ws, s);
+            if (ym < y1) trace_tile(p, x0, ym, xm, y1, ws, s);
+            if (xm < x1 && ym < y1) trace_tile(p, xm, ym, x1, y1, ws, s);
+            return;
+        }
+        ws.cones.push_back(cone);
+        ++s.tiles;
+        s.tiles_all += cone.all;
+        const std::size_t n = refs_.size();
+        s.sphere_tests += n;
+        constexpr T eps = std::numeric_limits<T>::epsilon();
+        const T tile_r = cone.slack + T(16) * eps * glm::length(cone.apex);
+        std::uint8_t* pass = ws.pass.data();
+        for (std::size_t first = 0; first < n; first += chunk) {
+            const std::size_t cnt = std::min(chunk, n - first);
+            if (cone.all) {
+                std::fill(pass, pass + cnt, std::uint8_t(1));
+            } else {
+                sphere_chunk(cone, tile_r, first, cnt, pass);
+            }
+            for (std::size_t j = 0; j < cnt; ++j) {
+                if (!pass[j]) continue;
+                test_rays(p.view, refs_[first + j], p.rays, idx, p.hits);
+                s.tests += m;
+            }
+        }
+    }
+
+    /// The rays idx against one triangle's block: exactly TriangleStore::closest_hit on a
+    /// one-record block (the same translation into the record's frame, the same batch
+    /// kernel with n = 1, the same strict "closer than the best so far" update), without
+    /// rebuilding the view for every ray.
+    static void test_ray(const SoaView<T, P::field_count>& view, const typename TriangleStore<P>::Group& g,
+                         std::uint32_t id, const Ray<T>& ray, StoreHit<T>& hit) {
+        Ray<T> local = ray;
+        local.tmax = std::min(ray.tmax, hit.t);
+        local.origin = ray.origin - g.origin;
+        const auto rd = P::prepare(local);
+        T t, u, v;
+        P::batch(view, g.begin, 1, rd, &t, &u, &v);
+        if (t < local.tmax) {
+            hit.t = t;
+            hit.u = u;
+            hit.v = v;
+            hit.id = id;
+        }
+    }
+
+    void test_rays(const SoaView<T, P::field_count>& view, typename TriangleStore<P>::BlockRef ref,
+                   std::span<const Ray<T>> rays, std::span<const std::uint32_t> idx, std::span<StoreHit<T>> hits) const {
+        for (std::uint32_t gi = ref.group_begin; gi < ref.group_end; ++gi) {
+            const auto& g = store_.group(gi);
+            if (g.end - g.begin == 1) {
+                const std::uint32_t id = store_.id(g.begin);
+                for (std::uint32_t k : idx) test_ray(view, g, id, rays[k], hits[k]);
+            } else {
+                for (std::uint32_t k : idx) store_.closest_hit({gi, gi + 1}, rays[k], hits[k]);
+            }
+        }
+    }
+
     /// Cone-sphere test (sphere.hpp, cone_meets_sphere) for triangles first .. first+cnt-1,
     /// written over the structure-of-arrays spheres without branches so that it vectorizes.
     void sphere_chunk(const Cone<T>& cone, T tile_r, std::size_t first, std::size_t cnt, std::uint8_t* pass) const {
@@ -262,7 +347,7 @@ private:
         }
     }
 
-    ConeOptions opt_;
+    TileOptions opt_;
     TriangleStore<P> store_;
     std::vector<typename TriangleStore<P>::BlockRef> refs_;
     std::vector<T> cx_, cy_, cz_, cr_;  // sphere centres and radii (with the triangle's rounding margin)
