@@ -64,13 +64,19 @@ struct TileGrid {
 ///
 /// 000's hierarchy has two levels (rays and tiles). Adaptive split is an extension in the
 /// direction of 000 section 6.7 (lines 3512-3529, multi-level ray hierarchies of Roger et
-/// al.): a tile whose cone opens wider than `split_half_angle` (or falls back to admitting
-/// every ray) is split into quadrants, recursively, down to `min_tile` rays on a side. With
-/// `min_tile` at least the grid's tile size (TileOptions::fixed()) it is 000's scheme.
+/// al.): a tile of m rays whose cone passes P of the N triangles' spheres is split into
+/// quadrants (recursively, down to `min_tile` rays on a side) when the tests a split may
+/// save exceed its cost, all in units of one ray-triangle test:
+///     split_gain * P * m  >  4 * sphere_cost * N  +  cone_cost * m
+/// (four sub-cones each test N spheres; each ray enters cone construction again). The
+/// defaults were set on bench_cones (sphere and knot scenes). With `min_tile` at least the
+/// grid's tile size (TileOptions::fixed()) it is 000's scheme.
 struct TileOptions {
     ConeOptions cone;
     int min_tile = 4;
-    double split_half_angle = 0.25;  // radians
+    double split_gain = 0.3;    // expected fraction of a tile's tests that a split saves
+    double sphere_cost = 0.5;   // one cone-sphere test
+    double cone_cost = 10.0;    // one ray's share of building a cone
 
     /// 000's fixed tiles: no split.
     static TileOptions fixed() {
@@ -81,8 +87,8 @@ struct TileOptions {
     void validate() const {
         cone.validate();
         if (min_tile < 1) throw Error("TileOptions::min_tile must be >= 1, got " + std::to_string(min_tile));
-        if (!(split_half_angle >= 0.0))
-            throw Error("TileOptions::split_half_angle must be >= 0, got " + std::to_string(split_half_angle));
+        if (!(split_gain >= 0.0 && sphere_cost >= 0.0 && cone_cost >= 0.0))
+            throw Error("TileOptions: split_gain, sphere_cost and cone_cost must be >= 0");
     }
 };
 
@@ -211,7 +217,7 @@ public:
                         std::to_string(hits.size()) + " hits");
         ws.cones.clear();
         ws.index.resize(std::size_t(grid.tile) * grid.tile);
-        ws.pass.resize(chunk);
+        ws.pass.resize(refs_.size());
         for (std::size_t i = 0; i < rays.size(); ++i)
             if (active[i]) hits[i] = StoreHit<T>{};
         PassStats s;
@@ -247,8 +253,8 @@ private:
     };
 
     /// The rays of the rectangle [x0, x1) x [y0, y1): their cone, then every triangle's
-    /// sphere against it, then the rays against the triangles that pass. A cone wider than
-    /// TileOptions::split_half_angle splits the rectangle into quadrants (down to min_tile).
+    /// sphere against it, then the rays against the triangles that pass, unless the cost
+    /// model of TileOptions splits the rectangle into quadrants (down to min_tile).
     void trace_tile(const Pass& p, int x0, int y0, int x1, int y1, TileWorkspace<T>& ws, PassStats& s) const {
         std::size_t m = 0;
         for (int y = y0; y < y1; ++y)
@@ -260,8 +266,27 @@ private:
         const std::span<const std::uint32_t> idx(ws.index.data(), m);
         const Cone<T> cone = detail::enclosing_cone_of<T>(
             m, [&](std::size_t k) -> const Ray<T>& { return p.rays[idx[k]]; }, opt_.cone);
-        if ((cone.all || double(cone.half_angle) > opt_.split_half_angle) &&
-            (x1 - x0 > opt_.min_tile || y1 - y0 > opt_.min_tile)) {
+        const std::size_t n = refs_.size();
+        s.sphere_tests += n;
+        // Every triangle's sphere against the cone, into ws.pass.
+        constexpr T eps = std::numeric_limits<T>::epsilon();
+        const T tile_r = cone.slack + T(16) * eps * glm::length(cone.apex);
+        std::uint8_t* pass = ws.pass.data();
+        std::size_t passed = n;
+        if (cone.all) {
+            std::fill(pass, pass + n, std::uint8_t(1));
+        } else {
+            passed = 0;
+            for (std::size_t first = 0; first < n; first += chunk) {
+                const std::size_t cnt = std::min(chunk, n - first);
+                sphere_chunk(cone, tile_r, first, cnt, pass + first);
+                for (std::size_t j = 0; j < cnt; ++j) passed += pass[first + j];
+            }
+        }
+        // Split when the tests it may save outweigh its cost (TileOptions).
+        const bool can_split = x1 - x0 > opt_.min_tile || y1 - y0 > opt_.min_tile;
+        if (can_split && opt_.split_gain * double(passed) * double(m) >
+                             4.0 * opt_.sphere_cost * double(n) + opt_.cone_cost * double(m)) {
             const int xm = x1 - x0 > opt_.min_tile ? x0 + (x1 - x0 + 1) / 2 : x1;
             const int ym = y1 - y0 > opt_.min_tile ? y0 + (y1 - y0 + 1) / 2 : y1;
             trace_tile(p, x0, y0, xm, ym, ws, s);
@@ -273,23 +298,11 @@ private:
         ws.cones.push_back(cone);
         ++s.tiles;
         s.tiles_all += cone.all;
-        const std::size_t n = refs_.size();
-        s.sphere_tests += n;
-        constexpr T eps = std::numeric_limits<T>::epsilon();
-        const T tile_r = cone.slack + T(16) * eps * glm::length(cone.apex);
-        std::uint8_t* pass = ws.pass.data();
-        for (std::size_t first = 0; first < n; first += chunk) {
-            const std::size_t cnt = std::min(chunk, n - first);
-            if (cone.all) {
-                std::fill(pass, pass + cnt, std::uint8_t(1));
-            } else {
-                sphere_chunk(cone, tile_r, first, cnt, pass);
-            }
-            for (std::size_t j = 0; j < cnt; ++j) {
-                if (!pass[j]) continue;
-                test_rays(p.view, refs_[first + j], p.rays, idx, p.hits);
-                s.tests += m;
-            }
+        // (A split returned above: the sub-tiles reuse ws.index and ws.pass.)
+        for (std::size_t j = 0; j < n; ++j) {
+            if (!pass[j]) continue;
+            test_rays(p.view, refs_[j], p.rays, idx, p.hits);
+            s.tests += m;
         }
     }
 
