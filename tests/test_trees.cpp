@@ -46,6 +46,7 @@ struct Scene {
     Mesh<float> mesh;
     std::vector<Ray<float>> rays;
     std::size_t generic = 0;  // rays[0, generic) are generic, the rest vertex-snapped
+    double scale = 0;         // |extent| + |centre| of the scene's box
 };
 
 /// A mix of ray kinds over one scene. Generic: incoherent surface rays, primary camera
@@ -92,12 +93,16 @@ std::vector<Ray<float>> ray_mix(const Mesh<float>& m, std::size_t n, std::uint64
 const std::vector<Scene>& scenes() {
     static const std::vector<Scene> s = [] {
         std::vector<Scene> v;
-        v.push_back({"sphere", make_sphere<float>(40, 80), {}, 0});
-        v.push_back({"torus-knot", make_torus_knot<float>(), {}, 0});
-        v.push_back({"soup", make_soup<float>(3000, 5), {}, 0});
-        v.push_back({"stadium", make_teapot_in_stadium<float>(), {}, 0});
+        v.push_back({"sphere", make_sphere<float>(40, 80), {}, 0, 0});
+        v.push_back({"torus-knot", make_torus_knot<float>(), {}, 0, 0});
+        v.push_back({"soup", make_soup<float>(3000, 5), {}, 0, 0});
+        v.push_back({"stadium", make_teapot_in_stadium<float>(), {}, 0, 0});
         std::uint64_t seed = 100;
-        for (auto& sc : v) sc.rays = ray_mix(sc.mesh, rays_per_scene, seed += 10, sc.generic);
+        for (auto& sc : v) {
+            sc.rays = ray_mix(sc.mesh, rays_per_scene, seed += 10, sc.generic);
+            const AABB<float> b = mesh_bounds<float>(sc.mesh);
+            sc.scale = glm::length(Vec3d(b.extent())) + glm::length(Vec3d(b.center()));
+        }
         return v;
     }();
     return s;
@@ -122,10 +127,7 @@ struct Tally {
 };
 
 /// Magnitude of the coordinates a scene's computations round at: |extent| + |centre|.
-float scene_scale(const Scene& sc) {
-    const AABB<float> b = mesh_bounds<float>(sc.mesh);
-    return glm::length(b.extent()) + glm::length(b.center());
-}
+double scene_scale(const Scene& sc) { return sc.scale; }
 
 /// t tolerance: 1e-4 relative, plus the rounding of the hit's distance from the plane
 /// (32 float ulps of the coordinates' magnitude |origin| + scene scale) divided by the
@@ -144,6 +146,23 @@ float t_tol(const Scene& sc, const Ray<float>& r, const TriangleVertices<float>&
 double edge_tol(const Scene& sc, const Ray<float>& r, const TriangleVertices<float>& tri) {
     const double size = std::sqrt(glm::length(glm::cross(Vec3d(tri[1] - tri[0]), Vec3d(tri[2] - tri[0])))) + 1e-30;
     return 1e-4 + 64 * 0x1p-24 * (glm::length(Vec3d(r.origin)) + scene_scale(sc)) / size;
+}
+
+/// Whether the ray, in double precision, crosses some triangle of the scene within
+/// edge_tol of that triangle's boundary (inside or just outside) for t in (tmin, tmax).
+bool boundary_crossing(const Scene& sc, const Ray<float>& r) {
+    const Vec3d o(r.origin), d(r.direction);
+    for (const auto& tri : sc.mesh) {
+        const Vec3d a(tri[0]), b(tri[1]), c(tri[2]);
+        const Vec3d n = glm::cross(b - a, c - a);
+        const double nn = glm::dot(n, n), dn = glm::dot(d, n);
+        if (!(nn > 0) || dn == 0) continue;
+        const double t = glm::dot(a - o, n) / dn;
+        const double slack = 1e-4 * std::max(1.0, std::abs(t));
+        if (!(t > double(r.tmin) - slack && t < double(r.tmax) + slack)) continue;
+        if (std::abs(edge_distance(tri, r, t)) < edge_tol(sc, r, tri)) return true;
+    }
+    return false;
 }
 
 bool zero_area(const TriangleVertices<float>& t) {
@@ -198,16 +217,26 @@ void check_agreement(const Scene& sc, const std::vector<StoreHit<float>>& ref, c
         const bool found = tree.closest_hit(r, h);
         compare(sc, i, h, found, ref[i], ref_found[i], closest);
         // Any hit agrees with the tree's own closest-hit occlusion, on the full ray and on a
-        // shadow ray that ends halfway to the closest hit, and with brute-force occlusion up
-        // to the cases classified above.
-        ++any.rays;
-        if (tree.any_hit(r) != found) ++any.errors;
+        // shadow ray that ends halfway to the closest hit (and so with brute force, up to
+        // the cases classified above). The same kernel, inlined into the any-hit and the
+        // closest-hit traversal, may be compiled differently (vectorized or not, FMA
+        // contraction) and round an exact edge or vertex hit differently, so a disagreement
+        // is allowed only where the ray (computed in double) crosses some triangle within
+        // edge_tol of its boundary; at most 1 in 1000 generic rays may be one.
+        const bool generic = i < sc.generic;
+        auto check_any = [&](const Ray<float>& ray, bool occluded, bool closest_found) {
+            ++any.rays;
+            if (occluded == closest_found) return;
+            if (!boundary_crossing(sc, ray)) ++any.errors;
+            ++any.edges;
+            any.generic_edges += generic;
+        };
+        check_any(r, tree.any_hit(r), found);
         if (found) {
             Ray<float> shadow = r;
             shadow.tmax = r.tmin + 0.5f * (h.t - r.tmin);
             StoreHit<float> hs;
-            ++any.rays;
-            if (tree.any_hit(shadow) != tree.closest_hit(shadow, hs)) ++any.errors;
+            check_any(shadow, tree.any_hit(shadow), tree.closest_hit(shadow, hs));
         }
     }
     const std::string what = sc.name + " " + Accel::builder_type::name + " " + Accel::layout_type::label() + " " + P::name;
@@ -216,9 +245,11 @@ void check_agreement(const Scene& sc, const std::vector<StoreHit<float>>& ref, c
                           << closest.edges << " (generic " << closest.generic_edges << " of " << closest.generic_rays
                           << ") reference hits on zero-area triangles " << closest.degenerate << " errors "
                           << closest.errors);
-    INFO("any: rays " << any.rays << " errors " << any.errors);
+    INFO("any: rays " << any.rays << " disagreements at triangle boundaries " << any.edges << " (on generic rays "
+                      << any.generic_edges << ") errors " << any.errors);
     CHECK(closest.errors == 0);
     CHECK(any.errors == 0);
+    CHECK(any.generic_edges * 1000 <= closest.generic_rays);
     CHECK(closest.generic_edges * 1000 <= closest.generic_rays);
     CHECK(closest.hits > closest.rays / 10);  // the ray sets do hit things
     if (closest.degenerate)

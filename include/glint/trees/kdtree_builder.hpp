@@ -9,10 +9,11 @@
 //   cost(leaf)  = K_I * N
 //
 // - K_T (`traversal_cost`, default 1): one traversal step;
-// - K_I (`intersection_cost`, default 1.2): one triangle test in units of K_T. Leaves are
-//   tested with the SIMD batch kernel (8 triangles at once), which makes an extra triangle
-//   cheaper than in scalar code; 1.2 was the fastest on the generated scenes of
-//   bench_trees (tried 0.8 to 3);
+// - K_I (`intersection_cost`, default 0.1): one triangle test in units of K_T. Leaves are
+//   padded to whole batches and tested with the SIMD batch kernel (8 triangles at once),
+//   while a traversal step is a chain of dependent loads, compares and a hard-to-predict
+//   choice: measured on incoherent rays (bunny, 128k-triangle knot, Wald kernel), K_I =
+//   0.05-0.2 was fastest, 1.2 was 1.5-2x slower and built 5-20x more nodes;
 // - lambda = 1 - `empty_bonus` (default 0.8) when one side is empty and has volume: the
 //   empty-space cut-off of Wald and Havran, which favours cutting empty space away;
 // - a node becomes a leaf when no split is cheaper than cost(leaf), or at depth
@@ -45,7 +46,7 @@ namespace glint {
 
 struct KdBuildOptions {
     double traversal_cost = 1.0;     // K_T
-    double intersection_cost = 1.2;  // K_I
+    double intersection_cost = 0.1;  // K_I
     double empty_bonus = 0.2;        // lambda = 1 - empty_bonus for a split with an empty side
     int max_depth = 0;               // 0: 8 + 1.3 log2 N, at most 56
 };

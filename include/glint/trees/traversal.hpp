@@ -21,6 +21,7 @@
 // cost time, never a hit inside an entered cell.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -71,13 +72,24 @@ public:
         bounds_ = tree.bounds;
         std::vector<std::array<std::uint32_t, 2>> groups(tree.nodes.size(), {0u, 0u});
         std::vector<TriangleVertices<T>> leaf_tris;
+        std::vector<std::uint32_t> leaf_ids;
         for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
             const BuildNode<T>& n = tree.nodes[i];
             if (!n.leaf || n.prim_count == 0) continue;
-            const std::span<const std::uint32_t> ids(tree.prims.data() + n.prim_begin, n.prim_count);
+            leaf_ids.assign(tree.prims.begin() + n.prim_begin, tree.prims.begin() + n.prim_begin + n.prim_count);
             leaf_tris.clear();
-            for (std::uint32_t id : ids) leaf_tris.push_back(tris[id]);
-            const auto ref = store_.add_block(leaf_tris, ids);
+            for (std::uint32_t id : leaf_ids) leaf_tris.push_back(tris[id]);
+            // Pad the block to whole batches with point triangles (all three vertices the
+            // same: a record that never hits), so that the batch kernel always runs its full
+            // SIMD width instead of a scalar remainder loop.
+            if constexpr (!P::uses_frame) {
+                while (leaf_tris.size() % batch_width != 0) {
+                    const Vec3<T> p = leaf_tris[0][0];
+                    leaf_tris.push_back({p, p, p});
+                    leaf_ids.push_back(leaf_ids[0]);
+                }
+            }
+            const auto ref = store_.add_block(leaf_tris, leaf_ids);
             groups[i] = {ref.group_begin, ref.group_end - ref.group_begin};
             detail::check_index(ref.group_end);
         }
@@ -86,7 +98,14 @@ public:
     }
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
-    bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const { return trace<false>(ray, hit); }
+    bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const {
+        // On a local copy: the compiler keeps it in registers (the caller's `hit` could alias
+        // the stack's floats).
+        StoreHit<T> h = hit;
+        if (!trace<false>(ray, h)) return false;
+        hit = h;
+        return true;
+    }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<T>& ray) const {
         StoreHit<T> hit;
@@ -131,6 +150,10 @@ private:
         if constexpr (!Any) t1 = t1 < hit.t ? t1 : hit.t;
         if (!(t0 <= t1)) return false;
         const Node* nodes = nodes_.data();
+        const SoaView<T, P::field_count> view = store_.view();
+        // Frame-free intersectors prepare the ray once, not once per leaf.
+        typename P::RayData world{};
+        if constexpr (!P::uses_frame) world = P::prepare(ray);
         Entry stack[max_stack];
         int sp = 0;
         std::uint32_t index = 0, base = 0;
@@ -159,23 +182,22 @@ private:
                 const bool visit_near = !(tn < t0);
                 const bool visit_far = !(tf > t1);
                 const std::uint32_t near = first + ng, far = first + 1 - ng;
-                if (visit_near & visit_far) stack[sp++] = Entry{far, base, tf > t0 ? tf : t0, t1};
-                else if (!(visit_near | visit_far)) goto pop;  // only for NaN t0 or t1
-                // One cell to enter: the near one (with the far one pushed, or alone), else
-                // the far one; selected without a branch.
-                index = visit_near ? near : far;
+                if (!(visit_near | visit_far)) goto pop;  // only for NaN t0 or t1
+                // Without branches (incoherent rays mispredict them): the far cell is always
+                // written to the stack but kept only when both cells are entered; the cell
+                // entered is the near one if its segment is not empty, else the far one.
                 const T near_t1 = tn < t1 ? tn : t1, far_t0 = tf > t0 ? tf : t0;
+                stack[sp] = Entry{far, base, far_t0, t1};
+                sp += int(visit_near & visit_far);
+                index = visit_near ? near : far;
                 t1 = visit_near ? near_t1 : t1;
                 t0 = visit_near ? t0 : far_t0;
                 n = nodes + index;
             }
             if (const std::uint32_t count = n->group_count()) {
-                const std::uint32_t g = n->group_begin();
-                const typename TriangleStore<P>::BlockRef ref{g, g + count};
-                if constexpr (Any) {
-                    if (store_.any_hit(ref, ray)) return true;
-                } else {
-                    found |= store_.closest_hit(ref, ray, hit);
+                if (test_leaf<Any>(n->group_begin(), count, view, ray, world, hit)) {
+                    if constexpr (Any) return true;
+                    found = true;
                 }
             }
         pop:
@@ -193,6 +215,41 @@ private:
                 break;
             }
         }
+    }
+
+    /// The leaf's records, `count` groups from `g`, with the batch kernel (the same test as
+    /// TriangleStore::closest_hit, with the ray prepared once per trace for intersectors
+    /// without frames). Updates `hit` when a hit nearer than hit.t is found.
+    template <bool Any>
+    bool test_leaf(std::uint32_t g, std::uint32_t count, const SoaView<T, P::field_count>& view, const Ray<T>& ray,
+                   const typename P::RayData& world, StoreHit<T>& hit) const {
+        T ts[batch_width], us[batch_width], vs[batch_width];
+        bool found = false;
+        for (const std::uint32_t end = g + count; g < end; ++g) {
+            const auto& group = store_.group(g);
+            typename P::RayData rd = world;
+            if constexpr (P::uses_frame) {
+                Ray<T> local = ray;
+                local.origin -= group.origin;
+                local.tmax = ray.tmax < hit.t ? ray.tmax : hit.t;
+                rd = P::prepare(local);
+            }
+            for (std::uint32_t first = group.begin; first < group.end; first += std::uint32_t(batch_width)) {
+                const std::size_t n = std::min<std::size_t>(batch_width, group.end - first);
+                P::batch(view, first, n, rd, ts, us, vs);
+                for (std::size_t k = 0; k < n; ++k) {
+                    if (ts[k] < hit.t) {
+                        if constexpr (Any) return true;
+                        hit.t = ts[k];
+                        hit.u = us[k];
+                        hit.v = vs[k];
+                        hit.id = store_.id(first + k);
+                        found = true;
+                    }
+                }
+            }
+        }
+        return found;
     }
 
     std::vector<Node> nodes_;
