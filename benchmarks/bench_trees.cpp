@@ -2,24 +2,26 @@
 // Embree 3's rtcIntersect1 on the very same rays, single thread.
 //
 //   bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N]
-//               [--no-generated] [--all]
+//               [--no-generated] [--only SCENE] [--all]
 //
 // For every scene (generated: the 2880-triangle torus knot of 000 section 5, "teapot in a
 // stadium", a 128k-triangle torus knot; plus each --mesh) and two ray sets (primary camera
 // rays; incoherent diffuse rays leaving surface points on both sides), it builds every
 // tree x layout x intersector combination, traces every ray for its closest hit and prints
-// Mrays/s, build time, node memory and the ratio to Embree measured in the same run. The
-// time of a combination is the best of --reps passes (default 3; 1 with --quick).
+// Mrays/s, build time, node memory and the ratio to Embree measured in the same run: Embree
+// is timed on the same rays alternately with every combination, and each side keeps its
+// best of --reps passes (default 3; 1 with --quick), so both see the same machine load.
 // --csv writes scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,
 // bytes_per_triangle,embree_mrays_per_s (embree_mrays_per_s is empty without Embree).
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63).
+// --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <functional>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -96,8 +98,6 @@ struct Scene {
     std::string name;
     Mesh<float> mesh;
     std::vector<RaySet> sets;
-    std::vector<double> embree_mrays;   // per ray set; 0 without Embree
-    std::vector<std::vector<float>> embree_t;  // per ray set, per ray: Embree's closest t
 };
 
 #ifdef GLINT_HAVE_EMBREE
@@ -165,9 +165,17 @@ private:
 };
 #endif
 
+#ifdef GLINT_HAVE_EMBREE
+using Peer = Embree;
+#else
+struct Peer {  // no peer: never constructed
+    void trace(const std::vector<Ray<float>>&, std::vector<float>&) const {}
+};
+#endif
+
 struct Options {
     std::vector<std::string> meshes;
-    std::string csv;
+    std::string csv, only;
     bool quick = false, generated = true, all = false;
     std::size_t rays = 1'000'000;
     int reps = 3;
@@ -181,15 +189,19 @@ struct Row {
     double agree = 0;  // fraction of rays whose hit/miss and t agree with Embree
 };
 
-/// Traces every ray set of the scene with one accelerator; returns one row per set.
+/// Traces every ray set of the scene with one accelerator; returns one row per set. The
+/// peer (Embree), when there is one, is timed on the same rays alternately with ours, so
+/// that both see the same machine load; each keeps its best of --reps passes.
 template <class Accel>
-void run_combination(const Scene& sc, const BuiltTree<float>& built, const Options& opt, std::vector<Row>& rows) {
+void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer* peer, const Options& opt,
+                     std::vector<Row>& rows) {
     const auto t0 = Clock::now();
     const Accel acc(sc.mesh, built);
     const double encode_s = seconds_since(t0);
+    std::vector<float> peer_t;
     for (std::size_t s = 0; s < sc.sets.size(); ++s) {
         const auto& rays = sc.sets[s].rays;
-        double best = infinity<double>;
+        double best = infinity<double>, peer_best = infinity<double>;
         std::size_t agree = 0;
         for (int rep = 0; rep < opt.reps; ++rep) {
             std::size_t hits = 0;
@@ -200,12 +212,17 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Optio
             }
             best = std::min(best, seconds_since(t1));
             if (hits == std::size_t(-1)) std::puts("");  // keep the loop
+            if (peer) {
+                const auto t2 = Clock::now();
+                peer->trace(rays, peer_t);
+                peer_best = std::min(peer_best, seconds_since(t2));
+            }
         }
-        if (!sc.embree_t.empty()) {
+        if (peer) {
             for (std::size_t i = 0; i < rays.size(); ++i) {
                 StoreHit<float> h;
                 acc.closest_hit(rays[i], h);
-                const float te = sc.embree_t[s][i];
+                const float te = peer_t[i];
                 agree += (std::isinf(te) && std::isinf(h.t)) || std::abs(te - h.t) <= 1e-3f * std::max(1.f, te);
             }
         }
@@ -219,8 +236,8 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Optio
         row.build_s = built.build_seconds + encode_s;
         row.node_bytes = acc.stats().node_bytes();
         row.bytes_per_tri = acc.stats().bytes_per_triangle();
-        row.embree = sc.embree_mrays[s];
-        row.agree = sc.embree_t.empty() ? -1 : double(agree) / double(rays.size());
+        row.embree = peer ? double(rays.size()) / peer_best * 1e-6 : 0.0;
+        row.agree = peer ? double(agree) / double(rays.size()) : -1.0;
         std::printf("%-12s %-10s %-4s %-11s %-14s %8.3f Mrays/s  build %7.3f s  nodes %10zu B (%6.1f B/tri)", row.scene.c_str(),
                     row.rays.c_str(), row.tree.c_str(), row.layout.c_str(), row.intersector.c_str(), row.mrays, row.build_s,
                     row.node_bytes, row.bytes_per_tri);
@@ -232,24 +249,24 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Optio
 }
 
 template <class P, class... Layouts>
-void run_layouts(const Scene& sc, const BuiltTree<float>& kd, const BuiltTree<float>& bih, const Options& opt,
-                 std::vector<Row>& rows) {
-    (run_combination<KdTree<float, P, Layouts>>(sc, kd, opt, rows), ...);
-    (run_combination<Bih<float, P, Layouts>>(sc, bih, opt, rows), ...);
+void run_layouts(const Scene& sc, const BuiltTree<float>& kd, const BuiltTree<float>& bih, const Peer* peer,
+                 const Options& opt, std::vector<Row>& rows) {
+    (run_combination<KdTree<float, P, Layouts>>(sc, kd, peer, opt, rows), ...);
+    (run_combination<Bih<float, P, Layouts>>(sc, bih, peer, opt, rows), ...);
 }
 
 template <class P>
-void run_intersector(const Scene& sc, const BuiltTree<float>& kd, const BuiltTree<float>& bih, const Options& opt,
-                     std::vector<Row>& rows) {
+void run_intersector(const Scene& sc, const BuiltTree<float>& kd, const BuiltTree<float>& bih, const Peer* peer,
+                     const Options& opt, std::vector<Row>& rows) {
     if (opt.quick) {
-        run_layouts<P, PointerLayout, CompactSubtrees<31>>(sc, kd, bih, opt, rows);
+        run_layouts<P, PointerLayout, CompactSubtrees<31>>(sc, kd, bih, peer, opt, rows);
     } else if (opt.all) {
         run_layouts<P, PointerLayout, HavranSubtrees<3>, CompactSubtrees<3>, HavranSubtrees<7>, CompactSubtrees<7>,
                     HavranSubtrees<15>, CompactSubtrees<15>, HavranSubtrees<31>, CompactSubtrees<31>,
-                    HavranSubtrees<63>, CompactSubtrees<63>>(sc, kd, bih, opt, rows);
+                    HavranSubtrees<63>, CompactSubtrees<63>>(sc, kd, bih, peer, opt, rows);
     } else {
         run_layouts<P, PointerLayout, HavranSubtrees<7>, CompactSubtrees<7>, HavranSubtrees<31>, CompactSubtrees<31>>(
-            sc, kd, bih, opt, rows);
+            sc, kd, bih, peer, opt, rows);
     }
 }
 
@@ -266,10 +283,12 @@ Options parse(int argc, char** argv) {
         else if (a == "--quick") o.quick = true;
         else if (a == "--all") o.all = true;
         else if (a == "--no-generated") o.generated = false;
+        else if (a == "--only") o.only = value();
         else if (a == "--rays") o.rays = std::stoul(value());
         else if (a == "--reps") o.reps = std::max(1, std::stoi(value()));
         else if (a == "--help" || a == "-h") {
-            std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] [--all]");
+            std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
+                      "[--only SCENE] [--all]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -288,17 +307,19 @@ int main(int argc, char** argv) try {
     const Options opt = parse(argc, argv);
     std::vector<Scene> scenes;
     if (opt.generated) {
-        scenes.push_back({"torus-knot", make_torus_knot<float>(), {}, {}, {}});
+        scenes.push_back({"torus-knot", make_torus_knot<float>(), {}});
         if (!opt.quick) {
-            scenes.push_back({"stadium", make_teapot_in_stadium<float>(), {}, {}, {}});
-            scenes.push_back({"knot-128k", make_torus_knot<float>(2000, 32), {}, {}, {}});
+            scenes.push_back({"stadium", make_teapot_in_stadium<float>(), {}});
+            scenes.push_back({"knot-128k", make_torus_knot<float>(2000, 32), {}});
         }
     }
     for (const auto& path : opt.meshes) {
         std::string name = path.substr(path.find_last_of('/') + 1);
         name = name.substr(0, name.find_last_of('.'));
-        scenes.push_back({name, read_obj(path), {}, {}, {}});
+        scenes.push_back({name, read_obj(path), {}});
     }
+    if (!opt.only.empty())
+        std::erase_if(scenes, [&](const Scene& sc) { return sc.name != opt.only; });
     std::vector<Row> rows;
     for (Scene& sc : scenes) {
         const int width = 1024, height = std::max<int>(1, int(opt.rays / width));
@@ -306,34 +327,20 @@ int main(int argc, char** argv) try {
         sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
         std::printf("# scene %s: %zu triangles, %zu primary and %zu incoherent rays\n", sc.name.c_str(), sc.mesh.size(),
                     sc.sets[0].rays.size(), sc.sets[1].rays.size());
+        std::unique_ptr<Peer> peer;
 #ifdef GLINT_HAVE_EMBREE
-        {
-            const Embree e(sc.mesh);
-            std::printf("# Embree %d.%d.%d build %.3f s (threads=1)\n", RTC_VERSION_MAJOR, RTC_VERSION_MINOR,
-                        RTC_VERSION_PATCH, e.build_seconds);
-            sc.embree_t.resize(sc.sets.size());
-            for (std::size_t s = 0; s < sc.sets.size(); ++s) {
-                double best = infinity<double>;
-                for (int rep = 0; rep < opt.reps; ++rep) {
-                    const auto t0 = Clock::now();
-                    e.trace(sc.sets[s].rays, sc.embree_t[s]);
-                    best = std::min(best, seconds_since(t0));
-                }
-                sc.embree_mrays.push_back(double(sc.sets[s].rays.size()) / best * 1e-6);
-                std::printf("%-12s %-10s embree rtcIntersect1            %8.3f Mrays/s\n", sc.name.c_str(),
-                            sc.sets[s].name.c_str(), sc.embree_mrays.back());
-            }
-        }
+        peer = std::make_unique<Peer>(sc.mesh);
+        std::printf("# Embree %d.%d.%d build %.3f s (threads=1), timed alternately with each combination\n",
+                    RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, peer->build_seconds);
 #else
-        sc.embree_mrays.assign(sc.sets.size(), 0.0);
         std::puts("# Embree 3 not found: no peer comparison");
 #endif
         const BuiltTree<float> kd = KdTreeBuilder<float>{}.build(sc.mesh);
         const BuiltTree<float> bih = BihBuilder<float>{}.build(sc.mesh);
-        run_intersector<Ivm<float>>(sc, kd, bih, opt, rows);
-        run_intersector<MollerTrumbore<float>>(sc, kd, bih, opt, rows);
-        run_intersector<Wald<float>>(sc, kd, bih, opt, rows);
-        run_intersector<Watertight<float>>(sc, kd, bih, opt, rows);
+        run_intersector<Ivm<float>>(sc, kd, bih, peer.get(), opt, rows);
+        run_intersector<MollerTrumbore<float>>(sc, kd, bih, peer.get(), opt, rows);
+        run_intersector<Wald<float>>(sc, kd, bih, peer.get(), opt, rows);
+        run_intersector<Watertight<float>>(sc, kd, bih, peer.get(), opt, rows);
         for (std::size_t s = 0; s < sc.sets.size(); ++s) {
             const Row* best = nullptr;
             for (const Row& r : rows)
