@@ -2,7 +2,7 @@
 // Embree 3's rtcIntersect1 on the very same rays, single thread.
 //
 //   bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N]
-//               [--no-generated] [--only SCENE] [--all]
+//               [--no-generated] [--only SCENE] [--all] [--memory]
 //
 // For every scene (generated: the 2880-triangle torus knot of 000 section 5, "teapot in a
 // stadium", a 128k-triangle torus knot; plus each --mesh) and two ray sets (primary camera
@@ -16,6 +16,8 @@
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63).
 // --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
+// --memory: print only the node-memory table (pointer, havran-K, compact-K for K = 3 ... 63,
+// kd-tree and BIH; 000 Fig. 4.6) and exit.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -176,7 +178,7 @@ struct Peer {  // no peer: never constructed
 struct Options {
     std::vector<std::string> meshes;
     std::string csv, only;
-    bool quick = false, generated = true, all = false;
+    bool quick = false, generated = true, all = false, memory = false;
     std::size_t rays = 1'000'000;
     int reps = 3;
 };
@@ -270,6 +272,41 @@ void run_intersector(const Scene& sc, const BuiltTree<float>& kd, const BuiltTre
     }
 }
 
+/// Node memory of one layout for a built tree (leaf contents do not matter here).
+template <class L>
+LayoutStats layout_stats(const BuiltTree<float>& t) {
+    std::vector<std::array<std::uint32_t, 2>> groups(t.nodes.size(), {0u, 1u});
+    std::vector<KdNode<float>> kd;
+    std::vector<BihNode<float>> bih;
+    return t.kind == TreeKind::kd ? L::encode(t, std::span<const std::array<std::uint32_t, 2>>(groups), kd)
+                                  : L::encode(t, std::span<const std::array<std::uint32_t, 2>>(groups), bih);
+}
+
+template <std::uint32_t K>
+void memory_row(const std::string& scene, const char* tree, const BuiltTree<float>& t, const LayoutStats& p) {
+    const LayoutStats h = layout_stats<HavranSubtrees<K>>(t), c = layout_stats<CompactSubtrees<K>>(t);
+    std::printf("| %-10s | %-4s | %2u | %10zu | %10zu | %10zu | %5.1f%% | %8.1f | %8.1f | %8.1f |\n", scene.c_str(), tree, K,
+                p.node_bytes(), h.node_bytes(), c.node_bytes(), 100.0 * (1.0 - double(c.node_bytes()) / double(h.node_bytes())),
+                p.bytes_per_triangle(), h.bytes_per_triangle(), c.bytes_per_triangle());
+}
+
+/// --memory: node bytes of pointer, havran-K and compact-K for K = 3 ... 63 (000 Fig. 4.6).
+void memory_table(const std::vector<std::pair<std::string, Mesh<float>>>& scenes) {
+    std::puts("| scene      | tree |  K | pointer B  | havran-K B | compact-K B | saving | ptr B/tri | hav B/tri | cmp B/tri |");
+    std::puts("|------------|------|----|------------|------------|------------|--------|----------|----------|----------|");
+    for (const auto& [name, mesh] : scenes) {
+        for (const BuiltTree<float>& t : {KdTreeBuilder<float>{}.build(mesh), BihBuilder<float>{}.build(mesh)}) {
+            const char* tree = t.kind == TreeKind::kd ? "kd" : "bih";
+            const LayoutStats p = layout_stats<PointerLayout>(t);
+            memory_row<3>(name, tree, t, p);
+            memory_row<7>(name, tree, t, p);
+            memory_row<15>(name, tree, t, p);
+            memory_row<31>(name, tree, t, p);
+            memory_row<63>(name, tree, t, p);
+        }
+    }
+}
+
 Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
@@ -284,11 +321,12 @@ Options parse(int argc, char** argv) {
         else if (a == "--all") o.all = true;
         else if (a == "--no-generated") o.generated = false;
         else if (a == "--only") o.only = value();
+        else if (a == "--memory") o.memory = true;
         else if (a == "--rays") o.rays = std::stoul(value());
         else if (a == "--reps") o.reps = std::max(1, std::stoi(value()));
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
-                      "[--only SCENE] [--all]");
+                      "[--only SCENE] [--all] [--memory]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -320,6 +358,12 @@ int main(int argc, char** argv) try {
     }
     if (!opt.only.empty())
         std::erase_if(scenes, [&](const Scene& sc) { return sc.name != opt.only; });
+    if (opt.memory) {
+        std::vector<std::pair<std::string, Mesh<float>>> meshes;
+        for (const Scene& sc : scenes) meshes.emplace_back(sc.name, sc.mesh);
+        memory_table(meshes);
+        return 0;
+    }
     std::vector<Row> rows;
     for (Scene& sc : scenes) {
         const int width = 1024, height = std::max<int>(1, int(opt.rays / width));

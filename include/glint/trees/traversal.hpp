@@ -237,15 +237,16 @@ private:
             for (std::uint32_t first = group.begin; first < group.end; first += std::uint32_t(batch_width)) {
                 const std::size_t n = std::min<std::size_t>(batch_width, group.end - first);
                 P::batch(view, first, n, rd, ts, us, vs);
-                for (std::size_t k = 0; k < n; ++k) {
-                    if (ts[k] < hit.t) {
-                        if constexpr (Any) return true;
-                        hit.t = ts[k];
-                        hit.u = us[k];
-                        hit.v = vs[k];
-                        hit.id = store_.id(first + k);
-                        found = true;
-                    }
+                // The nearest lane, selected without branches; one compare with the best.
+                std::size_t best = 0;
+                for (std::size_t k = 1; k < n; ++k) best = ts[k] < ts[best] ? k : best;
+                if (ts[best] < hit.t) {
+                    if constexpr (Any) return true;
+                    hit.t = ts[best];
+                    hit.u = us[best];
+                    hit.v = vs[best];
+                    hit.id = store_.id(first + best);
+                    found = true;
                 }
             }
         }
