@@ -90,7 +90,14 @@ public:
                 }
             }
             const auto ref = store_.add_block(leaf_tris, leaf_ids);
-            groups[i] = {ref.group_begin, ref.group_end - ref.group_begin};
+            if constexpr (P::uses_frame) {
+                groups[i] = {ref.group_begin, ref.group_end - ref.group_begin};
+            } else {
+                // One group in the world frame: the leaf holds its record range itself,
+                // which saves traversal a dependent load of the group.
+                const auto& g = store_.group(ref.group_begin);
+                groups[i] = {g.begin, g.end - g.begin};
+            }
             detail::check_index(ref.group_end);
         }
         stats_ = L::encode(tree, std::span<const std::array<std::uint32_t, 2>>(groups), nodes_);
@@ -221,33 +228,46 @@ private:
     /// TriangleStore::closest_hit, with the ray prepared once per trace for intersectors
     /// without frames). Updates `hit` when a hit nearer than hit.t is found.
     template <bool Any>
-    bool test_leaf(std::uint32_t g, std::uint32_t count, const SoaView<T, P::field_count>& view, const Ray<T>& ray,
-                   const typename P::RayData& world, StoreHit<T>& hit) const {
-        T ts[batch_width], us[batch_width], vs[batch_width];
-        bool found = false;
-        for (const std::uint32_t end = g + count; g < end; ++g) {
-            const auto& group = store_.group(g);
-            typename P::RayData rd = world;
-            if constexpr (P::uses_frame) {
+    bool test_leaf(std::uint32_t first, std::uint32_t count, const SoaView<T, P::field_count>& view,
+                   const Ray<T>& ray, const typename P::RayData& world, StoreHit<T>& hit) const {
+        if constexpr (P::uses_frame) {
+            // `first`, `count`: a range of groups, each with its own frame.
+            bool found = false;
+            for (const std::uint32_t end = first + count; first < end; ++first) {
+                const auto& group = store_.group(first);
                 Ray<T> local = ray;
                 local.origin -= group.origin;
                 local.tmax = ray.tmax < hit.t ? ray.tmax : hit.t;
-                rd = P::prepare(local);
-            }
-            for (std::uint32_t first = group.begin; first < group.end; first += std::uint32_t(batch_width)) {
-                const std::size_t n = std::min<std::size_t>(batch_width, group.end - first);
-                P::batch(view, first, n, rd, ts, us, vs);
-                // The nearest lane, selected without branches; one compare with the best.
-                std::size_t best = 0;
-                for (std::size_t k = 1; k < n; ++k) best = ts[k] < ts[best] ? k : best;
-                if (ts[best] < hit.t) {
+                if (test_records<Any>(group.begin, group.end, view, P::prepare(local), hit)) {
                     if constexpr (Any) return true;
-                    hit.t = ts[best];
-                    hit.u = us[best];
-                    hit.v = vs[best];
-                    hit.id = store_.id(first + best);
                     found = true;
                 }
+            }
+            return found;
+        } else {
+            // `first`, `count`: a range of records in the world frame.
+            return test_records<Any>(first, first + count, view, world, hit);
+        }
+    }
+
+    template <bool Any>
+    bool test_records(std::uint32_t first, std::uint32_t end, const SoaView<T, P::field_count>& view,
+                      const typename P::RayData& rd, StoreHit<T>& hit) const {
+        T ts[batch_width], us[batch_width], vs[batch_width];
+        bool found = false;
+        for (; first < end; first += std::uint32_t(batch_width)) {
+            const std::size_t n = std::min<std::size_t>(batch_width, end - first);
+            P::batch(view, first, n, rd, ts, us, vs);
+            // The nearest lane, selected without branches; one compare with the best.
+            std::size_t best = 0;
+            for (std::size_t k = 1; k < n; ++k) best = ts[k] < ts[best] ? k : best;
+            if (ts[best] < hit.t) {
+                if constexpr (Any) return true;
+                hit.t = ts[best];
+                hit.u = us[best];
+                hit.v = vs[best];
+                hit.id = store_.id(first + best);
+                found = true;
             }
         }
         return found;

@@ -100,8 +100,9 @@ concept TreeBuilder = requires(const B b, std::span<const TriangleVertices<typen
 // another node). glint's nodes describe themselves in the low bits of one 32-bit word:
 //   word & 3 in {0, 1, 2}: split node on that axis; word >> 2 is the first child's index
 //                          for PointerLayout (unused by the subtree layouts);
-//   word & 7 == 3:         leaf; word >> 3 = number of triangle-store groups (0: empty leaf),
-//                          the first group index is stored in the plane slot's bits;
+//   word & 7 == 3:         leaf; its range in the TriangleStore: word >> 3 = count (0: empty
+//                          leaf), the first index in the plane slot's bits; the range counts
+//                          groups for intersectors with frames (IVM), records otherwise;
 //   word & 7 == 7:         pointer; word >> 3 = index of the node it stands for.
 // A kd node is 8 bytes for float (one plane), a BIH node 12 (two planes). Repair: 000 says
 // one bit marks a leaf and the position inside the subtree tells pointers from splits; we
@@ -152,7 +153,7 @@ struct EncodedNode {
     int axis() const { return static_cast<int>(word & 3u); }
     std::uint32_t child() const { return word >> 2; }     // PointerLayout split nodes
     std::uint32_t target() const { return word >> 3; }    // pointer nodes
-    std::uint32_t group_count() const { return word >> 3; }  // leaves
+    std::uint32_t group_count() const { return word >> 3; }  // leaves: groups or records
     std::uint32_t group_begin() const { return detail::unpack_index<T>(plane[0]); }
 
     static EncodedNode split(const BuildNode<T>& b, std::uint32_t child) {
