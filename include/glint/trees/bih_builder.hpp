@@ -31,7 +31,10 @@
 namespace glint {
 
 struct BihBuildOptions {
-    std::uint32_t leaf_size = 4;  // at most this many triangles make a leaf
+    // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time
+    // (SIMD batches): on incoherent rays 16 was 1.4x (bunny) and 1.7x (128k-triangle knot)
+    // faster than Waechter and Keller's 4, and faster than 8 and 24.
+    std::uint32_t leaf_size = 16;
     int max_depth = 56;           // at most 56 (the traversal stack holds 64 entries)
 };
 
