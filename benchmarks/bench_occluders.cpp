@@ -1,18 +1,45 @@
 // bench_occluders: occluder spheres (000 chapter 5) measured against shadow rays.
 //
-//   bench_occluders --fit-gssa            re-measure A(1, r/R, d/R) by Monte Carlo and fit it
+//   bench_occluders [--quick] [--csv FILE] [--mesh FILE.obj] [--images DIR]
+//       1. Delaunay build time scaling (random points and torus-knot surface samples);
+//       2. sphere generation: time, and the sphere sets' hit probability for isotropic random
+//          lines against the mesh's at 1000/250/100/25/10 spheres, without (000's method) and
+//          with radius calibration; generation time for a 100k-triangle mesh;
+//       3. VPL renders (tracer/vpl.hpp) of the torus knot (and --mesh) in a box: shadow rays
+//          through a kd-tree against occluder spheres (linear scan and kd-tree search),
+//          time, speedup and relative RMSE of the VPL (indirect) illumination; the kd-tree /
+//          linear crossover; side-by-side PNG images (rays | spheres | 4x difference).
+//       CSV columns: scene,visibility,spheres,seconds,rel_rmse (visibility: rays,
+//       spheres-linear, spheres-kdtree).
+//   bench_occluders --fit-gssa    re-measure A(1, r/R, d/R) by Monte Carlo and fit it (gssa.hpp)
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <functional>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <glint/core/error.hpp>
 #include <glint/core/random.hpp>
+#include <glint/core/image.hpp>
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/io/obj.hpp>
+#include <glint/io/png.hpp>
+#include <glint/occluders/delaunay.hpp>
 #include <glint/occluders/gssa.hpp>
+#include <glint/occluders/spheres.hpp>
+#include <glint/occluders/visibility.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/tracer/vpl.hpp>
+#include <glint/trees/layouts.hpp>
+#include <glint/trees/scenes.hpp>
+#include <glint/trees/traversal.hpp>
 
 using namespace glint;
 
@@ -136,11 +163,246 @@ int fit_gssa(std::uint64_t lines) {
     return 0;
 }
 
+
+/// --mesh: io/obj.hpp's loader, in double.
+Mesh<double> read_obj(const std::string& path) {
+    const ObjMesh obj = load_obj(path);
+    Mesh<double> m(obj.triangles.size());
+    for (std::size_t i = 0; i < m.size(); ++i)
+        for (std::size_t k = 0; k < 3; ++k) m[i][k] = Vec3d(obj.triangles[i][k]);
+    if (m.empty()) throw Error("bench_occluders: " + path + " has no faces");
+    return m;
+}
+
+// ---------------------------------------------------------------------------------------
+
+struct Options {
+    bool quick = false;
+    std::string csv, mesh, images = ".";
+};
+
+struct CsvRow {
+    std::string scene, visibility;
+    std::size_t spheres;
+    double seconds, rel_rmse;
+};
+
+void delaunay_scaling(const Options& o) {
+    std::printf("\n== Delaunay build time (Bowyer-Watson, exact predicates) ==\n%10s %12s %12s %14s\n", "points", "set",
+                "seconds", "us/point");
+    std::vector<std::size_t> sizes = {1000, 10000, 100000};
+    if (o.quick) sizes = {1000, 10000};
+    const auto knot = make_torus_knot<double>();
+    for (std::size_t n : sizes) {
+        Pcg32 rng(7);
+        std::vector<Vec3d> pts(n);
+        for (auto& p : pts) p = Vec3d(rng.uniform<double>(), rng.uniform<double>(), rng.uniform<double>());
+        const Delaunay<double> d{std::span<const Vec3d>(pts)};
+        std::printf("%10zu %12s %12.3f %14.2f\n", n, "random", d.build_seconds(), 1e6 * d.build_seconds() / double(n));
+        std::vector<Vec3d> nrm;
+        sample_surface<double>(knot, n, 3, pts, nrm);
+        const Delaunay<double> s{std::span<const Vec3d>(pts)};
+        std::printf("%10zu %12s %12.3f %14.2f\n", n, "knot-surface", s.build_seconds(), 1e6 * s.build_seconds() / double(n));
+    }
+}
+
+/// Hit-probability check: relative error of the sphere sets against the mesh.
+void hit_probability(const std::string& name, const Mesh<double>& mesh, const Options& o) {
+    const std::vector<std::size_t> targets = {1000, 250, 100, 25, 10};
+    Vec3d c;
+    double radius;
+    mesh_ball<double>(mesh, c, radius);
+    const std::size_t lines = o.quick ? 5000 : 40000;
+    const double pm = mesh_hit_fraction<double>(mesh, c, radius, lines, 31);
+    std::printf("\n== %s (%zu triangles): hit probability of isotropic random lines, mesh %.4f (%zu lines) ==\n",
+                name.c_str(), mesh.size(), pm, lines);
+    for (bool calibrate : {false, true}) {
+        OccluderOptions opt;
+        opt.calibrate = calibrate;
+        const double t0 = now();
+        const auto levels = generate_occluder_levels<double>(mesh, targets, opt);
+        const double t = now() - t0;
+        std::printf("%-26s generation %.2f s;", calibrate ? "D2+fitted GSSA+calibrated" : "D2+fitted GSSA (000)", t);
+        for (std::size_t k = 0; k < targets.size(); ++k) {
+            const double ps = sphere_set_hit_fraction<double>(levels[k], c, radius, lines, 31);
+            std::printf("  %zu: %+.1f%%", targets[k], 100 * (ps / pm - 1));
+        }
+        std::printf("\n");
+    }
+}
+
+Mesh<float> to_float(const Mesh<double>& m) {
+    Mesh<float> out(m.size());
+    for (std::size_t i = 0; i < m.size(); ++i)
+        for (int k = 0; k < 3; ++k) out[i][std::size_t(k)] = Vec3f(m[i][std::size_t(k)]);
+    return out;
+}
+
+/// Object scaled into a Cornell-like box [-1, 1]^3 (open at +z), lit by a ceiling quad.
+VplScene<float> box_scene(const Mesh<double>& object, Mesh<double>& placed) {
+    AABB<double> b = mesh_bounds<double>(object);
+    const Vec3d e = b.extent();
+    const double s = 1.3 / std::max({e.x, e.y, e.z});
+    const Vec3d shift = Vec3d(0, -1 + 0.02 + 0.5 * s * e.y, -0.1) - s * b.center();
+    placed = object;
+    for (auto& t : placed)
+        for (auto& v : t) v = v * s + shift;
+    VplScene<float> sc;
+    auto quad = [&](Vec3d a, Vec3d bb, Vec3d c, Vec3d d, Rgb<float> alb, Rgb<float> le = Rgb<float>(0.f)) {
+        const Mesh<double> q = {{a, bb, c}, {a, c, d}};
+        sc.add(to_float(q), alb, le);
+    };
+    const Rgb<float> white(0.75f, 0.75f, 0.75f), red(0.7f, 0.15f, 0.12f), green(0.15f, 0.6f, 0.15f);
+    quad({-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}, white);   // floor
+    quad({-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}, white);       // ceiling
+    quad({-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {1, -1, -1}, white);   // back
+    quad({-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}, red);     // left
+    quad({1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}, green);       // right
+    const double l = 0.3, y = 0.999;
+    quad({-l, y, -l}, {l, y, -l}, {l, y, l}, {-l, y, l}, Rgb<float>(0.f), Rgb<float>(15.f, 14.f, 12.f));
+    sc.add(to_float(placed), Rgb<float>(0.7f, 0.7f, 0.65f));
+    return sc;
+}
+
+void render_scene(const std::string& name, const Mesh<double>& object, const Options& o, std::vector<CsvRow>& rows) {
+    Mesh<double> placed;
+    const VplScene<float> sc = box_scene(object, placed);
+    using Tree = KdTree<float, MollerTrumbore<float>, CompactSubtrees<31>>;
+    const Tree tree(sc.triangles);
+    PinholeCamera<float> cam;
+    cam.eye = Vec3f(0, 0, 3.4f);
+    cam.target = Vec3f(0, 0, 0);
+    cam.fov_y = 0.68f;
+    cam.width = cam.height = o.quick ? 32 : 128;
+    const std::size_t walks = o.quick ? 40 : 300;
+    const auto vpls = shoot_vpls(sc, tree, SpectralRoulette<float, 3>{}, walks, 17);
+    const float min_distance = 0.1f;
+    std::printf("\n== VPL render: %s in a box, %zu triangles, %dx%d pixels, %zu VPLs from %zu walks ==\n", name.c_str(),
+                sc.triangles.size(), cam.width, cam.height, vpls.size(), walks);
+
+    ShadowRayVisibility<Tree> rays(tree, 1e-4f);
+    double t0 = now();
+    const auto ref = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, rays, min_distance);
+    const double t_rays = now() - t0;
+    rows.push_back({name, "rays", 0, t_rays, 0.0});
+    std::printf("%-16s %8s %10s %10s %9s\n", "visibility", "spheres", "seconds", "speedup", "rel_rmse");
+    std::printf("%-16s %8s %10.3f %10s %9s\n", "rays", "-", t_rays, "1.0", "0");
+
+    std::vector<std::size_t> counts = {10, 25, 50, 100, 250, 500, 1000, 2000, 4000};
+    if (o.quick) counts = {10, 100, 1000};
+    const auto t_gen = now();
+    const auto levels = generate_occluder_levels<double>(placed, counts);
+    std::printf("(generation of all levels: %.2f s)\n", now() - t_gen);
+    std::vector<Rgb<float>> img100;
+    std::size_t crossover = 0;
+    double best_speedup_ok = 0;
+    std::size_t best_speedup_n = 0;
+    for (std::size_t k = 0; k < counts.size(); ++k) {
+        std::vector<Sphere<float>> sf;
+        for (const auto& s : levels[k]) sf.push_back({Vec3f(s.centre), float(s.radius)});
+        SphereVisibilityLinear<float> lin(sf);
+        SphereVisibilityKdTree<float> kd(sf);
+        t0 = now();
+        const auto a = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, lin, min_distance);
+        const double t_lin = now() - t0;
+        t0 = now();
+        const auto b = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, kd, min_distance);
+        const double t_kd = now() - t0;
+        const double e_lin = relative_rmse<float>(a, ref), e_kd = relative_rmse<float>(b, ref);
+        rows.push_back({name, "spheres-linear", sf.size(), t_lin, e_lin});
+        rows.push_back({name, "spheres-kdtree", sf.size(), t_kd, e_kd});
+        std::printf("%-16s %8zu %10.3f %10.1f %9.4f\n", "spheres-linear", sf.size(), t_lin, t_rays / t_lin, e_lin);
+        std::printf("%-16s %8zu %10.3f %10.1f %9.4f\n", "spheres-kdtree", sf.size(), t_kd, t_rays / t_kd, e_kd);
+        if (!crossover && t_kd < t_lin) crossover = sf.size();
+        if (sf.size() <= 100 && e_lin <= 0.05 && t_rays / t_lin > best_speedup_ok)
+            best_speedup_ok = t_rays / t_lin, best_speedup_n = sf.size();
+        if (counts[k] == 100) img100 = a;
+    }
+    if (best_speedup_n)
+        std::printf("best speedup at rel_rmse <= 0.05 with <= 100 spheres: %.1fx (%zu spheres, linear scan)\n",
+                    best_speedup_ok, best_speedup_n);
+    else
+        std::printf("no sphere set of <= 100 spheres reached rel_rmse <= 0.05\n");
+    if (crossover)
+        std::printf("kd-tree search first faster than the linear scan at %zu spheres\n", crossover);
+    else
+        std::printf("kd-tree search never faster than the linear scan up to %zu spheres\n", counts.back());
+    // Side by side: rays | 100 spheres (linear) | 4x |difference|.
+    if (!img100.empty()) {
+        double mean = 0;
+        for (const auto& p : ref) mean += double(p.luminance());
+        mean /= double(ref.size());
+        const float scale = float(0.5 / std::max(mean, 1e-12));
+        const int w = cam.width, h = cam.height;
+        Image<Rgb<float>> side(3 * w, h);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const std::size_t i = std::size_t(y) * std::size_t(w) + std::size_t(x);
+                side.at(x, y) = ref[i] * scale;
+                side.at(w + x, y) = img100[i] * scale;
+                for (std::size_t c = 0; c < 3; ++c)
+                    side.at(2 * w + x, y)[c] = 4.f * std::abs(img100[i][c] - ref[i][c]) * scale;
+            }
+        const std::string path = o.images + "/occluders_" + name + ".png";
+        write_png(path, side);
+        std::printf("wrote %s (shadow rays | 100 spheres | 4x difference)\n", path.c_str());
+    }
+}
+
+int run(const Options& o) {
+    std::vector<CsvRow> rows;
+    delaunay_scaling(o);
+    const auto knot = make_torus_knot<double>();
+    hit_probability("torus-knot", knot, o);
+    Mesh<double> mesh;
+    std::string mesh_name;
+    if (!o.mesh.empty()) {
+        mesh = read_obj(o.mesh);
+        mesh_name = o.mesh.substr(o.mesh.find_last_of('/') + 1);
+        mesh_name = mesh_name.substr(0, mesh_name.find('.'));
+        hit_probability(mesh_name, mesh, o);
+    }
+    if (!o.quick) {
+        const auto big = make_torus_knot<double>(2500, 20);
+        const double t0 = now();
+        const auto s = generate_occluders<double>(big, 100);
+        std::printf("\n100k-triangle mesh (%zu triangles): generation of 100 spheres %.2f s\n", big.size(), now() - t0);
+    }
+    render_scene("torus-knot", knot, o, rows);
+    if (!mesh.empty()) render_scene(mesh_name, mesh, o, rows);
+    if (!o.csv.empty()) {
+        std::ofstream f(o.csv);
+        if (!f) throw Error("bench_occluders: cannot write " + o.csv);
+        f << "scene,visibility,spheres,seconds,rel_rmse\n";
+        for (const auto& r : rows)
+            f << r.scene << ',' << r.visibility << ',' << r.spheres << ',' << r.seconds << ',' << r.rel_rmse << '\n';
+        std::printf("\nwrote %s\n", o.csv.c_str());
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--fit-gssa")) return fit_gssa(400000);
+    Options o;
+    try {
+        for (int i = 1; i < argc; ++i) {
+            const std::string a = argv[i];
+            auto value = [&]() -> std::string {
+                if (i + 1 >= argc) throw Error("bench_occluders: " + a + " needs a value");
+                return argv[++i];
+            };
+            if (a == "--fit-gssa") return fit_gssa(400000);
+            if (a == "--quick") o.quick = true;
+            else if (a == "--csv") o.csv = value();
+            else if (a == "--mesh") o.mesh = value();
+            else if (a == "--images") o.images = value();
+            else throw Error("bench_occluders: unknown option " + a +
+                             " (use --quick, --csv FILE, --mesh FILE.obj, --images DIR, --fit-gssa)");
+        }
+        return run(o);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 1;
     }
-    return 0;
 }

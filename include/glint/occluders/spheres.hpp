@@ -257,7 +257,12 @@ private:
         const double cells = std::max<double>(1, double(live_));
         h_ = std::cbrt(e.x * e.y * e.z / cells);
         h_ = std::max({h_, e.x / 256, e.y / 256, e.z / 256, 1e-300});
-        for (int a = 0; a < 3; ++a) dim_[a] = std::max(1, std::min(256, int(std::ceil(e[a] / h_))));
+        // At most about 2 cells per live sphere (flat sets would otherwise get 256^3 cells).
+        for (;;) {
+            for (int a = 0; a < 3; ++a) dim_[a] = std::max(1, std::min(256, int(std::ceil(e[a] / h_))));
+            if (double(dim_[0]) * dim_[1] * dim_[2] <= 2 * cells + 8) break;
+            h_ *= 1.25;
+        }
         head_.assign(std::size_t(dim_[0]) * std::size_t(dim_[1]) * std::size_t(dim_[2]), -1);
         cell_rmin_.assign(head_.size(), infinity<double>);
         cell_rmax_.assign(head_.size(), -infinity<double>);

@@ -76,7 +76,7 @@ inline bool occluder_view(const Sphere<T>& s, const Vec3<T>& x, const Vec3<T>& n
 
 template <class T>
 inline bool occludes(const Vec3<T>& u, T cos_gamma, T t, const Vec3<T>& l, T q) {
-    return t < q && glm::dot(u, l) > cos_gamma;
+    return t < q && u.x * l.x + u.y * l.y + u.z * l.z > cos_gamma;
 }
 
 }  // namespace detail
@@ -90,7 +90,7 @@ public:
         for (const auto& s : s_)
             if (!all_finite(s.centre) || !(s.radius >= 0) || !std::isfinite(s.radius))
                 throw Error("glint::SphereVisibilityLinear: sphere with non-finite centre or radius");
-        const std::size_t n = s_.size();
+        const std::size_t n = (s_.size() + block - 1) / block * block;
         ux_.resize(n), uy_.resize(n), uz_.resize(n), cg_.resize(n), t_.resize(n);
     }
 
@@ -105,6 +105,8 @@ public:
             ux_[count_] = u.x, uy_[count_] = u.y, uz_[count_] = u.z, cg_[count_] = cg, t_[count_] = t;
             ++count_;
         }
+        for (std::size_t i = count_; i < (count_ + block - 1) / block * block; ++i)
+            ux_[i] = uy_[i] = uz_[i] = cg_[i] = T(0), t_[i] = infinity<T>;
     }
 
     bool occluded(const Vec3<T>& y) const {
@@ -112,8 +114,15 @@ public:
         const T q = std::sqrt(glm::dot(d, d));
         if (!(q > T(0))) return false;
         const Vec3<T> l = d / q;
-        for (std::size_t i = 0; i < count_; ++i)
-            if (detail::occludes(Vec3<T>(ux_[i], uy_[i], uz_[i]), cg_[i], t_[i], l, q)) return true;
+        // Branch-free blocks of 16 (vectorizable), the same predicate as detail::occludes;
+        // padding slots have t = +inf and never occlude.
+        const T *ux = ux_.data(), *uy = uy_.data(), *uz = uz_.data(), *cg = cg_.data(), *tt = t_.data();
+        for (std::size_t b = 0; b < count_; b += block) {
+            int hit = 0;
+            for (std::size_t i = b; i < b + block; ++i)
+                hit |= int(tt[i] < q) & int(ux[i] * l.x + uy[i] * l.y + uz[i] * l.z > cg[i]);
+            if (hit) return true;
+        }
         return false;
     }
     bool visible(const Vec3<T>& y) const { return !occluded(y); }
@@ -121,6 +130,7 @@ public:
     std::size_t size() const { return s_.size(); }
 
 private:
+    static constexpr std::size_t block = 16;
     std::vector<Sphere<T>> s_;
     SphereVisibilityOptions<T> opt_;
     Vec3<T> x_{0};
@@ -264,9 +274,9 @@ private:
             if (b.lo[axis] <= split) left.push_back(i);
             if (b.hi[axis] >= split) right.push_back(i);
         }
-        if (left.size() == ids.size() && right.size() == ids.size()) return make_leaf();
-        if (left.size() + right.size() > 2 * ids.size() - ids.size() / 4 && ids.size() <= 4 * leaf_size)
-            return make_leaf();  // splitting duplicates nearly everything
+        // Stop where a split would mostly duplicate references (large overlapping spheres):
+        // more than 1.6 references per sphere would grow the tree exponentially with depth.
+        if (10 * (left.size() + right.size()) > 16 * ids.size()) return make_leaf();
         const auto child = std::uint32_t(nodes_.size());
         nodes_.push_back({});
         nodes_.push_back({});
