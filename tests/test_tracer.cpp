@@ -272,3 +272,16 @@ TEST_CASE("io: OBJ loading, materials, and errors that name the file") {
     }
     std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("ReducedContinuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 1") {
+    const ClassicRoulette<double, 3> classic{Rgb<double>(1.0 / 3.0)};
+    const RadianceEstimateRoulette<double, 3, ClassicRoulette<double, 3>> est{classic, Rgb<double>(0.2)};
+    const Rgb<double> F(1.0), a(0.6);
+    const ReducedContinuation<double, 3, decltype(est)> same{est, 1.0}, shorter{est, 0.25};
+    CHECK(same.selection_weight(F, a) == doctest::Approx(0.6));
+    CHECK(shorter.selection_weight(F, a) == doctest::Approx(0.6 * 0.25 / (1.0 - 0.75 * 0.6)));
+    // The speedup of 000 line 1530: expected walk length ratio 1 / (1 - (1 - d) s_old).
+    const double s_new = shorter.selection_weight(F, a);
+    CHECK((1.0 - s_new) / (1.0 - 0.6) == doctest::Approx(1.0 / (1.0 - 0.75 * 0.6)));
+    CHECK(shorter.terminated(a) == est.terminated(a));
+}

@@ -32,6 +32,7 @@
 #include <mutex>
 #include <span>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <glint/core/image.hpp>
@@ -60,6 +61,9 @@ struct RenderSettings {
     int threads = 0;             // 0: std::thread::hardware_concurrency()
     BrdfSelection selection = BrdfSelection::mis;
     DirectEstimator estimator = DirectEstimator::combined;
+    /// Combined estimator at the primary vertices: lambda from the statistics pooled over
+    /// the (2r + 1)^2 pixel neighbourhood (000 section 3.1.1); -1 estimates it per vertex.
+    int lambda_filter_radius = 1;
     bool progress = false;       // progress bar on stderr
 };
 
@@ -78,6 +82,17 @@ struct ShadingPoint {
     Vec3<T> n;          // normal on the side of the outgoing direction
     Frame<T> frame;     // local frame about n
     const SurfaceBrdf<T>* brdf;
+};
+
+/// Per-pixel sums of the primary vertices' correlated-sampling quantities, so that the
+/// combined estimate f/p + lambda (J - g/p) can use a lambda pooled over neighbouring pixels
+/// after all samples are taken (it is linear in lambda).
+template <Scalar T>
+struct PrimaryDirect {
+    Rgb<T> used{T(0)};  // what radiance() added with the per-vertex lambda
+    Rgb<T> a{T(0)};     // sum of mean f/p
+    Rgb<T> b{T(0)};     // sum of J - mean g/p
+    Rgb<T> fg{T(0)}, gg{T(0)};  // sums of the within-vertex co-moments
 };
 
 /// No next-event estimation: the walk collects emission wherever it hits it.
@@ -131,13 +146,18 @@ public:
         std::atomic<std::uint64_t> rays{0};
         std::mutex progress_mutex;
         const auto start = std::chrono::steady_clock::now();
+        const bool pool_lambda = std::is_same_v<D, CorrelatedDirect> && settings_.estimator == DirectEstimator::combined &&
+                                 settings_.lambda_filter_radius >= 0 && !lights_.empty();
+        std::vector<PrimaryDirect<T>> primaries(pool_lambda ? std::size_t(w) * std::size_t(h) : 0);
         auto worker = [&] {
             S sampler = prototype;
             std::uint64_t local_rays = 0;
             for (int t = next++; t < tiles; t = next++) {
                 const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
                 for (int y = y0; y < std::min(y0 + tile, h); ++y)
-                    for (int x = x0; x < std::min(x0 + tile, w); ++x) render_pixel(x, y, spp, sampler, out, local_rays);
+                    for (int x = x0; x < std::min(x0 + tile, w); ++x)
+                        render_pixel(x, y, spp, sampler, out, local_rays,
+                                     pool_lambda ? &primaries[std::size_t(y) * std::size_t(w) + std::size_t(x)] : nullptr);
                 const int d = ++done;
                 if (settings_.progress) {
                     std::lock_guard lock(progress_mutex);
@@ -155,13 +175,15 @@ public:
         for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
         worker();
         for (auto& th : pool) th.join();
+        if (pool_lambda) apply_pooled_lambda(primaries, spp, out);
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out.rays = rays;
         return out;
     }
 
     /// Radiance along one camera ray (for tests); `rays` counts traced rays.
-    Rgb<T> radiance(Ray<T> ray, S& sampler, std::uint64_t& rays, T* lambda_out = nullptr) const {
+    Rgb<T> radiance(Ray<T> ray, S& sampler, std::uint64_t& rays, T* lambda_out = nullptr,
+                    PrimaryDirect<T>* primary = nullptr) const {
         Rgb<T> L(T(0)), F(T(1));
         bool count_emission = true;
         for (int depth = 0; depth < settings_.max_depth; ++depth) {
@@ -203,7 +225,7 @@ public:
             const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
             const ShadingPoint<T> sp{x, n, frame, &brdf};
             if constexpr (!D::collects_emission) {
-                L += F * direct(sp, sampler, rays, depth == 0 ? lambda_out : nullptr);
+                L += F * direct(sp, sampler, rays, depth == 0 ? lambda_out : nullptr, depth == 0 ? primary : nullptr);
             }
             if constexpr (Points) L += F * point_lights(sp, rays);
 
@@ -229,8 +251,70 @@ public:
         return L;
     }
 
+    /// 000 section 2.3's goodness of a radiance estimate L~:
+    /// d = E[(X - a L~)^2] / E[X^2], X = (w/p) L_in the one-sample estimate of the reflected
+    /// radiance at the first diffuse vertex of `n` pilot camera paths (L_in traced by this
+    /// tracer, so it is unbiased), a the vertex's albedo; in luminance with weights H.
+    /// Clamped to [0.05, 1]. Used to shorten walks with ReducedContinuation.
+    T estimate_goodness(const S& prototype, const Rgb<T>& estimate, const Rgb<T>& H, int n) const {
+        S sampler = prototype;
+        double num = 0, den = 0;
+        std::uint64_t rays = 0;
+        const T aspect = T(settings_.width) / T(settings_.height);
+        for (int i = 0; i < n; ++i) {
+            const int x = i % settings_.width, y = (i / settings_.width) % settings_.height;
+            sampler.start_pixel_sample(x, y, std::uint64_t(0x9000000 + i));
+            const Vec2<T> p = sampler.get_pixel_2d();
+            const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
+            StoreHit<T> hit;
+            if (!accel_.closest_hit(ray, hit)) continue;
+            const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
+            if (m.specular()) continue;
+            const Vec3<T> ng = scene_.normal(hit.id);
+            const Vec3<T> nn = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
+            const Frame<T> frame = Frame<T>::from_normal(nn);
+            const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
+            const Vec3<T> wi = sample_brdf(brdf, sampler.get_2d());
+            const T pdf = brdf.sampling_pdf(wi);
+            if (!(pdf > T(0)) || wi.z <= T(0)) continue;
+            const Rgb<T> weight = brdf.f(wi) * (wi.z / pdf);
+            const Rgb<T> L_in = radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, rays);
+            const double X = double((weight * L_in).luminance(H));
+            const double aL = double(((m.kd + m.ks) * estimate).luminance(H));
+            num += (X - aL) * (X - aL);
+            den += X * X;
+        }
+        return den > 0 ? std::clamp(T(num / den), T(0.05), T(1)) : T(1);
+    }
+
 private:
-    void render_pixel(int x, int y, int spp, S& sampler, RenderResult& out, std::uint64_t& rays) const {
+    /// 000 section 3.1.1: replace each pixel's per-vertex-lambda primary direct light by
+    /// a + lambda b with lambda = sum fg / sum gg over the pixel's neighbourhood.
+    void apply_pooled_lambda(const std::vector<PrimaryDirect<T>>& p, int spp, RenderResult& out) const {
+        const int w = settings_.width, h = settings_.height, r = settings_.lambda_filter_radius;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                Rgb<T> fg(T(0)), gg(T(0));
+                for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
+                    for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx) {
+                        const auto& q = p[std::size_t(yy) * std::size_t(w) + std::size_t(xx)];
+                        fg += q.fg;
+                        gg += q.gg;
+                    }
+                const auto& q = p[std::size_t(y) * std::size_t(w) + std::size_t(x)];
+                Rgb<float>& pixel = out.image.at(x, y);
+                T lambda_mean = 0;
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const T lambda = gg[c] > T(0) ? fg[c] / gg[c] : T(0);
+                    pixel[c] += float((q.a[c] + lambda * q.b[c] - q.used[c]) / T(spp));
+                    lambda_mean += lambda / T(3);
+                }
+                out.lambda.at(x, y) = float(lambda_mean);
+            }
+    }
+
+    void render_pixel(int x, int y, int spp, S& sampler, RenderResult& out, std::uint64_t& rays,
+                      PrimaryDirect<T>* primary) const {
         const T aspect = T(settings_.width) / T(settings_.height);
         Rgb<T> mean(T(0)), m2(T(0));
         T lambda_sum = 0;
@@ -240,8 +324,16 @@ private:
             const Vec2<T> p = sampler.get_pixel_2d();
             const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
             T lambda = std::numeric_limits<T>::quiet_NaN();
-            Rgb<T> L = radiance(ray, sampler, rays, &lambda);
+            PrimaryDirect<T> pd;
+            Rgb<T> L = radiance(ray, sampler, rays, &lambda, primary ? &pd : nullptr);
             if (!L.is_finite()) L = Rgb<T>(T(0));  // never let one sample poison a pixel
+            else if (primary && pd.a.is_finite() && pd.b.is_finite()) {
+                primary->used += pd.used;
+                primary->a += pd.a;
+                primary->b += pd.b;
+                primary->fg += pd.fg;
+                primary->gg += pd.gg;
+            }
             if (!std::isnan(lambda)) {
                 lambda_sum += lambda;
                 ++lambda_count;
@@ -304,7 +396,8 @@ private:
         return i;
     }
 
-    Rgb<T> direct(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays, T* lambda_out) const {
+    Rgb<T> direct(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays, T* lambda_out,
+                  PrimaryDirect<T>* primary) const {
         Rgb<T> L(T(0));
         if constexpr (std::is_same_v<D, CorrelatedDirect>) {
             if (!lights_.empty()) {
@@ -313,6 +406,17 @@ private:
                 T lambda_sum = 0;
                 for (const auto& light : lights_) {
                     for (std::size_t i = 0; i < k; ++i) u[i] = sampler.get_2d();
+                    if (settings_.estimator == DirectEstimator::importance) {
+                        // f/p alone: no main part, so no form factor is computed.
+                        const T area = light.sampler().area();
+                        for (std::size_t i = 0; i < k; ++i) {
+                            const Vec3<T> y = light.sampler().sample(u[i]);
+                            const T G = light.geometry(sp.x, sp.n, y) * area;
+                            if (G > T(0) && visible(sp.x, sp.n, y, rays))
+                                L += light.radiance() * sp.brdf->f(sp.frame.to_local(safe_normalize(y - sp.x))) * (G / T(k));
+                        }
+                        continue;
+                    }
                     const Rgb<T> fr_approx = sp.brdf->kd() / pi<T>;
                     const auto res = correlated_direct(
                         light, sp.x, sp.n, [&](const Vec3<T>& wi) { return sp.brdf->f(sp.frame.to_local(wi)); },
@@ -322,6 +426,15 @@ private:
                         case DirectEstimator::importance: L += res.importance; break;
                         case DirectEstimator::correlated: L += res.correlated; break;
                         default: L += res.combined; break;
+                    }
+                    if (primary) {
+                        for (std::size_t c = 0; c < 3; ++c) {
+                            primary->a[c] += res.importance[c];
+                            primary->b[c] += res.main_part[c] - res.stats[c].mean_g;
+                            primary->fg[c] += res.stats[c].comoment_fg;
+                            primary->gg[c] += res.stats[c].comoment_gg;
+                        }
+                        primary->used += res.combined;
                     }
                     lambda_sum += res.lambda.mean();
                 }

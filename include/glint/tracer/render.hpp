@@ -36,6 +36,15 @@ struct RenderOptions {
     std::string direct = "mis";
     std::string sampler = "random";
     std::uint64_t seed = 0;
+    /// Band weights H of the roulettes (000 section 2.2): "luminance" (0.3086, 0.6094,
+    /// 0.0820) or "mean" (1/3 each, matching an error measured equally over R, G, B).
+    std::string roulette_weights = "luminance";
+    /// Radiance-estimate roulettes: shorten walks by the goodness of the estimate measured
+    /// on pilot paths (ReducedContinuation, 000 section 2.3). Off by default: measured by
+    /// bench_convergence, it is neutral on cornell (goodness d = 0.98) and costs efficiency
+    /// on the furnace, where every vertex's shortened walk feeds the next vertex's estimate.
+    bool reduce_continuation = false;
+    int pilot_paths = 4096;
 };
 
 inline const std::vector<std::string>& roulette_names() {
@@ -56,46 +65,79 @@ inline BrdfSelection parse_selection(const std::string& s) {
 
 namespace detail {
 
-template <class S, class R, class D>
-RenderResult render_with(const Scene<float>& scene, const RenderAccel& accel, const R& roulette,
-                         const RenderSettings& settings, const S& sampler) {
+/// Calls run.template operator()<Env, Points>() with the scene's features: checked once,
+/// so that a scene without an environment map or point lights gets a tracer without them.
+template <class F>
+auto with_features(const Scene<float>& scene, F&& run) {
     const SceneFeatures f = scene.features();
-    auto run = [&]<bool Env, bool Points>() {
-        return PathTracer<RenderAccel, S, R, D, Env, Points>(scene, accel, roulette, settings).render(sampler);
-    };
     if (f.environment) return f.point_lights ? run.template operator()<true, true>() : run.template operator()<true, false>();
     return f.point_lights ? run.template operator()<false, true>() : run.template operator()<false, false>();
 }
 
-template <class S, class R>
-RenderResult render_direct(const Scene<float>& scene, const RenderAccel& accel, const R& roulette,
-                           RenderSettings settings, const std::string& direct, const S& sampler) {
-    if (direct == "brdf") return render_with<S, R, BrdfOnlyDirect>(scene, accel, roulette, settings, sampler);
-    if (direct == "mis") return render_with<S, R, MisDirect>(scene, accel, roulette, settings, sampler);
+template <class S, class R, class D>
+RenderResult render_with(const Scene<float>& scene, const RenderAccel& accel, const R& roulette,
+                         const RenderSettings& settings, const S& sampler) {
+    return with_features(scene, [&]<bool Env, bool Points>() {
+        return PathTracer<RenderAccel, S, R, D, Env, Points>(scene, accel, roulette, settings).render(sampler);
+    });
+}
+
+/// Calls f.template operator()<D>(settings) with the direct-lighting policy named `direct`.
+template <class F>
+auto with_direct(const std::string& direct, RenderSettings settings, F&& f) {
+    if (direct == "brdf") return f.template operator()<BrdfOnlyDirect>(settings);
+    if (direct == "mis") return f.template operator()<MisDirect>(settings);
     if (direct == "importance") settings.estimator = DirectEstimator::importance;
     else if (direct == "correlated") settings.estimator = DirectEstimator::correlated;
     else if (direct == "combined") settings.estimator = DirectEstimator::combined;
     else throw Error("unknown direct lighting '" + direct + "' (brdf, mis, importance, correlated, combined)");
-    return render_with<S, R, CorrelatedDirect>(scene, accel, roulette, settings, sampler);
+    return f.template operator()<CorrelatedDirect>(settings);
+}
+
+template <class S, class R>
+RenderResult render_direct(const Scene<float>& scene, const RenderAccel& accel, const R& roulette,
+                           const RenderSettings& settings, const std::string& direct, const S& sampler) {
+    return with_direct(direct, settings, [&]<class D>(const RenderSettings& st) {
+        return render_with<S, R, D>(scene, accel, roulette, st, sampler);
+    });
+}
+
+/// A radiance-estimate roulette, optionally with walks shortened by the goodness of its
+/// estimate measured on pilot paths (000 section 2.3).
+template <class S, class R>
+RenderResult render_estimate(const Scene<float>& scene, const RenderAccel& accel, const R& roulette,
+                             const RenderOptions& o, const Rgb<float>& H, const S& sampler) {
+    if (!o.reduce_continuation) return render_direct(scene, accel, roulette, o.settings, o.direct, sampler);
+    const float d = with_direct(o.direct, o.settings, [&]<class D>(const RenderSettings& st) {
+        return with_features(scene, [&]<bool Env, bool Points>() {
+            return PathTracer<RenderAccel, S, R, D, Env, Points>(scene, accel, roulette, st)
+                .estimate_goodness(sampler, roulette.estimate, H, o.pilot_paths);
+        });
+    });
+    return render_direct(scene, accel, ReducedContinuation<float, 3, R>{roulette, d}, o.settings, o.direct, sampler);
 }
 
 template <class S>
 RenderResult render_roulette(const Scene<float>& scene, const RenderAccel& accel, const RenderOptions& o,
                              const S& sampler) {
     const std::string& r = o.roulette;
-    if (r == "classic") return render_direct(scene, accel, ClassicRoulette<float, 3>{}, o.settings, o.direct, sampler);
-    if (r == "spectral") return render_direct(scene, accel, SpectralRoulette<float, 3>{}, o.settings, o.direct, sampler);
+    Rgb<float> H;
+    if (o.roulette_weights == "luminance") H = Rgb<float>::default_luminance_weights();
+    else if (o.roulette_weights == "mean") H = Rgb<float>(1.0f / 3.0f);
+    else throw Error("unknown roulette weights '" + o.roulette_weights + "' (luminance, mean)");
+    const ClassicRoulette<float, 3> classic{H};
+    const SpectralRoulette<float, 3> spectral{H};
+    if (r == "classic") return render_direct(scene, accel, classic, o.settings, o.direct, sampler);
+    if (r == "spectral") return render_direct(scene, accel, spectral, o.settings, o.direct, sampler);
     if (r == "estimate" || r == "spectral+estimate") {
         Rgb<float> power, albedo;
         float area;
         scene.radiance_estimate_inputs(power, area, albedo);
         const Rgb<float> estimate = global_radiance_estimate(power, area, albedo);
         if (r == "estimate")
-            return render_direct(scene, accel,
-                                 RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>{{}, estimate},
-                                 o.settings, o.direct, sampler);
-        return render_direct(scene, accel, RadianceEstimateRoulette<float, 3>{{}, estimate}, o.settings, o.direct,
-                             sampler);
+            return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>{classic, estimate},
+                                   o, H, sampler);
+        return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3>{spectral, estimate}, o, H, sampler);
     }
     throw Error("unknown roulette '" + r + "' (classic, spectral, estimate, spectral+estimate)");
 }

@@ -1,0 +1,268 @@
+// bench_convergence: error against time for the path tracer's policies, and 000's claims as
+// efficiency ratios measured in one run.
+//
+//   ./build/benchmarks/bench_convergence --scene all --csv convergence.csv
+//   ./build/benchmarks/bench_convergence --scene arealight --csv arealight.csv --size 64 --max-spp 64
+//
+// For each scene, each method renders at spp = 1, 2, 4, ... max-spp; the RMSE over the image
+// is measured against the exact answer (furnace: 1 everywhere) or against a reference render
+// (16x max-spp, another seed, cached as EXR with its variance layer in --cache DIR; the
+// reference's own variance is subtracted from the measured MSE). Efficiency is
+// 1 / (MSE * seconds); a method's ratio to its baseline is the geometric mean over the spp
+// levels >= 4 of the ratio at equal spp. Methods per scene:
+//   furnace         roulette: classic (baseline), spectral, estimate, spectral+estimate
+//   cornell         roulette: classic (baseline), spectral, estimate, spectral+estimate
+//   cornell-glossy  BRDF selection: mis (baseline), dis, w
+//   arealight       direct lighting, 10 light samples: importance (baseline), correlated, combined
+//                   (direct illumination only, max depth 1, as 000 section 3.2 compares it:
+//                   with indirect light the shared path-tracing noise would hide the
+//                   difference)
+// CSV columns: scene,method,spp,seconds,rmse. A gnuplot plot (RMSE against seconds) is
+// written next to the CSV when gnuplot is installed.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <glint/io/exr.hpp>
+#include <glint/tracer/render.hpp>
+#include <glint/tracer/scenes.hpp>
+
+using namespace glint;
+
+namespace {
+
+struct Method {
+    std::string name;     // as in the CSV
+    RenderOptions options;
+};
+
+struct Point {
+    int spp;
+    double seconds, rmse;
+};
+
+struct Config {
+    std::string scene = "all", csv, cache = "bench_cache", plot;
+    std::string direct;  // direct lighting of the roulette and selection scenes (default per scene)
+    int size = 96, max_spp = 64, threads = 0;
+    bool quick = false;
+};
+
+std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
+    auto base = [&] {
+        RenderOptions o;
+        o.settings.width = o.settings.height = cfg.size;
+        o.settings.threads = cfg.threads;
+        o.roulette = "spectral";
+        // The furnace is lit by all its walls: a pure random walk collecting emission where
+        // it hits (000 section 2.2's setting); the others use light sampling with MIS.
+        o.direct = !cfg.direct.empty() ? cfg.direct : scene == "furnace" ? "brdf" : "mis";
+        o.roulette_weights = "mean";  // the RMSE weighs R, G and B equally
+        return o;
+    };
+    std::vector<Method> m;
+    if (scene == "furnace" || scene == "cornell") {
+        for (const std::string r : {"classic", "spectral", "estimate", "spectral+estimate"}) {
+            RenderOptions o = base();
+            o.roulette = r;
+            m.push_back({r, o});
+        }
+    } else if (scene == "cornell-glossy") {
+        for (const std::string s : {"mis", "dis", "w"}) {
+            RenderOptions o = base();
+            o.settings.selection = parse_selection(s);
+            m.push_back({s, o});
+        }
+    } else if (scene == "arealight") {
+        for (const std::string d : {"importance", "correlated", "combined"}) {
+            RenderOptions o = base();
+            o.direct = d;
+            o.settings.light_samples = 10;
+            o.settings.max_depth = 1;
+            m.push_back({d, o});
+        }
+    } else {
+        throw Error("bench_convergence: no methods for scene '" + scene +
+                    "' (furnace, cornell, cornell-glossy, arealight, all)");
+    }
+    return m;
+}
+
+/// The reference image and the mean of its per-pixel variances (its own squared error).
+Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& scene, const RenderAccel& accel,
+                            const Config& cfg, double& ref_var) {
+    ref_var = 0;
+    if (scene_name == "furnace") return Image<Rgb<float>>(cfg.size, cfg.size, Rgb<float>(1.0f));
+    const int spp = 16 * cfg.max_spp;
+    std::filesystem::create_directories(cfg.cache);
+    const std::string path = cfg.cache + "/" + scene_name + "_" + std::to_string(cfg.size) + "_" +
+                             std::to_string(spp) + "_v2.exr";
+    const std::string var_path = path + ".var";
+    if (std::filesystem::exists(path) && std::filesystem::exists(var_path)) {
+        std::ifstream(var_path) >> ref_var;
+        std::printf("  reference: cached %s\n", path.c_str());
+        return read_exr_rgb(path);
+    }
+    RenderOptions o;
+    o.settings.width = o.settings.height = cfg.size;
+    o.settings.spp = spp;
+    o.settings.threads = cfg.threads;
+    o.settings.light_samples = 4;
+    o.roulette = "spectral";
+    o.direct = "mis";
+    o.seed = 0x5eed;
+    if (scene_name == "arealight") o.settings.max_depth = 1;  // direct illumination only
+    const RenderResult r = render(scene, accel, o);
+    for (const auto& v : r.variance.pixels) ref_var += double(v[0] + v[1] + v[2]) / (3.0 * double(r.variance.size()));
+    std::vector<ExrLayer> layers{ExrLayer{"variance", {"R", "G", "B"}, {}}};
+    for (const auto& v : r.variance.pixels) layers[0].data.insert(layers[0].data.end(), {v[0], v[1], v[2]});
+    write_exr(path, r.image, layers);
+    std::ofstream(var_path) << ref_var;
+    std::printf("  reference: %d spp in %.1f s, cached as %s\n", spp, r.seconds, path.c_str());
+    return r.image;
+}
+
+double rmse(const Image<Rgb<float>>& a, const Image<Rgb<float>>& b, double ref_var) {
+    double mse = 0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double d = double(a.pixels[i][c]) - double(b.pixels[i][c]);
+            mse += d * d;
+        }
+    mse /= 3.0 * double(a.size());
+    return std::sqrt(std::max(mse - ref_var, mse * 1e-3));
+}
+
+void plot(const Config& cfg, const std::map<std::string, std::map<std::string, std::vector<Point>>>& results) {
+    if (cfg.plot.empty() || std::system("command -v gnuplot > /dev/null 2>&1") != 0) return;
+    const std::string dir = cfg.plot + ".d";
+    std::filesystem::create_directories(dir);
+    std::string script = "set terminal pngcairo size 1200,900 noenhanced\nset output '" + cfg.plot + "'\n"
+                         "set logscale xy\nset xlabel 'seconds'\nset ylabel 'RMSE'\nset grid\nset key bottom left\n"
+                         "set multiplot layout 2,2\n";
+    for (const auto& [scene, methods] : results) {
+        script += "set title '" + scene + "'\nplot ";
+        bool first = true;
+        for (const auto& [method, points] : methods) {
+            const std::string dat = dir + "/" + scene + "_" + method + ".dat";
+            std::ofstream out(dat);
+            for (const Point& p : points) out << p.seconds << ' ' << p.rmse << '\n';
+            script += std::string(first ? "" : ", ") + "'" + dat + "' with linespoints title '" + method + "'";
+            first = false;
+        }
+        script += "\n";
+    }
+    script += "unset multiplot\n";
+    const std::string gp = dir + "/plot.gp";
+    std::ofstream(gp) << script;
+    if (std::system(("gnuplot " + gp).c_str()) == 0) std::printf("wrote %s\n", cfg.plot.c_str());
+}
+
+/// Geometric mean over spp >= 4 (or all levels when there are fewer) of eff(m) / eff(base).
+double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& base) {
+    double log_sum = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < m.size() && i < base.size(); ++i) {
+        if (m[i].spp < 4 && m.back().spp >= 4) continue;
+        const double em = 1.0 / (m[i].rmse * m[i].rmse * m[i].seconds);
+        const double eb = 1.0 / (base[i].rmse * base[i].rmse * base[i].seconds);
+        log_sum += std::log(em / eb);
+        ++n;
+    }
+    return n ? std::exp(log_sum / n) : 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        Config cfg;
+        for (int i = 1; i < argc; ++i) {
+            const std::string a = argv[i];
+            auto value = [&]() -> std::string {
+                if (i + 1 >= argc) throw Error(a + " expects a value");
+                return argv[++i];
+            };
+            if (a == "--scene") cfg.scene = value();
+            else if (a == "--csv") cfg.csv = value();
+            else if (a == "--cache") cfg.cache = value();
+            else if (a == "--plot") cfg.plot = value();
+            else if (a == "--size") cfg.size = std::max(4, std::atoi(value().c_str()));
+            else if (a == "--max-spp") cfg.max_spp = std::max(1, std::atoi(value().c_str()));
+            else if (a == "--threads") cfg.threads = std::max(0, std::atoi(value().c_str()));
+            else if (a == "--quick") cfg.quick = true;
+            else if (a == "--direct") cfg.direct = value();
+            else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
+                             "--cache DIR --plot FILE.png --threads N --direct NAME --quick)");
+        }
+        if (cfg.quick) {
+            cfg.size = 16;
+            cfg.max_spp = 4;
+        }
+        if (cfg.plot.empty() && !cfg.csv.empty()) {
+            const auto dot = cfg.csv.rfind('.');
+            cfg.plot = (dot == std::string::npos ? cfg.csv : cfg.csv.substr(0, dot)) + ".png";
+        }
+        std::vector<std::string> scenes;
+        if (cfg.scene == "all") scenes = {"furnace", "cornell", "cornell-glossy", "arealight"};
+        else scenes = {cfg.scene};
+
+        std::map<std::string, std::map<std::string, std::vector<Point>>> results;
+        std::ofstream csv;
+        if (!cfg.csv.empty()) {
+            csv.open(cfg.csv);
+            if (!csv) throw Error("cannot write " + cfg.csv);
+            csv << "scene,method,spp,seconds,rmse\n";
+        }
+        for (const std::string& name : scenes) {
+            const Scene<float> scene = builtin_scene<float>(name);
+            const RenderAccel accel(scene.triangles);
+            std::printf("%s (%dx%d, spp 1..%d)\n", name.c_str(), cfg.size, cfg.size, cfg.max_spp);
+            double ref_var = 0;
+            const Image<Rgb<float>> ref = reference(name, scene, accel, cfg, ref_var);
+            const std::vector<Method> methods = methods_for(name, cfg);
+            // Levels outer, methods inner: each level's methods run back to back, so that
+            // machine load drifts affect them alike.
+            for (int spp = 1; spp <= cfg.max_spp; spp *= 2)
+                for (const Method& m : methods) {
+                    RenderOptions o = m.options;
+                    o.settings.spp = spp;
+                    o.seed = std::uint64_t(spp);
+                    const RenderResult r = render(scene, accel, o);
+                    const Point p{spp, r.seconds, rmse(r.image, ref, ref_var)};
+                    results[name][m.name].push_back(p);
+                    if (csv) csv << name << ',' << m.name << ',' << spp << ',' << p.seconds << ',' << p.rmse << '\n';
+                }
+            const std::string& base = methods.front().name;
+            std::printf("  %-20s %10s %10s %12s\n", "method", "rmse@max", "seconds", "efficiency");
+            for (const Method& m : methods) {
+                const auto& pts = results[name][m.name];
+                std::printf("  %-20s %10.5f %10.3f %11.3fx vs %s\n", m.name.c_str(), pts.back().rmse,
+                            pts.back().seconds, efficiency_ratio(pts, results[name][base]), base.c_str());
+            }
+            if (name == "arealight") {
+                const auto& imp = results[name]["importance"];
+                const auto& cor = results[name]["correlated"];
+                const auto& com = results[name]["combined"];
+                int lower = 0;
+                for (std::size_t i = 0; i < com.size(); ++i) lower += com[i].rmse < imp[i].rmse && com[i].rmse < cor[i].rmse;
+                double t_com = 0, t_imp = 0;
+                for (std::size_t i = 0; i < com.size(); ++i) t_com += com[i].seconds, t_imp += imp[i].seconds;
+                std::printf("  combined has lower RMSE than importance and correlated at %d of %zu spp levels; "
+                            "time overhead vs importance %+.1f%%\n", lower, com.size(), 100.0 * (t_com / t_imp - 1.0));
+            }
+        }
+        if (csv) std::printf("wrote %s\n", cfg.csv.c_str());
+        plot(cfg, results);
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bench_convergence: %s\n", e.what());
+        return 1;
+    }
+}
