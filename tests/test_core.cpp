@@ -133,6 +133,9 @@ TEST_CASE("exact and stress: AABB slab test") {
     CHECK_FALSE(hit(Ray<float>{{-3, 0, 0}, {1, 0, 0}, 0.0f, 1.5f}, t0, t1));
     // A ray lying in a face plane (0 * inf = NaN in that slab) is kept: conservative.
     CHECK(hit(Ray<float>{{-3, 1, 0}, {1, 0, 0}}, t0, t1));
+    CHECK(hit(Ray<float>{{-3, 1, 0}, {1, -0.0f, 0}}, t0, t1));  // negative zero: 1/d = -inf
+    CHECK(hit(Ray<float>{{3, -1, 0}, {-1, -0.0f, 0}}, t0, t1));
+    CHECK_FALSE(hit(Ray<float>{{-3, 1.5f, 0}, {1, -0.0f, 0}}, t0, t1));
 }
 
 TEST_CASE("glint::Error carries its message") {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
@@ -37,10 +38,12 @@ struct AABB {
         t0 = r.tmin;
         t1 = r.tmax;
         for (int a = 0; a < 3; ++a) {
-            T tn = (lo[a] - r.origin[a]) * inv_dir[a];
-            T tf = (hi[a] - r.origin[a]) * inv_dir[a];
-            if (tn > tf) std::swap(tn, tf);
-            // max/min written so that a NaN slab (0 * inf) leaves the interval unchanged.
+            // Near and far planes by the sign of the direction (not by comparing the two
+            // distances, which a NaN would defeat), and max/min written so that a NaN slab
+            // (0 * inf: the ray lies in that face) leaves the interval unchanged.
+            const bool neg = std::signbit(inv_dir[a]);
+            const T tn = ((neg ? hi[a] : lo[a]) - r.origin[a]) * inv_dir[a];
+            const T tf = ((neg ? lo[a] : hi[a]) - r.origin[a]) * inv_dir[a];
             t0 = tn > t0 ? tn : t0;
             t1 = tf < t1 ? tf : t1;
         }
