@@ -20,8 +20,9 @@
 //                     A(1, r/R, d/R) / (4 pi) (lines 2985-3000, garbled: it reads
 //                     "1.1824 * 0.42615R/d * r/R1.972 + 0.991", i.e. 1.1824 * 0.42615^(R/d) *
 //                     (r/R)^1.972 + 0.991). glint measured A again (gssa_monte_carlo below, 4e5
-//                     isotropic lines per point on a 24 x 40 grid of r/R in (0, 1] and
-//                     d/R in (1 - r/R, 1 - r/R + 4r/R]) and fitted it again (bench_occluders
+//                     isotropic lines per point on a 24 x 40 grid: r/R = 1/24 .. 1, and
+//                     d/R = 1 - r/R + x r/R with x = 0.05 .. 20 geometrically spaced; x = 2 is
+//                     external contact) and fitted it again (bench_occluders
 //                     --fit-gssa); the coefficients and fit error are in gssa_fitted and
 //                     docs/occluders.md.
 // Repair of the measurement: 000 draws lines through two uniform points of the enclosing

@@ -164,15 +164,15 @@ inline Expansion<4> minor2(double ax, double ay, double bx, double by) {
     return sub(product(ax, by), product(bx, ay));
 }
 
+/// det[p; q; r] (rows p, q, r), exact, by minors along the z column.
+inline Expansion<24> det3(const Vec3d& p, const Vec3d& q, const Vec3d& r) {
+    const Expansion<16> s1 = add(scale(minor2(q.x, q.y, r.x, r.y), p.z), scale(minor2(r.x, r.y, p.x, p.y), q.z));
+    return add(s1, scale(minor2(p.x, p.y, q.x, q.y), r.z));
+}
+
 /// Exact orient3d on raw coordinates: det[b-a; c-a; d-a] expanded as the 4x4 determinant
 /// with a column of ones (Shewchuk's orient3dexact, sign adjusted).
 inline double orient3d_exact(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
-    // 3x3 minors of rows (p, q, r) over columns (x, y, z): det[p; q; r].
-    auto det3 = [](const Vec3d& p, const Vec3d& q, const Vec3d& r) {
-        const Expansion<16> s1 = add(scale(minor2(q.x, q.y, r.x, r.y), p.z),
-                                     scale(minor2(r.x, r.y, p.x, p.y), q.z));
-        return add(s1, scale(minor2(p.x, p.y, q.x, q.y), r.z));
-    };
     // det[b-a; c-a; d-a] = det[b;c;d] - det[a;c;d] + det[a;b;d] - det[a;b;c].
     const auto bcd = det3(b, c, d), acd = det3(a, c, d), abd = det3(a, b, d), abc = det3(a, b, c);
     return add(sub(bcd, acd), sub(abd, abc)).sign();
@@ -182,11 +182,6 @@ inline double orient3d_exact(const Vec3d& a, const Vec3d& b, const Vec3d& c, con
 /// expanded along the lift column; the cofactors are the exact 4x4 orientation dets.
 inline double insphere_exact(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d,
                              const Vec3d& e) {
-    auto det3 = [](const Vec3d& p, const Vec3d& q, const Vec3d& r) {
-        const Expansion<16> s1 = add(scale(minor2(q.x, q.y, r.x, r.y), p.z),
-                                     scale(minor2(r.x, r.y, p.x, p.y), q.z));
-        return add(s1, scale(minor2(p.x, p.y, q.x, q.y), r.z));
-    };
     // O(p,q,r,s) = det[q-p; r-p; s-p] as an expansion.
     auto orient = [&](const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s) {
         return add(sub(det3(q, r, s), det3(p, r, s)), sub(det3(p, q, s), det3(p, q, r)));

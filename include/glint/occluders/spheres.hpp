@@ -53,7 +53,7 @@ struct Sphere {
 enum class MergeDistance { d1, d2 };
 
 /// Options of occluder generation. samples = 0 picks max(10000, 4 * triangles) capped at
-/// 200000. calibrate: after merging, scale all radii by one factor so that the set's hit
+/// 50000. calibrate: after merging, scale all radii by one factor so that the set's hit
 /// probability for isotropic random lines through the mesh's bounding ball equals the
 /// mesh's, measured with calibration_lines lines (see calibrate_radii).
 struct OccluderOptions {
@@ -114,7 +114,7 @@ void sample_surface(std::span<const TriangleVertices<T>> mesh, std::size_t n, st
 template <Scalar T>
 std::vector<Sphere<T>> initial_occluders(std::span<const TriangleVertices<T>> mesh, const OccluderOptions& opt = {}) {
     if (mesh.empty()) throw Error("glint::initial_occluders: empty mesh");
-    const std::size_t n = opt.samples ? opt.samples : std::clamp<std::size_t>(4 * mesh.size(), 10000, 200000);
+    const std::size_t n = opt.samples ? opt.samples : std::clamp<std::size_t>(4 * mesh.size(), 10000, 50000);
     std::vector<Vec3d> pts, nrm;
     sample_surface(mesh, n, opt.seed, pts, nrm);
     AABB<double> box;
