@@ -97,6 +97,7 @@ public:
                 // which saves traversal a dependent load of the group.
                 const auto& g = store_.group(ref.group_begin);
                 groups[i] = {g.begin, g.end - g.begin};
+                detail::check_index(g.end);
             }
             detail::check_index(ref.group_end);
         }
