@@ -181,7 +181,7 @@ TEST_CASE("delaunay: random, gridded, coplanar, cospherical and duplicate sets")
         MESSAGE(pts.size() << " gridded points: " << d.build_seconds() << " s");
     }
     SUBCASE("cospherical") {
-        auto pts = integer_sphere_points(125 * 125);  // exactly cospherical
+        auto pts = integer_sphere_points(1105 * 1105);  // 6630 exactly cospherical points
         const std::size_t n = pts.size();
         Delaunay<double> d(pts);
         check_delaunay(d, n);
