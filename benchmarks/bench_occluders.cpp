@@ -1,6 +1,6 @@
 // bench_occluders: occluder spheres (000 chapter 5) measured against shadow rays.
 //
-//   bench_occluders [--quick] [--csv FILE] [--mesh FILE.obj] [--images DIR]
+//   bench_occluders [--quick] [--csv FILE] [--mesh FILE.obj] [--images DIR]   (images only with --images)
 //       1. Delaunay build time scaling (random points and torus-knot surface samples);
 //       2. sphere generation: time, and the sphere sets' hit probability for isotropic random
 //          lines against the mesh's at 1000/250/100/25/10 spheres, without (000's method) and
@@ -178,7 +178,7 @@ Mesh<double> read_obj(const std::string& path) {
 
 struct Options {
     bool quick = false;
-    std::string csv, mesh, images = ".";
+    std::string csv, mesh, images;  // images: written only when --images DIR is given
 };
 
 struct CsvRow {
@@ -328,7 +328,7 @@ void render_scene(const std::string& name, const Mesh<double>& object, const Opt
     else
         std::printf("kd-tree search never faster than the linear scan up to %zu spheres\n", counts.back());
     // Side by side: rays | 100 spheres (linear) | 4x |difference|.
-    if (!img100.empty()) {
+    if (!img100.empty() && !o.images.empty()) {
         double mean = 0;
         for (const auto& p : ref) mean += double(p.luminance());
         mean /= double(ref.size());
