@@ -30,7 +30,7 @@ public:
         : kd_(m.kd), ks_(m.ks), n_(m.exponent), wo_(wo_local),
           lobes_(m.kind == MaterialKind::glossy ? 2 : 1) {
         r_ = Vec3<T>(-wo_.x, -wo_.y, wo_.z);
-        orthonormal_basis(r_, rb1_, rb2_);
+        if (lobes_ > 1) orthonormal_basis(r_, rb1_, rb2_);  // only the Phong lobe samples about r
     }
 
     std::size_t lobe_count() const { return lobes_; }
@@ -78,7 +78,7 @@ public:
 private:
     Rgb<T> kd_, ks_;
     T n_;
-    Vec3<T> wo_, r_, rb1_, rb2_;
+    Vec3<T> wo_, r_, rb1_{}, rb2_{};
     std::size_t lobes_;
 };
 
