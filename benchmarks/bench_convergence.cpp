@@ -141,7 +141,8 @@ double rmse(const Image<Rgb<float>>& a, const Image<Rgb<float>>& b, double ref_v
 
 void plot(const Config& cfg, const std::map<std::string, std::map<std::string, std::vector<Point>>>& results) {
     if (cfg.plot.empty() || std::system("command -v gnuplot > /dev/null 2>&1") != 0) return;
-    const std::string dir = cfg.plot + ".d";
+    // Plot data and script go to a scratch folder, not next to the plot.
+    const std::string dir = (std::filesystem::temp_directory_path() / "glint_convergence_plot").string();
     std::filesystem::create_directories(dir);
     std::string script = "set terminal pngcairo size 1200,900 noenhanced\nset output '" + cfg.plot + "'\n"
                          "set logscale xy\nset xlabel 'seconds'\nset ylabel 'RMSE'\nset grid\nset key bottom left\n"
