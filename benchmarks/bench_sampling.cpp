@@ -95,6 +95,16 @@ struct PointSource {
     }
 };
 
+/// Underscores are subscripts in gnuplot's enhanced text: escape them ('\_' in single quotes).
+std::string gp_escape(const std::string& text) {
+    std::string out;
+    for (char c : text) {
+        if (c == '_') out += '\\';
+        out += c;
+    }
+    return out;
+}
+
 bool has_gnuplot_terminal(const char* term) {
     const std::string cmd = std::string("gnuplot -e \"set terminal ") + term + "\" >/dev/null 2>&1";
     return std::system(cmd.c_str()) == 0;
@@ -114,12 +124,12 @@ void plot(const std::vector<Row>& rows, int max_log2n, const std::string& png) {
     std::fprintf(f, "set logscale xy 2\nset format y '2^{%%L}'\nset format x '2^{%%L}'\nset key bottom left font ',8'\nset grid\n");
     for (int fi = 0; fi < 2; ++fi) {
         for (int d : kDims) {
-            std::fprintf(f, "set title '%s, %d D'\nset xrange [8:%g]\n", kIntegrands[fi], d,
+            std::fprintf(f, "set title '%s, %d D'\nset xrange [8:%g]\n", gp_escape(kIntegrands[fi]).c_str(), d,
                          std::ldexp(2.0, max_log2n));
             std::fprintf(f, "plot ");
             for (std::size_t s = 0; s < kSamplers.size(); ++s)
                 std::fprintf(f, "%s'-' with linespoints title '%s (%.2f)'", s ? ", " : "",
-                             kSamplers[s].name.c_str(),
+                             gp_escape(kSamplers[s].name).c_str(),
                              fit_slope(rows, kSamplers[s].name, kIntegrands[fi], d));
             std::fprintf(f, ", '-' with lines dt 2 lc 'black' title 'N^{-1/2}', '-' with lines dt 3 lc 'black' title 'N^{-1}'\n");
             for (const SamplerSpec& s : kSamplers) {

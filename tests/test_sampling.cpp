@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <set>
 #include <span>
 #include <string>
@@ -844,4 +845,37 @@ TEST_CASE("statistics: correlated environment lighting with both main parts, hal
         CHECK(std::abs(comb.mean - exact) < 4 * comb.stderr_mean());
         CHECK(comb.variance() < imp.variance());
     }
+}
+
+TEST_CASE("stress: float instantiations, degenerate and non-finite inputs give no NaN") {
+    // float versions compile and agree with double.
+    DiffuseGlossyBrdf<float, 3> brdf{Rgb<float>(0.5f, 0.3f, 0.1f), Rgb<float>(0.2f, 0.4f, 0.6f), 20.0f};
+    const auto s = scatter<BrdfSelection::mis>(brdf, SpectralRoulette<float, 3>{}, Rgb<float>(1.0f), 0.1f,
+                                               Vec2<float>(0.3f, 0.7f));
+    CHECK_FALSE(s.terminated());
+    CHECK(s.weight.is_finite());
+    const std::vector<Vec3<float>> sq = {{-0.5f, -0.5f, 1}, {-0.5f, 0.5f, 1}, {0.5f, 0.5f, 1}, {0.5f, -0.5f, 1}};
+    PolygonLight<float, 3> light(sq, Rgb<float>(1.0f));
+    const std::array<Vec2<float>, 4> u = {Vec2<float>(0.1f, 0.2f), Vec2<float>(0.5f, 0.5f),
+                                          Vec2<float>(0.9f, 0.3f), Vec2<float>(0.4f, 0.8f)};
+    const auto r = correlated_direct(light, Vec3<float>(0), Vec3<float>(0, 0, 1),
+                                     [](const Vec3<float>&) { return Rgb<float>(0.2f); }, Rgb<float>(0.2f),
+                                     [](const Vec3<float>&, const Vec3<float>&) { return true; },
+                                     std::span<const Vec2<float>>(u));
+    CHECK(r.combined[0] == doctest::Approx(r.main_part[0]).epsilon(1e-5));
+    // A NaN or infinite throughput terminates the walk without producing NaN.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const std::array<Rgbd, 1> lobe = {Rgbd(0.5)};
+    for (const Rgbd& F : {Rgbd(nan), Rgbd(std::numeric_limits<double>::infinity()), Rgbd(0.0)}) {
+        const auto sel = select_lobe(SpectralRoulette<double, 3>{}, F, std::span<const Rgbd>(lobe), 0.2);
+        CHECK(sel.terminated());
+        CHECK(sel.offset.is_finite());
+    }
+    // Receiver in the light's plane, behind it, or a polygon seen edge-on: J = 0, no NaN.
+    const std::vector<Vec3<double>> sqd = {{-0.5, -0.5, 1}, {-0.5, 0.5, 1}, {0.5, 0.5, 1}, {0.5, -0.5, 1}};
+    PolygonLight<double, 3> dl(sqd, Rgbd(1.0));
+    CHECK(dl.geometry_integral(Vec3<double>(2, 0, 1), Vec3<double>(0, 0, 1)) == 0.0);
+    CHECK(dl.geometry_integral(Vec3<double>(0, 0, 2), Vec3<double>(0, 0, -1)) == 0.0);
+    CHECK(polygon_geometry_integral<double>(Vec3<double>(0, 0, 1), Vec3<double>(1, 0, 0), sqd) == 0.0);
+    CHECK(std::isfinite(polygon_geometry_integral<double>(Vec3<double>(0.5, 0.5, 1), Vec3<double>(0, 0, -1), sqd)));
 }

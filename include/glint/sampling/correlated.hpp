@@ -81,6 +81,20 @@ struct CorrelatedStats {
         comoment_gg += dg * eg;
     }
 
+    /// Merge the statistics of m further samples (means mf, mg and centred co-moments cfg,
+    /// cgg of their own), as if they had been added one by one (Chan, Golub and LeVeque).
+    void merge(T m, T mf, T mg, T cfg, T cgg) {
+        if (!(m > T(0))) return;
+        const T total = n + m;
+        const T df = mf - mean_f, dg = mg - mean_g;
+        const T w = n * m / total;
+        comoment_fg += cfg + df * dg * w;
+        comoment_gg += cgg + dg * dg * w;
+        mean_f += df * (m / total);
+        mean_g += dg * (m / total);
+        n = total;
+    }
+
     /// Denominator of lambda: sum (g_i - c)^2 with c = mean_g (regression) or J (eq33).
     T lambda_denominator(T J, LambdaEstimate form) const {
         if (form == LambdaEstimate::regression) return comoment_gg;
@@ -251,12 +265,38 @@ CorrelatedResult<T, N> correlated_direct(const PolygonLight<T, N>& light, const 
     const Spectrum<T, N> scale = light.radiance() * brdf_approx;
     out.main_part = scale * light.geometry_integral(x, n);
     const T area = light.sampler().area();
-    for (const Vec2<T>& u : uniforms) {
-        const Vec3<T> y = light.sampler().sample(u);
-        const T G = light.geometry(x, n, y) * area;  // G / p
-        Spectrum<T, N> f(T(0));
-        if (G > T(0) && visible(x, y)) f = light.radiance() * brdf(safe_normalize(y - x)) * G;
-        for (std::size_t l = 0; l < N; ++l) out.stats[l].add(f[l], scale[l] * G);
+    // Up to `chunk` samples at a time are kept and their statistics computed in two passes
+    // (means, then centred co-moments), merged into out.stats (Chan et al.'s pairwise update):
+    // the same values as Welford's one-pass update without a division per sample and band.
+    constexpr std::size_t chunk = 32;
+    // f and g are computed by the same expression (so that f == g, a fully visible light
+    // with fr = fr~, gives bitwise-equal statistics and lambda = 1 exactly, whatever
+    // floating-point contraction the compiler applies) and stored before they are summed.
+    std::array<Spectrum<T, N>, chunk> fs, gs;
+    for (std::size_t first = 0; first < uniforms.size(); first += chunk) {
+        const std::size_t m = std::min(chunk, uniforms.size() - first);
+        for (std::size_t i = 0; i < m; ++i) {
+            const Vec3<T> y = light.sampler().sample(uniforms[first + i]);
+            const T G = light.geometry(x, n, y) * area;  // G / p
+            fs[i] = Spectrum<T, N>(T(0));
+            if (G > T(0) && visible(x, y)) fs[i] = light.radiance() * brdf(safe_normalize(y - x)) * G;
+            gs[i] = light.radiance() * brdf_approx * G;
+        }
+        for (std::size_t l = 0; l < N; ++l) {
+            T sf = 0, sg = 0;
+            for (std::size_t i = 0; i < m; ++i) {
+                sf += fs[i][l];
+                sg += gs[i][l];
+            }
+            const T mf = sf / T(m), mg = sg / T(m);
+            T cfg = 0, cgg = 0;
+            for (std::size_t i = 0; i < m; ++i) {
+                const T df = fs[i][l] - mf, dg = gs[i][l] - mg;
+                cfg += df * dg;
+                cgg += dg * dg;
+            }
+            out.stats[l].merge(T(m), mf, mg, cfg, cgg);
+        }
     }
     for (std::size_t l = 0; l < N; ++l) {
         const T J = out.main_part[l];
