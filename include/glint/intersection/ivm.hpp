@@ -57,8 +57,7 @@ struct Ivm {
     /// rounding noise (|e1 x e2| <= 2^-60 * longest edge^2) are degenerate and never hit.
     static Ivm build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         Ivm r;
-        const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-        if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) return r;
+        if (detail::degenerate_triangle(a, b, c)) return r;
         using B = std::conditional_t<sizeof(T) < sizeof(double), double, long double>;
         const B v[3][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}, {c.x, c.y, c.z}};
         // Rows of the inverse of the column matrix [a b c] are the cross products of pairs

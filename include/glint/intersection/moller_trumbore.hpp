@@ -35,8 +35,7 @@ struct MollerTrumbore {
     static MollerTrumbore build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         MollerTrumbore r;
         r.v0 = Vec3<T>(a);
-        const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-        if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) return r;
+        if (detail::degenerate_triangle(a, b, c)) return r;
         r.e1 = Vec3<T>(b - a);
         r.e2 = Vec3<T>(c - a);
         return r;

@@ -88,6 +88,14 @@ concept TriangleIntersector =
 
 namespace detail {
 
+/// The degeneracy rule every policy's build() applies: a triangle whose area is below
+/// double rounding noise, |e1 x e2| <= 2^-60 * (longest edge)^2 (or with non-finite
+/// vertices), has no area to hit, and its record never reports a hit.
+inline bool degenerate_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+    return !(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60);
+}
+
 /// Plain ray data (origin, direction, interval), used by every test but the watertight one.
 template <class T>
 struct PlainRay {

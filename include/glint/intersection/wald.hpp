@@ -38,8 +38,7 @@ struct Wald {
         Wald r;
         const Vec3d ec = b - a, eb = c - a;
         const Vec3d n = glm::cross(ec, eb);
-        const double edge = std::max({glm::length(ec), glm::length(c - b), glm::length(eb)});
-        if (!(glm::length(n) > edge * edge * 0x1p-60)) return r;
+        if (detail::degenerate_triangle(a, b, c)) return r;
         const int kk = max_abs_axis(n), u = (kk + 1) % 3, v = (kk + 2) % 3;
         const double nk = n[kk];  // = ec_u * eb_v - ec_v * eb_u
         r.k = static_cast<std::uint32_t>(kk);

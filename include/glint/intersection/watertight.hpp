@@ -66,8 +66,7 @@ struct Watertight {
     /// rounding error, and would then report hits.
     static Watertight build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         Watertight r;
-        const double edge = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-        if (!(glm::length(glm::cross(b - a, c - a)) > edge * edge * 0x1p-60)) {
+        if (detail::degenerate_triangle(a, b, c)) {
             const T nan = std::numeric_limits<T>::quiet_NaN();
             for (auto& p : r.v) p = Vec3<T>(nan);
             return r;
