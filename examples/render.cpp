@@ -65,9 +65,7 @@ Scene<float> scene_from_obj(const std::string& path, const std::string& env_path
     if (!env_path.empty()) {
         s.environment = EnvironmentMap<float>(read_exr_rgb(env_path));
     } else if (s.area_lights.empty()) {
-        s.environment = EnvironmentMap<float>::sky(256, 128, Vec3f(0.5f, 0.6f, 0.3f), Rgb<float>(4000.0f, 3600.0f, 3000.0f),
-                                                   0.03f, Rgb<float>(0.25f, 0.45f, 0.9f), Rgb<float>(0.8f, 0.85f, 0.95f),
-                                                   Rgb<float>(0.15f));
+        s.environment = default_sky<float>();
     }
     const Vec3f c = box.center();
     const float r = glm::length(box.extent()) * 0.5f;

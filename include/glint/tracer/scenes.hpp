@@ -30,6 +30,14 @@
 
 namespace glint {
 
+/// The procedural sky of the envmap scene (and of OBJ scenes that do not emit): a blue
+/// gradient, a dark ground and a small bright sun.
+template <Scalar T>
+EnvironmentMap<T> default_sky() {
+    return EnvironmentMap<T>::sky(256, 128, Vec3<T>(0.5, 0.6, 0.3), Rgb<float>(4000.0f, 3600.0f, 3000.0f), 0.03f,
+                                  Rgb<float>(0.25f, 0.45f, 0.9f), Rgb<float>(0.8f, 0.85f, 0.95f), Rgb<float>(0.15f));
+}
+
 namespace detail {
 
 /// An axis-aligned box [lo, hi] rotated by `angle` about the vertical axis through its
@@ -171,9 +179,7 @@ Scene<T> envmap(std::optional<EnvironmentMap<T>> map = std::nullopt) {
     if (map) {
         s.environment = std::move(map);
     } else {
-        s.environment = EnvironmentMap<T>::sky(256, 128, V(0.5, 0.6, 0.3), Rgb<float>(4000.0f, 3600.0f, 3000.0f),
-                                               0.03f, Rgb<float>(0.25f, 0.45f, 0.9f),
-                                               Rgb<float>(0.8f, 0.85f, 0.95f), Rgb<float>(0.15f));
+        s.environment = default_sky<T>();
     }
     s.camera = Camera<T>{V(0, 2.2, 6), V(0, 0.8, 0), V(0, 1, 0), T(0.75)};
     return s;
