@@ -101,15 +101,15 @@ struct Ivm {
     }
     static Ivm load(const SoaView<T, field_count>& v, std::size_t i) {
         Ivm r;
-        for (int k = 0; k < 9; ++k) r.m[k / 3][k % 3] = v.fields[k][i];
+        for (int k = 0; k < 9; ++k) r.m[k / 3][k % 3] = *v.field(k, i);
         return r;
     }
 
-    /// Branch-free kernel over n <= batch_width records starting at `first`.
+    /// Branch-free kernel over records first .. first+n-1 of one block.
     static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
         const T* f[9];
-        for (int k = 0; k < 9; ++k) f[k] = v.fields[k] + first;
+        for (int k = 0; k < 9; ++k) f[k] = v.field(k, first);
         for (std::size_t i = 0; i < n; ++i) {
             const T qx = f[6][i], qy = f[7][i], qz = f[8][i];
             const T t = (T(1) - (qx * r.o.x + qy * r.o.y + qz * r.o.z)) /

@@ -72,9 +72,9 @@ struct MollerTrumbore {
     static MollerTrumbore load(const SoaView<T, field_count>& v, std::size_t i) {
         MollerTrumbore r;
         for (int k = 0; k < 3; ++k) {
-            r.v0[k] = v.fields[k][i];
-            r.e1[k] = v.fields[3 + k][i];
-            r.e2[k] = v.fields[6 + k][i];
+            r.v0[k] = *v.field(k, i);
+            r.e1[k] = *v.field(3 + k, i);
+            r.e2[k] = *v.field(6 + k, i);
         }
         return r;
     }
@@ -82,7 +82,7 @@ struct MollerTrumbore {
     static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
         const T* f[9];
-        for (int k = 0; k < 9; ++k) f[k] = v.fields[k] + first;
+        for (int k = 0; k < 9; ++k) f[k] = v.field(k, first);
         for (std::size_t i = 0; i < n; ++i) {
             const T e1x = f[3][i], e1y = f[4][i], e1z = f[5][i];
             const T e2x = f[6][i], e2y = f[7][i], e2z = f[8][i];

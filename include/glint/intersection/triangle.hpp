@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <new>
 #include <span>
 #include <string>
 #include <vector>
@@ -41,18 +42,27 @@ struct TriangleHit {
 template <class T>
 using TriangleVertices = std::array<Vec3<T>, 3>;
 
-/// Read-only view of `count` records stored as P::field_count arrays of scalars
-/// (structure of arrays): field k of record i is fields[k][i].
+/// Number of records a batch kernel call processes at most (the size of its output arrays),
+/// and the number of records in one block of a TriangleStore's array of structures of
+/// arrays.
+inline constexpr std::size_t batch_width = 8;
+
+/// Read-only view of `count` records stored as an array of structures of arrays: records
+/// are grouped in blocks of batch_width, and a block holds its records' field 0 for all
+/// lanes, then field 1, and so on (field k of record i is at
+/// data[(i / W) * W * F + k * W + i % W], W = batch_width). So the records a batch kernel
+/// reads (one block) are one contiguous run of F * W scalars, a few cache lines, instead of
+/// F lines from F separate arrays; for the 128k-triangle knot's 12 MB of records that is
+/// what decides how many misses a leaf costs (issue 3).
 template <class T, int F>
 struct SoaView {
-    std::array<const T*, F> fields{};
+    const T* data = nullptr;
     std::size_t count = 0;
+    /// Field k of record i; the records from i to the end of i's block follow at stride 1.
+    const T* field(int k, std::size_t i) const {
+        return data + (i / batch_width) * (batch_width * F) + std::size_t(k) * batch_width + i % batch_width;
+    }
 };
-
-/// Largest number of records a batch kernel call processes (the size of its output arrays).
-/// Groups are not padded: padding every leaf of a kd-tree (often 1 to 4 triangles) to 8
-/// records cost memory and measured no faster than the kernel's own remainder loop.
-inline constexpr std::size_t batch_width = 8;
 
 /// Everything a composite (tree leaf, brute force) needs from a ray-triangle test.
 ///
@@ -63,11 +73,13 @@ inline constexpr std::size_t batch_width = 8;
 ///   computed once per ray and frame.
 /// - `p.intersect(rd, hit)`: true and hit filled when the ray meets the triangle with
 ///   t in the open interval (tmin, tmax). NaN or infinite rays give false, never NaN.
-/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for n <= batch_width records
-///   of a structure-of-arrays block, branch-free so that the compiler vectorizes it;
-///   writes t = +inf for a miss.
-/// - `store(out)`, `load(view, i)` and `field_count`: the record's scalars, for the SoA
-///   layout.
+/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for records first .. first+n-1,
+///   which lie in one block of the view (first % batch_width + n <= batch_width), reading
+///   field k from view.field(k, first) at stride 1; branch-free so that the compiler
+///   vectorizes it (with n = batch_width known at compile time, as tree leaves call it, it
+///   is straight-line SIMD code); writes t = +inf for a miss.
+/// - `store(out)`, `load(view, i)` and `field_count`: the record's scalars, for the
+///   blocked layout.
 /// - `uses_frame`: whether records need a frame away from their planes (IVM only).
 template <class P>
 concept TriangleIntersector =
@@ -87,6 +99,21 @@ concept TriangleIntersector =
     };
 
 namespace detail {
+
+/// Allocator aligned to a cache line (64 bytes), so that a store's blocks of records start
+/// on a line boundary and a SIMD load never straddles two lines more than it must.
+template <class T>
+struct CacheLineAllocator {
+    using value_type = T;
+    static constexpr std::align_val_t alignment{64};
+    CacheLineAllocator() = default;
+    template <class U>
+    CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}
+    T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), alignment)); }
+    void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, alignment); }
+    template <class U>
+    bool operator==(const CacheLineAllocator<U>&) const noexcept { return true; }
+};
 
 /// The degeneracy rule every policy's build() applies: a triangle whose area is below
 /// double rounding noise, |e1 x e2| <= 2^-60 * (longest edge)^2 (or with non-finite
@@ -207,55 +234,58 @@ struct StoreHit : TriangleHit<T> {
     std::uint32_t id = std::numeric_limits<std::uint32_t>::max();
 };
 
-/// Blocks of triangle records in structure-of-arrays layout. A block (one tree leaf, or a
-/// whole mesh for brute force) is a range of *groups*; a group is a contiguous run of
-/// records sharing one frame origin. Non-IVM policies have exactly one group per block at
-/// the world origin; IVM blocks are split until every triangle has a well-conditioned
-/// frame (detail::min_frame_quality), which for leaves of a few triangles is almost
-/// always one group.
+/// Blocks of triangle records, stored as an array of structures of arrays (SoaView). A
+/// block (one tree leaf, or a whole mesh for brute force) is a range of *groups*; a group is
+/// a contiguous run of records sharing one frame origin. Non-IVM policies have exactly one
+/// group per block at the world origin; IVM blocks are split until every triangle has a
+/// well-conditioned frame (detail::min_frame_quality), which for leaves of a few triangles
+/// is almost always one group.
+///
+/// `add_block(..., Padding::batches)` starts every group of the block on a batch boundary
+/// and fills the rest of its last batch with records that never hit (a degenerate triangle:
+/// every policy's build() gives it a record that misses), so that a caller may test the
+/// group in whole batches with the kernel's full width: tree leaves do. Unpadded blocks
+/// (the default) keep records back to back, as brute force and one-triangle blocks want.
 template <TriangleIntersector P>
 class TriangleStore {
 public:
     using T = typename P::scalar_type;
     static constexpr int F = P::field_count;
+    static constexpr std::size_t W = batch_width;
 
     struct Group {
         Vec3<T> origin;
-        std::uint32_t begin, end;  // record range
+        std::uint32_t begin, end;  // record range (without padding)
     };
     struct BlockRef {
         std::uint32_t group_begin = 0, group_end = 0;
     };
+    enum class Padding { none, batches };
 
     /// Appends one block; `ids[i]` is reported for hits on `tris[i]` (the original
     /// triangle index, for shading). Returns the block's group range.
-    BlockRef add_block(std::span<const TriangleVertices<T>> tris,
-                       std::span<const std::uint32_t> ids) {
+    BlockRef add_block(std::span<const TriangleVertices<T>> tris, std::span<const std::uint32_t> ids,
+                       Padding padding = Padding::none) {
         if (tris.size() != ids.size())
             throw Error("TriangleStore::add_block: " + std::to_string(tris.size()) +
                         " triangles but " + std::to_string(ids.size()) + " ids");
         BlockRef ref{static_cast<std::uint32_t>(groups_.size()), 0};
-        if (!tris.empty()) add_groups(tris, ids);
+        if (!tris.empty()) add_groups(tris, ids, padding == Padding::batches);
         ref.group_end = static_cast<std::uint32_t>(groups_.size());
         return ref;
     }
 
-    /// Number of triangle records stored.
+    /// Number of record slots stored (triangles plus the padding of padded blocks).
     std::size_t size() const { return ids_.size(); }
     std::size_t group_count() const { return groups_.size(); }
     const Group& group(std::size_t g) const { return groups_[g]; }
     std::uint32_t id(std::size_t record) const { return ids_[record]; }
     std::size_t bytes() const {
-        return ids_.size() * (F * sizeof(T) + sizeof(std::uint32_t)) + groups_.size() * sizeof(Group);
+        return data_.size() * sizeof(T) + ids_.size() * sizeof(std::uint32_t) + groups_.size() * sizeof(Group);
     }
     P record(std::size_t i) const { return P::load(view(), i); }
 
-    SoaView<T, F> view() const {
-        SoaView<T, F> v;
-        for (int k = 0; k < F; ++k) v.fields[k] = fields_[k].data();
-        v.count = ids_.size();
-        return v;
-    }
+    SoaView<T, F> view() const { return {data_.data(), ids_.size()}; }
 
     /// Closest hit among the block's records with t in (ray.tmin, hit.t or ray.tmax);
     /// `hit` is updated only when a closer hit is found. Uses the batch kernel.
@@ -269,7 +299,22 @@ public:
     }
 
 private:
-    void add_groups(std::span<const TriangleVertices<T>> tris, std::span<const std::uint32_t> ids) {
+    /// Appends one record (its scalars) with its id, opening a new block when needed.
+    void push(const T* scalars, std::uint32_t id) {
+        const std::size_t i = ids_.size();
+        if (i % W == 0) data_.resize(data_.size() + W * F, T(0));
+        T* block = data_.data() + (i / W) * (W * F) + i % W;
+        for (int k = 0; k < F; ++k) block[std::size_t(k) * W] = scalars[k];
+        ids_.push_back(id);
+    }
+    /// Fills the current block with never-hit records up to the next batch boundary.
+    void pad(const Vec3d& p) {
+        T scalars[F];
+        P::build(p, p, p).store(scalars);
+        while (ids_.size() % W != 0) push(scalars, std::numeric_limits<std::uint32_t>::max());
+    }
+
+    void add_groups(std::span<const TriangleVertices<T>> tris, std::span<const std::uint32_t> ids, bool padded) {
         Vec3d origin(0.0);
         if constexpr (P::uses_frame) {
             double quality;
@@ -294,23 +339,25 @@ private:
                 }
                 const std::span<const TriangleVertices<T>> st(sorted_tris);
                 const std::span<const std::uint32_t> si(sorted_ids);
-                add_groups(st.first(half), si.first(half));
-                add_groups(st.subspan(half), si.subspan(half));
+                add_groups(st.first(half), si.first(half), padded);
+                add_groups(st.subspan(half), si.subspan(half), padded);
                 return;
             }
         }
         const Vec3<T> o(origin);
         const Vec3d od(o);  // the frame origin exactly as rays will be translated by it
+        const Vec3d corner = Vec3d(tris[0][0]) - od;
+        if (padded) pad(corner);
         Group g{o, static_cast<std::uint32_t>(ids_.size()), 0};
         T scalars[F];
         for (std::size_t i = 0; i < tris.size(); ++i) {
             const P rec = P::build(Vec3d(tris[i][0]) - od, Vec3d(tris[i][1]) - od,
                                    Vec3d(tris[i][2]) - od);
             rec.store(scalars);
-            for (int k = 0; k < F; ++k) fields_[k].push_back(scalars[k]);
-            ids_.push_back(ids[i]);
+            push(scalars, ids[i]);
         }
         g.end = static_cast<std::uint32_t>(ids_.size());
+        if (padded) pad(corner);
         groups_.push_back(g);
     }
 
@@ -320,13 +367,14 @@ private:
         Ray<T> local = ray;
         local.tmax = std::min(ray.tmax, hit.t);
         bool found = false;
-        T ts[batch_width], us[batch_width], vs[batch_width];
+        T ts[W], us[W], vs[W];
         for (std::uint32_t gi = b.group_begin; gi < b.group_end; ++gi) {
             const Group& g = groups_[gi];
             local.origin = ray.origin - g.origin;
             const auto rd = P::prepare(local);
-            for (std::size_t first = g.begin; first < g.end; first += batch_width) {
-                const std::size_t n = std::min<std::size_t>(batch_width, g.end - first);
+            // Batches end at block boundaries: an unpadded group may start mid-block.
+            for (std::size_t first = g.begin, n; first < g.end; first += n) {
+                n = std::min<std::size_t>(W - first % W, g.end - first);
                 P::batch(v, first, n, rd, ts, us, vs);
                 // Most blocks have no hit closer than tmax: one cheap test first.
                 bool any = false;
@@ -348,7 +396,7 @@ private:
         return found;
     }
 
-    std::array<std::vector<T>, F> fields_;
+    std::vector<T, detail::CacheLineAllocator<T>> data_;  // blocks of W records x F fields
     std::vector<std::uint32_t> ids_;
     std::vector<Group> groups_;
 };

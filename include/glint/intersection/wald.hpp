@@ -80,8 +80,8 @@ struct Wald {
         Wald r;
         T* dst[9] = {&r.n_u, &r.n_v, &r.n_d, &r.beta_u, &r.beta_v, &r.beta_d,
                      &r.gamma_u, &r.gamma_v, &r.gamma_d};
-        for (int f = 0; f < 9; ++f) *dst[f] = s.fields[f][i];
-        r.k = static_cast<std::uint32_t>(s.fields[9][i]);
+        for (int f = 0; f < 9; ++f) *dst[f] = *s.field(f, i);
+        r.k = static_cast<std::uint32_t>(*s.field(9, i));
         return r;
     }
 
@@ -89,7 +89,7 @@ struct Wald {
     static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
         const T* f[10];
-        for (int c = 0; c < 10; ++c) f[c] = s.fields[c] + first;
+        for (int c = 0; c < 10; ++c) f[c] = s.field(c, first);
         for (std::size_t i = 0; i < n; ++i) {
             const T kf = f[9][i];
             const bool k0 = kf == T(0), k1 = kf == T(1);

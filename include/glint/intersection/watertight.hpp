@@ -114,18 +114,18 @@ struct Watertight {
     }
     static Watertight load(const SoaView<T, field_count>& s, std::size_t i) {
         Watertight r;
-        for (int f = 0; f < 9; ++f) r.v[f / 3][f % 3] = s.fields[f][i];
+        for (int f = 0; f < 9; ++f) r.v[f / 3][f % 3] = *s.field(f, i);
         return r;
     }
 
     static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
-        // The ray's axes are the same for every record: pick the field arrays once.
+        // The ray's axes are the same for every record: pick the fields once.
         const T* fx[3]; const T* fy[3]; const T* fz[3];
         for (int i = 0; i < 3; ++i) {
-            fx[i] = s.fields[3 * i + r.kx] + first;
-            fy[i] = s.fields[3 * i + r.ky] + first;
-            fz[i] = s.fields[3 * i + r.kz] + first;
+            fx[i] = s.field(3 * i + r.kx, first);
+            fy[i] = s.field(3 * i + r.ky, first);
+            fz[i] = s.field(3 * i + r.kz, first);
         }
         const T ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz];
         for (std::size_t j = 0; j < n; ++j) {

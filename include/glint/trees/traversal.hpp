@@ -79,17 +79,9 @@ public:
             leaf_ids.assign(tree.prims.begin() + n.prim_begin, tree.prims.begin() + n.prim_begin + n.prim_count);
             leaf_tris.clear();
             for (std::uint32_t id : leaf_ids) leaf_tris.push_back(tris[id]);
-            // Pad the block to whole batches with point triangles (all three vertices the
-            // same: a record that never hits), so that the batch kernel always runs its full
-            // SIMD width instead of a scalar remainder loop.
-            if constexpr (!P::uses_frame) {
-                while (leaf_tris.size() % batch_width != 0) {
-                    const Vec3<T> p = leaf_tris[0][0];
-                    leaf_tris.push_back({p, p, p});
-                    leaf_ids.push_back(leaf_ids[0]);
-                }
-            }
-            const auto ref = store_.add_block(leaf_tris, leaf_ids);
+            // Groups padded to whole batches (records that never hit): the leaf test runs
+            // the batch kernel at its full, compile-time width, with no remainder loop.
+            const auto ref = store_.add_block(leaf_tris, leaf_ids, TriangleStore<P>::Padding::batches);
             if constexpr (P::uses_frame) {
                 groups[i] = {ref.group_begin, ref.group_end - ref.group_begin};
             } else {
@@ -251,17 +243,18 @@ private:
         }
     }
 
+    /// Records first .. end-1 (a padded group: `first` on a batch boundary, the last batch
+    /// filled with records that never hit), in whole batches.
     template <bool Any>
     bool test_records(std::uint32_t first, std::uint32_t end, const SoaView<T, P::field_count>& view,
                       const typename P::RayData& rd, StoreHit<T>& hit) const {
         T ts[batch_width], us[batch_width], vs[batch_width];
         bool found = false;
         for (; first < end; first += std::uint32_t(batch_width)) {
-            const std::size_t n = std::min<std::size_t>(batch_width, end - first);
-            P::batch(view, first, n, rd, ts, us, vs);
+            P::batch(view, first, batch_width, rd, ts, us, vs);
             // The nearest lane, selected without branches; one compare with the best.
             std::size_t best = 0;
-            for (std::size_t k = 1; k < n; ++k) best = ts[k] < ts[best] ? k : best;
+            for (std::size_t k = 1; k < batch_width; ++k) best = ts[k] < ts[best] ? k : best;
             if (ts[best] < hit.t) {
                 if constexpr (Any) return true;
                 hit.t = ts[best];
