@@ -50,6 +50,8 @@ struct Point {
 struct Config {
     std::string scene = "all", csv, cache = "bench_cache", plot;
     std::string direct;  // direct lighting of the roulette and selection scenes (default per scene)
+    std::string radiance_estimate = "scene";  // L~ of the estimate roulettes: scene | pilot
+    bool reduce = false;                      // shorten walks by the estimate's goodness
     int size = 96, max_spp = 64, threads = 0;
     bool quick = false;
 };
@@ -64,6 +66,8 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
         // it hits (000 section 2.2's setting); the others use light sampling with MIS.
         o.direct = !cfg.direct.empty() ? cfg.direct : scene == "furnace" ? "brdf" : "mis";
         o.roulette_weights = "mean";  // the RMSE weighs R, G and B equally
+        o.radiance_estimate = cfg.radiance_estimate;
+        o.reduce_continuation = cfg.reduce;
         return o;
     };
     std::vector<Method> m;
@@ -199,8 +203,10 @@ int main(int argc, char** argv) {
             else if (a == "--threads") cfg.threads = std::max(0, std::atoi(value().c_str()));
             else if (a == "--quick") cfg.quick = true;
             else if (a == "--direct") cfg.direct = value();
+            else if (a == "--estimate") cfg.radiance_estimate = value();
+            else if (a == "--reduce") cfg.reduce = true;
             else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
-                             "--cache DIR --plot FILE.png --threads N --direct NAME --quick)");
+                             "--cache DIR --plot FILE.png --threads N --direct NAME --estimate scene|pilot --reduce --quick)");
         }
         if (cfg.quick) {
             cfg.size = 16;

@@ -138,6 +138,49 @@ Spectrum<T, N> global_radiance_estimate(const Spectrum<T, N>& emitted_power, T t
     return out;
 }
 
+/// One pilot observation for 000 section 2.3: at a scattering point of albedo `albedo`, the
+/// one-sample reflected-radiance estimate x = (w/p) L_in that a terminated walk would lose.
+template <Scalar T, std::size_t N>
+struct RoulettePilotSample {
+    Spectrum<T, N> albedo{};
+    Spectrum<T, N> reflected{};
+};
+
+/// 000 section 2.3 allows L~ to come "from the data gathered during a preprocessing phase"
+/// (line 1594). Per band, the constant L~ that minimizes the added variance of termination,
+/// sum (x - a L~)^2 over pilot samples, is L~ = sum x a / sum a^2 (least squares; clamped at
+/// 0, since 000 asks for a non-negative estimate). Unlike the closed-scene formula below it
+/// needs no closed scene: light escaping an open scene makes that formula an overestimate.
+template <Scalar T, std::size_t N>
+Spectrum<T, N> fitted_radiance_estimate(std::span<const RoulettePilotSample<T, N>> samples) {
+    Spectrum<T, N> out(T(0));
+    for (std::size_t l = 0; l < N; ++l) {
+        double xa = 0, aa = 0;
+        for (const auto& s : samples) {
+            xa += double(s.reflected[l]) * double(s.albedo[l]);
+            aa += double(s.albedo[l]) * double(s.albedo[l]);
+        }
+        out[l] = aa > 0 ? T(std::max(0.0, xa / aa)) : T(0);
+    }
+    return out;
+}
+
+/// 000 section 2.3's goodness d = E[(x - a L~)^2] / E[x^2] of the estimate L~ (line 1520), in
+/// the H-weighted sum over bands, from pilot samples. 1 when there is nothing to measure;
+/// above 1 when L~ is worse than the zero guess.
+template <Scalar T, std::size_t N>
+T estimate_goodness(std::span<const RoulettePilotSample<T, N>> samples, const Spectrum<T, N>& estimate,
+                    const Spectrum<T, N>& H) {
+    double num = 0, den = 0;
+    for (const auto& s : samples) {
+        const double x = double(s.reflected.luminance(H));
+        const double aL = double((s.albedo * estimate).luminance(H));
+        num += (x - aL) * (x - aL);
+        den += x * x;
+    }
+    return den > 0 ? T(num / den) : T(1);
+}
+
 /// 000 section 2.3 (lines 1495-1530): the radiance estimate "can be used to reduce the
 /// continuation probability and thus increase the speed". With goodness
 /// d = E[((w/p) L_in - a L~)^2] / E[((w/p) L_in)^2] of the estimate, the continuation

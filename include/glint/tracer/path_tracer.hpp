@@ -182,10 +182,12 @@ public:
     }
 
     /// Radiance along one camera ray (for tests); `rays` counts traced rays.
+    /// `count_first_emission = false` leaves out the emission of the first surface hit, as a
+    /// continued walk does where the direct light is sampled (MisDirect, CorrelatedDirect).
     Rgb<T> radiance(Ray<T> ray, S& sampler, std::uint64_t& rays, T* lambda_out = nullptr,
-                    PrimaryDirect<T>* primary = nullptr) const {
+                    PrimaryDirect<T>* primary = nullptr, bool count_first_emission = true) const {
         Rgb<T> L(T(0)), F(T(1));
-        bool count_emission = true;
+        bool count_emission = count_first_emission;
         for (int depth = 0; depth < settings_.max_depth; ++depth) {
             StoreHit<T> hit;
             ++rays;
@@ -251,14 +253,17 @@ public:
         return L;
     }
 
-    /// 000 section 2.3's goodness of a radiance estimate L~:
-    /// d = E[(X - a L~)^2] / E[X^2], X = (w/p) L_in the one-sample estimate of the reflected
-    /// radiance at the first diffuse vertex of `n` pilot camera paths (L_in traced by this
-    /// tracer, so it is unbiased), a the vertex's albedo; in luminance with weights H.
-    /// Clamped to [0.05, 1]. Used to shorten walks with ReducedContinuation.
-    T estimate_goodness(const S& prototype, const Rgb<T>& estimate, const Rgb<T>& H, int n) const {
+    /// Pilot observations for 000 section 2.3's radiance-estimate roulette: at the first
+    /// diffuse vertex of `n` camera paths, the albedo a and the one-sample reflected radiance
+    /// X = (w/p) L_in (L_in traced by this tracer, so unbiased). X is exactly what the
+    /// roulette decides about, what a terminated walk loses: with light sampling the emission
+    /// met by the continued ray is already in the vertex's direct-light estimate, so it is
+    /// not part of X. (An earlier version counted it, so that X's variance was that of
+    /// hitting a small light by chance: d = 0.98 on cornell instead of about 0.5.)
+    std::vector<RoulettePilotSample<T, 3>> pilot_samples(const S& prototype, int n) const {
         S sampler = prototype;
-        double num = 0, den = 0;
+        std::vector<RoulettePilotSample<T, 3>> out;
+        out.reserve(std::size_t(std::max(n, 0)));
         std::uint64_t rays = 0;
         const T aspect = T(settings_.width) / T(settings_.height);
         for (int i = 0; i < n; ++i) {
@@ -278,13 +283,11 @@ public:
             const T pdf = brdf.sampling_pdf(wi);
             if (!(pdf > T(0)) || wi.z <= T(0)) continue;
             const Rgb<T> weight = brdf.f(wi) * (wi.z / pdf);
-            const Rgb<T> L_in = radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, rays);
-            const double X = double((weight * L_in).luminance(H));
-            const double aL = double(((m.kd + m.ks) * estimate).luminance(H));
-            num += (X - aL) * (X - aL);
-            den += X * X;
+            const Rgb<T> L_in = radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, rays, nullptr, nullptr,
+                                         D::collects_emission);
+            out.push_back({m.kd + m.ks, weight * L_in});
         }
-        return den > 0 ? std::clamp(T(num / den), T(0.05), T(1)) : T(1);
+        return out;
     }
 
 private:

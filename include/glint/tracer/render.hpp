@@ -11,7 +11,10 @@
 //        sampler   random | halton
 #pragma once
 
+#include <algorithm>
+#include <chrono>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -39,11 +42,16 @@ struct RenderOptions {
     /// Band weights H of the roulettes (000 section 2.2): "luminance" (0.3086, 0.6094,
     /// 0.0820) or "mean" (1/3 each, matching an error measured equally over R, G, B).
     std::string roulette_weights = "luminance";
-    /// Radiance-estimate roulettes: shorten walks by the goodness of the estimate measured
-    /// on pilot paths (ReducedContinuation, 000 section 2.3). Off by default: measured by
-    /// bench_convergence, it is neutral on cornell (goodness d = 0.98) and costs efficiency
-    /// on the furnace, where every vertex's shortened walk feeds the next vertex's estimate.
+    /// Radiance-estimate roulettes (000 section 2.3): where L~ comes from. "scene": 000's
+    /// closed-scene formula a~ Phi_e / (pi S (1 - a~)) (an overestimate where light escapes,
+    /// as from the open Cornell box); "pilot": the least-squares constant over pilot paths
+    /// (fitted_radiance_estimate), 000's "data gathered during a preprocessing phase".
+    std::string radiance_estimate = "scene";
+    /// Radiance-estimate roulettes: shorten walks by the goodness d of the estimate measured
+    /// on pilot paths (ReducedContinuation, 000 section 2.3 lines 1495-1530).
     bool reduce_continuation = false;
+    /// Pilot camera paths for "pilot" and reduce_continuation; their time is part of the
+    /// render's time.
     int pilot_paths = 4096;
 };
 
@@ -102,19 +110,42 @@ RenderResult render_direct(const Scene<float>& scene, const RenderAccel& accel, 
     });
 }
 
-/// A radiance-estimate roulette, optionally with walks shortened by the goodness of its
-/// estimate measured on pilot paths (000 section 2.3).
+/// A radiance-estimate roulette (000 section 2.3) with its estimate from the scene or from
+/// pilot paths, optionally with walks shortened by the estimate's goodness. The pilot's time
+/// is counted in the result.
 template <class S, class R>
-RenderResult render_estimate(const Scene<float>& scene, const RenderAccel& accel, const R& roulette,
+RenderResult render_estimate(const Scene<float>& scene, const RenderAccel& accel, R roulette,
                              const RenderOptions& o, const Rgb<float>& H, const S& sampler) {
-    if (!o.reduce_continuation) return render_direct(scene, accel, roulette, o.settings, o.direct, sampler);
-    const float d = with_direct(o.direct, o.settings, [&]<class D>(const RenderSettings& st) {
+    if (o.radiance_estimate != "scene" && o.radiance_estimate != "pilot")
+        throw Error("unknown radiance estimate '" + o.radiance_estimate + "' (scene, pilot)");
+    const bool pilot = o.radiance_estimate == "pilot";
+    if (!pilot) {
+        Rgb<float> power, albedo;
+        float area;
+        scene.radiance_estimate_inputs(power, area, albedo);
+        roulette.estimate = global_radiance_estimate(power, area, albedo);
+    }
+    if (!pilot && !o.reduce_continuation) return render_direct(scene, accel, roulette, o.settings, o.direct, sampler);
+    const auto start = std::chrono::steady_clock::now();
+    const auto samples = with_direct(o.direct, o.settings, [&]<class D>(const RenderSettings& st) {
         return with_features(scene, [&]<bool Env, bool Points>() {
             return PathTracer<RenderAccel, S, R, D, Env, Points>(scene, accel, roulette, st)
-                .estimate_goodness(sampler, roulette.estimate, H, o.pilot_paths);
+                .pilot_samples(sampler, o.pilot_paths);
         });
     });
-    return render_direct(scene, accel, ReducedContinuation<float, 3, R>{roulette, d}, o.settings, o.direct, sampler);
+    const std::span<const RoulettePilotSample<float, 3>> view(samples);
+    if (pilot) roulette.estimate = fitted_radiance_estimate(view);
+    const double pilot_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    RenderResult r;
+    if (o.reduce_continuation) {
+        // d > 1 (an estimate worse than the zero guess) leaves the continuation unchanged.
+        const float d = std::clamp(estimate_goodness(view, roulette.estimate, H), 0.05f, 1.0f);
+        r = render_direct(scene, accel, ReducedContinuation<float, 3, R>{roulette, d}, o.settings, o.direct, sampler);
+    } else {
+        r = render_direct(scene, accel, roulette, o.settings, o.direct, sampler);
+    }
+    r.seconds += pilot_seconds;
+    return r;
 }
 
 template <class S>
@@ -129,16 +160,11 @@ RenderResult render_roulette(const Scene<float>& scene, const RenderAccel& accel
     const SpectralRoulette<float, 3> spectral{H};
     if (r == "classic") return render_direct(scene, accel, classic, o.settings, o.direct, sampler);
     if (r == "spectral") return render_direct(scene, accel, spectral, o.settings, o.direct, sampler);
-    if (r == "estimate" || r == "spectral+estimate") {
-        Rgb<float> power, albedo;
-        float area;
-        scene.radiance_estimate_inputs(power, area, albedo);
-        const Rgb<float> estimate = global_radiance_estimate(power, area, albedo);
-        if (r == "estimate")
-            return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>{classic, estimate},
-                                   o, H, sampler);
-        return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3>{spectral, estimate}, o, H, sampler);
-    }
+    if (r == "estimate")
+        return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>{classic, {}}, o,
+                               H, sampler);
+    if (r == "spectral+estimate")
+        return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3>{spectral, {}}, o, H, sampler);
     throw Error("unknown roulette '" + r + "' (classic, spectral, estimate, spectral+estimate)");
 }
 
