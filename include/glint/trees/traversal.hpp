@@ -179,13 +179,17 @@ private:
                     tn = ng ? tr : tl;
                     tf = ng ? tl : tr;
                 }
-                const bool visit_near = !(tn < t0);
-                const bool visit_far = !(tf > t1);
                 const std::uint32_t near = first + ng, far = first + 1 - ng;
-                if (!(visit_near | visit_far)) goto pop;  // only for NaN t0 or t1
-                // Without branches (incoherent rays mispredict them): the far cell is always
-                // written to the stack but kept only when both cells are entered; the cell
-                // entered is the near one if its segment is not empty, else the far one.
+                // Empty leaves (the empty space the SAH cut off) are never entered: on
+                // incoherent rays they were two of every three leaves visited, each a step
+                // and a pop (knot-128k: 7.7 leaves per ray, 2.5 of them with triangles).
+                const bool visit_near = !(tn < t0) & !nodes[near].is_empty_leaf();
+                const bool visit_far = !(tf > t1) & !nodes[far].is_empty_leaf();
+                if (!(visit_near | visit_far)) goto pop;
+                // The far cell is always written to the stack but kept only when both cells
+                // are entered; the cell entered is the near one if its segment is not
+                // empty, else the far one. (The compiler turns the selects into a predicted
+                // branch; forcing bitwise selects measured 20% slower on knot-128k.)
                 const T near_t1 = tn < t1 ? tn : t1, far_t0 = tf > t0 ? tf : t0;
                 stack[sp] = Entry{far, base, far_t0, t1};
                 sp += int(visit_near & visit_far);
@@ -252,11 +256,14 @@ private:
         bool found = false;
         for (; first < end; first += std::uint32_t(batch_width)) {
             P::batch(view, first, batch_width, rd, ts, us, vs);
-            // The nearest lane, selected without branches; one compare with the best.
-            std::size_t best = 0;
-            for (std::size_t k = 1; k < batch_width; ++k) best = ts[k] < ts[best] ? k : best;
-            if (ts[best] < hit.t) {
+            // Most batches hit nothing nearer than the best hit: one vectorizable test
+            // over the lanes decides that; the nearest lane is searched only otherwise.
+            bool any = false;
+            for (std::size_t k = 0; k < batch_width; ++k) any |= ts[k] < hit.t;
+            if (any) {
                 if constexpr (Any) return true;
+                std::size_t best = 0;
+                for (std::size_t k = 1; k < batch_width; ++k) best = ts[k] < ts[best] ? k : best;
                 hit.t = ts[best];
                 hit.u = us[best];
                 hit.v = vs[best];

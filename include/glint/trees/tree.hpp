@@ -150,6 +150,7 @@ struct EncodedNode {
     bool is_split() const { return (word & 3u) != 3u; }
     bool is_leaf() const { return (word & 7u) == detail::node_leaf_tag; }
     bool is_pointer() const { return (word & 7u) == detail::node_pointer_tag; }
+    bool is_empty_leaf() const { return word == detail::node_leaf_tag; }  // leaf of 0 groups
     int axis() const { return static_cast<int>(word & 3u); }
     std::uint32_t child() const { return word >> 2; }     // PointerLayout split nodes
     std::uint32_t target() const { return word >> 3; }    // pointer nodes
