@@ -17,6 +17,9 @@
 //                   (direct illumination only, max depth 1, as 000 section 3.2 compares it:
 //                   with indirect light the shared path-tracing noise would hide the
 //                   difference)
+// --analysis (furnace, cornell) prints instead what bounds the radiance-estimate roulette: the
+// goodness d of 000 section 2.3 for the closed-scene and the pilot-fitted estimate, the floor no
+// estimate can reach below, and the share of the MSE that termination adds at all.
 // CSV columns: scene,method,spp,seconds,rmse. A gnuplot plot (RMSE against seconds) is
 // written next to the CSV when gnuplot is installed.
 #include <algorithm>
@@ -50,10 +53,11 @@ struct Point {
 struct Config {
     std::string scene = "all", csv, cache = "bench_cache", plot;
     std::string direct;  // direct lighting of the roulette and selection scenes (default per scene)
-    std::string radiance_estimate = "scene";  // L~ of the estimate roulettes: scene | pilot
+    std::string radiance_estimate = "pilot";  // L~ of the estimate roulettes: pilot | scene
     bool reduce = false;                      // shorten walks by the estimate's goodness
     int size = 96, max_spp = 64, threads = 0;
     bool quick = false;
+    bool analysis = false;  // --analysis: 000 section 2.3's goodness d and termination's share
 };
 
 std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
@@ -169,6 +173,60 @@ void plot(const Config& cfg, const std::map<std::string, std::map<std::string, s
     if (std::system(("gnuplot " + gp).c_str()) == 0) std::printf("wrote %s\n", cfg.plot.c_str());
 }
 
+/// Mean over pixels and bands of the per-pixel variance of the mean: the image's MSE at its spp.
+double mean_variance(const RenderResult& r) {
+    double v = 0;
+    for (const auto& p : r.variance.pixels) v += double(p[0] + p[1] + p[2]) / 3.0;
+    return v / double(r.variance.size());
+}
+
+/// --analysis (roulette scenes): what bounds the radiance-estimate roulette of 000 section
+/// 2.3. The goodness d = E[(X - a L~)^2] / E[X^2] of the closed-scene and the pilot-fitted L~,
+/// the floor no estimate can go below (the ideal per-vertex L~, from runs of 8 samples at
+/// 2048 vertices), and how much of the MSE termination adds at all: classic roulette against
+/// none (walks to the depth cap), MSE from the variance images at max-spp, 4 seeds.
+void roulette_analysis(const std::string& name, const Scene<float>& scene, const RenderAccel& accel,
+                       const Config& cfg) {
+    RenderOptions o = methods_for(name, cfg).front().options;  // classic, the scene's lighting
+    o.settings.spp = cfg.max_spp;
+    const Rgb<float> H(1.0f / 3.0f);
+    using R = RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>;
+    const R roulette{ClassicRoulette<float, 3>{H}, {}};
+    const std::size_t repeats = 8;
+    const auto samples = detail::with_direct(o.direct, o.settings, [&]<class D>(const RenderSettings& st) {
+        return detail::with_features(scene, [&]<bool Env, bool Points>() {
+            return PathTracer<RenderAccel, RandomSampler<float>, R, D, Env, Points>(scene, accel, roulette, st)
+                .pilot_samples(RandomSampler<float>(7), 2048, int(repeats));
+        });
+    });
+    const std::span<const RoulettePilotSample<float, 3>> v(samples);
+    Rgb<float> power, albedo;
+    float area;
+    scene.radiance_estimate_inputs(power, area, albedo);
+    const Rgb<float> scene_L = global_radiance_estimate(power, area, albedo), pilot_L = fitted_radiance_estimate(v);
+    std::printf("  analysis (direct %s, H = 1/3): goodness d of L~ (000 2.3; 1 = no better than L~ = 0)\n", o.direct.c_str());
+    std::printf("    scene formula L~ = (%.4f %.4f %.4f)  d = %.3f\n", scene_L[0], scene_L[1], scene_L[2],
+                estimate_goodness(v, scene_L, H));
+    std::printf("    pilot fit     L~ = (%.4f %.4f %.4f)  d = %.3f\n", pilot_L[0], pilot_L[1], pilot_L[2],
+                estimate_goodness(v, pilot_L, H));
+    std::printf("    floor (ideal per-vertex L~)             d = %.3f\n", estimate_goodness_floor(v, repeats, H));
+    double mse[2] = {0, 0}, seconds[2] = {0, 0}, rays[2] = {0, 0};
+    const int seeds = 4;
+    for (int seed = 0; seed < seeds; ++seed)
+        for (int k = 0; k < 2; ++k) {
+            const RandomSampler<float> sampler(std::uint64_t(1000 + seed));
+            const RenderResult r = k == 0 ? detail::render_direct(scene, accel, ClassicRoulette<float, 3>{H}, o.settings, o.direct, sampler)
+                                          : detail::render_direct(scene, accel, NoRoulette<float, 3>{}, o.settings, o.direct, sampler);
+            mse[k] += mean_variance(r) / seeds;
+            seconds[k] += r.seconds / seeds;
+            rays[k] += double(r.rays) / (double(o.settings.width) * o.settings.height * o.settings.spp) / seeds;
+        }
+    std::printf("    MSE at %d spp: classic %.5g, no roulette %.5g: termination adds %.1f%% of classic's MSE\n",
+                cfg.max_spp, mse[0], mse[1], 100.0 * (1.0 - mse[1] / mse[0]));
+    std::printf("    rays per camera path: classic %.2f, no roulette %.2f; seconds %.3f, %.3f\n", rays[0], rays[1],
+                seconds[0], seconds[1]);
+}
+
 /// Geometric mean over spp >= 4 (or all levels when there are fewer) of eff(m) / eff(base).
 double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& base) {
     double log_sum = 0;
@@ -205,8 +263,9 @@ int main(int argc, char** argv) {
             else if (a == "--direct") cfg.direct = value();
             else if (a == "--estimate") cfg.radiance_estimate = value();
             else if (a == "--reduce") cfg.reduce = true;
+            else if (a == "--analysis") cfg.analysis = true;
             else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
-                             "--cache DIR --plot FILE.png --threads N --direct NAME --estimate scene|pilot --reduce --quick)");
+                             "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce --analysis --quick)");
         }
         if (cfg.quick) {
             cfg.size = 16;
@@ -232,6 +291,10 @@ int main(int argc, char** argv) {
             const RenderAccel accel(scene.triangles);
             std::printf("%s (%dx%d, spp 1..%d)\n", name.c_str(), cfg.size, cfg.size, cfg.max_spp);
             double ref_var = 0;
+            if (cfg.analysis) {
+                if (name == "furnace" || name == "cornell") roulette_analysis(name, scene, accel, cfg);
+                continue;
+            }
             const Image<Rgb<float>> ref = reference(name, scene, accel, cfg, ref_var);
             const std::vector<Method> methods = methods_for(name, cfg);
             // Levels outer, methods inner: each level's methods run back to back, so that
@@ -265,7 +328,7 @@ int main(int argc, char** argv) {
                             "time overhead vs importance %+.1f%%\n", lower, com.size(), 100.0 * (t_com / t_imp - 1.0));
             }
         }
-        if (csv) std::printf("wrote %s\n", cfg.csv.c_str());
+        if (csv.is_open()) std::printf("wrote %s\n", cfg.csv.c_str());
         plot(cfg, results);
         return 0;
     } catch (const std::exception& e) {

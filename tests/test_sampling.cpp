@@ -506,6 +506,28 @@ TEST_CASE("exact: global radiance estimate and its configuration errors") {
     CHECK_THROWS_AS(global_radiance_estimate(Rgbd(-1), 1.0, Rgbd(0.5)), Error);
 }
 
+TEST_CASE("exact: pilot fit, goodness and its floor; no roulette never terminates") {
+    // Two vertices of albedo 1/2, two samples each: X = (1, 3) and (2, 2) in every band.
+    const Rgbd a(0.5), H(1.0 / 3.0);
+    const std::array<RoulettePilotSample<double, 3>, 4> s = {{{a, Rgbd(1.0)}, {a, Rgbd(3.0)}, {a, Rgbd(2.0)}, {a, Rgbd(2.0)}}};
+    const std::span<const RoulettePilotSample<double, 3>> v(s);
+    // Least squares: L~ = sum x a / sum a^2 = 8 * 0.5 / (4 * 0.25) = 4, so a L~ = mean x = 2.
+    const Rgbd L = fitted_radiance_estimate(v);
+    CHECK(L[0] == doctest::Approx(4.0));
+    // d = sum (x - 2)^2 / sum x^2 = 2 / 18; the floor = mean within-vertex variance (2 and 0,
+    // n - 1 = 1) over mean x^2 (5 and 4): 1 / 4.5.
+    CHECK(estimate_goodness(v, L, H) == doctest::Approx(2.0 / 18.0));
+    CHECK(estimate_goodness_floor(v, 2, H) == doctest::Approx(1.0 / 4.5));
+    CHECK_THROWS_AS(estimate_goodness_floor(v, 1, H), Error);
+    // No roulette: some lobe is always chosen, weight 1 each, however dark the albedo.
+    const std::array<Rgbd, 2> lobes = {Rgbd(0.01), Rgbd(0.0)};
+    for (double u : {0.0, 0.5, 0.999999}) {
+        const auto sel = select_lobe(NoRoulette<double, 3>{}, Rgbd(1.0), std::span<const Rgbd>(lobes), u);
+        CHECK(sel.lobe == 0);
+        CHECK(sel.total == 1.0);
+    }
+}
+
 namespace {
 
 /// The furnace of 000 section 2.2 (lines 1355-1362) as a toy walk: every surface has albedo a

@@ -76,6 +76,18 @@ struct ClassicRoulette {
     Spectrum<T, N> continued_offset(const Spectrum<T, N>&, T) const { return Spectrum<T, N>(T(0)); }
 };
 
+/// No Russian roulette: every lobe that reflects anything gets weight 1 (select_lobe then
+/// picks among them uniformly), so walks end only at the tracer's depth cap. Not a method to
+/// render with: the reference for how much variance termination adds at all, which bounds
+/// what any radiance estimate L~ can gain at equal samples (bench_convergence --analysis).
+template <Scalar T, std::size_t N>
+struct NoRoulette {
+    static constexpr bool has_radiance_estimate = false;
+    T selection_weight(const Spectrum<T, N>&, const Spectrum<T, N>& a) const { return a.max() > T(0) ? T(1) : T(0); }
+    Spectrum<T, N> terminated(const Spectrum<T, N>&) const { return Spectrum<T, N>(T(0)); }
+    Spectrum<T, N> continued_offset(const Spectrum<T, N>&, T) const { return Spectrum<T, N>(T(0)); }
+};
+
 /// 000 section 2.2: s_i = sum F a_i H / sum F H, so that the H-weighted throughput stays
 /// constant in expectation. Zero when the walk carries nothing the lobe reflects.
 template <Scalar T, std::size_t N>
@@ -179,6 +191,29 @@ T estimate_goodness(std::span<const RoulettePilotSample<T, N>> samples, const Sp
         den += x * x;
     }
     return den > 0 ? T(num / den) : T(1);
+}
+
+/// The least goodness any estimate can reach: E[Var(X | vertex)] / E[X^2], from pilot samples
+/// drawn in runs of `repeats` >= 2 at the same vertex (PathTracer::pilot_samples). That is d
+/// of the ideal per-vertex estimate L~(x) = E[X | x] / a: what is left is the noise of X itself
+/// (the BRDF-sampled direction, the light met there), which no L~ can remove.
+template <Scalar T, std::size_t N>
+T estimate_goodness_floor(std::span<const RoulettePilotSample<T, N>> samples, std::size_t repeats,
+                          const Spectrum<T, N>& H) {
+    if (repeats < 2) throw Error("glint::estimate_goodness_floor: needs runs of at least 2 samples per vertex");
+    double within = 0, second = 0;
+    const std::size_t groups = samples.size() / repeats;
+    for (std::size_t g = 0; g < groups; ++g) {
+        double sum = 0, sum2 = 0;
+        for (std::size_t j = 0; j < repeats; ++j) {
+            const double x = double(samples[g * repeats + j].reflected.luminance(H));
+            sum += x;
+            sum2 += x * x;
+        }
+        within += (sum2 - sum * sum / double(repeats)) / double(repeats - 1);
+        second += sum2 / double(repeats);
+    }
+    return second > 0 ? T(within / second) : T(1);
 }
 
 /// 000 section 2.3 (lines 1495-1530): the radiance estimate "can be used to reduce the

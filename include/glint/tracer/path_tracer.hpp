@@ -255,19 +255,27 @@ public:
 
     /// Pilot observations for 000 section 2.3's radiance-estimate roulette: at the first
     /// diffuse vertex of `n` camera paths, the albedo a and the one-sample reflected radiance
-    /// X = (w/p) L_in (L_in traced by this tracer, so unbiased). X is exactly what the
+    /// X = (w/p) L_in (L_in traced by this tracer, so unbiased), `repeats` of them per vertex
+    /// (consecutive; more than 1 for estimate_goodness_floor). X is exactly what the
     /// roulette decides about, what a terminated walk loses: with light sampling the emission
     /// met by the continued ray is already in the vertex's direct-light estimate, so it is
     /// not part of X. (An earlier version counted it, so that X's variance was that of
-    /// hitting a small light by chance: d = 0.98 on cornell instead of about 0.5.)
-    std::vector<RoulettePilotSample<T, 3>> pilot_samples(const S& prototype, int n) const {
+    /// hitting a small light by chance: d = 0.98 on cornell instead of 0.81.) A direction
+    /// the BRDF cannot sample gives X = 0, as in the walk.
+    std::vector<RoulettePilotSample<T, 3>> pilot_samples(const S& prototype, int n, int repeats = 1) const {
         S sampler = prototype;
         std::vector<RoulettePilotSample<T, 3>> out;
-        out.reserve(std::size_t(std::max(n, 0)));
+        repeats = std::max(repeats, 1);
+        out.reserve(std::size_t(std::max(n, 0)) * std::size_t(repeats));
         std::uint64_t rays = 0;
         const T aspect = T(settings_.width) / T(settings_.height);
+        const std::uint64_t pixels = std::uint64_t(settings_.width) * std::uint64_t(settings_.height);
         for (int i = 0; i < n; ++i) {
-            const int x = i % settings_.width, y = (i / settings_.width) % settings_.height;
+            // Pixels spread over the whole image (an odd multiplier not divisible by 3 permutes
+            // the indices of a w x h image with w h = 2^k 3^j; any other size is still covered
+            // widely), not the first rows: the fit must see every part of the scene.
+            const std::uint64_t k = (std::uint64_t(i) * 0x9E3779B1u) % pixels;
+            const int x = int(k % std::uint64_t(settings_.width)), y = int(k / std::uint64_t(settings_.width));
             sampler.start_pixel_sample(x, y, std::uint64_t(0x9000000 + i));
             const Vec2<T> p = sampler.get_pixel_2d();
             const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
@@ -279,13 +287,16 @@ public:
             const Vec3<T> nn = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
             const Frame<T> frame = Frame<T>::from_normal(nn);
             const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
-            const Vec3<T> wi = sample_brdf(brdf, sampler.get_2d());
-            const T pdf = brdf.sampling_pdf(wi);
-            if (!(pdf > T(0)) || wi.z <= T(0)) continue;
-            const Rgb<T> weight = brdf.f(wi) * (wi.z / pdf);
-            const Rgb<T> L_in = radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, rays, nullptr, nullptr,
-                                         D::collects_emission);
-            out.push_back({m.kd + m.ks, weight * L_in});
+            for (int j = 0; j < repeats; ++j) {
+                const Vec3<T> wi = sample_brdf(brdf, sampler.get_2d());
+                const T pdf = brdf.sampling_pdf(wi);
+                Rgb<T> X(T(0));
+                if (pdf > T(0) && wi.z > T(0))
+                    X = brdf.f(wi) * (wi.z / pdf) *
+                        radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, rays, nullptr, nullptr,
+                                 D::collects_emission);
+                out.push_back({m.kd + m.ks, X});
+            }
         }
         return out;
     }

@@ -42,17 +42,20 @@ struct RenderOptions {
     /// Band weights H of the roulettes (000 section 2.2): "luminance" (0.3086, 0.6094,
     /// 0.0820) or "mean" (1/3 each, matching an error measured equally over R, G, B).
     std::string roulette_weights = "luminance";
-    /// Radiance-estimate roulettes (000 section 2.3): where L~ comes from. "scene": 000's
-    /// closed-scene formula a~ Phi_e / (pi S (1 - a~)) (an overestimate where light escapes,
-    /// as from the open Cornell box); "pilot": the least-squares constant over pilot paths
-    /// (fitted_radiance_estimate), 000's "data gathered during a preprocessing phase".
-    std::string radiance_estimate = "scene";
+    /// Radiance-estimate roulettes (000 section 2.3): where L~ comes from. "pilot" (default):
+    /// the least-squares constant over pilot paths (fitted_radiance_estimate), 000's "data
+    /// gathered during a preprocessing phase"; "scene": 000's closed-scene formula
+    /// a~ Phi_e / (pi S (1 - a~)). Measured (bench_convergence --analysis): on the open
+    /// Cornell box the formula overestimates, goodness d = 1.08 (worse than no estimate, the
+    /// case 000 says to avoid), the pilot's d = 0.81; on the furnace, whose radiance is 1
+    /// everywhere, the pilot finds L~ = 1 and the roulette adds almost no variance.
+    std::string radiance_estimate = "pilot";
     /// Radiance-estimate roulettes: shorten walks by the goodness d of the estimate measured
     /// on pilot paths (ReducedContinuation, 000 section 2.3 lines 1495-1530).
     bool reduce_continuation = false;
     /// Pilot camera paths for "pilot" and reduce_continuation; their time is part of the
-    /// render's time.
-    int pilot_paths = 4096;
+    /// render's time. 0: 1/32 of the render's camera paths, at least 1024, at most 4096.
+    int pilot_paths = 0;
 };
 
 inline const std::vector<std::string>& roulette_names() {
@@ -110,6 +113,12 @@ RenderResult render_direct(const Scene<float>& scene, const RenderAccel& accel, 
     });
 }
 
+inline int pilot_paths(const RenderOptions& o) {
+    if (o.pilot_paths > 0) return o.pilot_paths;
+    const double paths = double(o.settings.width) * double(o.settings.height) * double(std::max(1, o.settings.spp));
+    return int(std::clamp(paths / 32.0, 1024.0, 4096.0));
+}
+
 /// A radiance-estimate roulette (000 section 2.3) with its estimate from the scene or from
 /// pilot paths, optionally with walks shortened by the estimate's goodness. The pilot's time
 /// is counted in the result.
@@ -130,7 +139,7 @@ RenderResult render_estimate(const Scene<float>& scene, const RenderAccel& accel
     const auto samples = with_direct(o.direct, o.settings, [&]<class D>(const RenderSettings& st) {
         return with_features(scene, [&]<bool Env, bool Points>() {
             return PathTracer<RenderAccel, S, R, D, Env, Points>(scene, accel, roulette, st)
-                .pilot_samples(sampler, o.pilot_paths);
+                .pilot_samples(sampler, pilot_paths(o));
         });
     });
     const std::span<const RoulettePilotSample<float, 3>> view(samples);
