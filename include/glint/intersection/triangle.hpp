@@ -1,7 +1,7 @@
 // glint/intersection/triangle.hpp: what every ray-triangle test provides, and the two
 // containers that use them: Triangle<P> (one triangle in world space) and
-// TriangleStore<P> (blocks of triangles stored structure-of-arrays, for tree leaves and
-// brute force).
+// TriangleStore<P> (blocks of triangles stored as an array of structures of arrays: 8
+// records per block, field by field, for tree leaves and brute force).
 //
 // A policy P (Ivm, MollerTrumbore, Wald, Watertight) is the per-triangle record: the
 // precomputed scalars a test needs, built once from three vertices. Records live in a
