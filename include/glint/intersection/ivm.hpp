@@ -118,7 +118,8 @@ struct Ivm {
             const T b0 = f[0][i] * x + f[1][i] * y + f[2][i] * z;
             const T b1 = f[3][i] * x + f[4][i] * y + f[5][i] * z;
             const T b2 = T(1) - b0 - b1;
-            const bool ok = t > r.tmin && t < r.tmax && b0 >= T(0) && b1 >= T(0) && b2 >= T(0);
+            // Bitwise &, not &&: without short-circuit branches the loop vectorizes on AVX2 too.
+            const bool ok = (t > r.tmin) & (t < r.tmax) & (b0 >= T(0)) & (b1 >= T(0)) & (b2 >= T(0));
             ts[i] = ok ? t : infinity<T>;
             us[i] = b1;
             vs[i] = b2;

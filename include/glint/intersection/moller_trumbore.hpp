@@ -98,8 +98,10 @@ struct MollerTrumbore {
             const T qz = sx * e1y - sy * e1x;
             const T w = (r.d.x * qx + r.d.y * qy + r.d.z * qz) * inv;
             const T t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-            const bool ok = det != T(0) && u >= T(0) && w >= T(0) && u + w <= T(1) &&
-                            t > r.tmin && t < r.tmax;
+            // Bitwise &, not &&: with && GCC vectorizes this loop only with AVX-512 masks;
+            // on AVX2 it compiled to scalar code with a branch per condition.
+            const bool ok = (det != T(0)) & (u >= T(0)) & (w >= T(0)) & (u + w <= T(1)) &
+                            (t > r.tmin) & (t < r.tmax);
             ts[i] = ok ? t : infinity<T>;
             us[i] = u;
             vs[i] = w;

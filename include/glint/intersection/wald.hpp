@@ -105,8 +105,9 @@ struct Wald {
             const T hu = ou + t * du, hv = ov + t * dv;
             const T beta = hu * f[3][i] + hv * f[4][i] + f[5][i];
             const T gamma = hu * f[6][i] + hv * f[7][i] + f[8][i];
-            const bool ok = t > r.tmin && t < r.tmax && beta >= T(0) && gamma >= T(0) &&
-                            beta + gamma <= T(1);
+            // Bitwise &, not &&: with && GCC vectorizes this loop only with AVX-512 masks.
+            const bool ok = (t > r.tmin) & (t < r.tmax) & (beta >= T(0)) & (gamma >= T(0)) &
+                            (beta + gamma <= T(1));
             ts[i] = ok ? t : infinity<T>;
             us[i] = beta;
             vs[i] = gamma;
