@@ -19,7 +19,10 @@
 //                   difference)
 // --analysis (furnace, cornell) prints instead what bounds the radiance-estimate roulette: the
 // goodness d of 000 section 2.3 for the closed-scene and the pilot-fitted estimate, the floor no
-// estimate can reach below, and the share of the MSE that termination adds at all.
+// estimate can reach below, and the share of the MSE that termination adds at all; on the
+// furnace also a geometry-free chain model of the room that predicts what spectral roulette
+// can gain over classic there (000 section 2.2). --weights mean|luminance sets the roulettes'
+// band weights H (default mean, matching the RMSE's equal weights on R, G, B).
 // CSV columns: scene,method,spp,seconds,rmse. A gnuplot plot (RMSE against seconds) is
 // written next to the CSV when gnuplot is installed.
 #include <algorithm>
@@ -29,6 +32,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -55,6 +59,7 @@ struct Config {
     std::string direct;  // direct lighting of the roulette and selection scenes (default per scene)
     std::string radiance_estimate = "pilot";  // L~ of the estimate roulettes: pilot | scene
     bool reduce = false;                      // shorten walks by the estimate's goodness
+    std::string weights = "mean";             // roulette band weights H: mean | luminance
     int size = 96, max_spp = 64, threads = 0;
     bool quick = false;
     bool analysis = false;  // --analysis: 000 section 2.3's goodness d and termination's share
@@ -69,7 +74,7 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
         // The furnace is lit by all its walls: a pure random walk collecting emission where
         // it hits (000 section 2.2's setting); the others use light sampling with MIS.
         o.direct = !cfg.direct.empty() ? cfg.direct : scene == "furnace" ? "brdf" : "mis";
-        o.roulette_weights = "mean";  // the RMSE weighs R, G and B equally
+        o.roulette_weights = cfg.weights;  // default mean: the RMSE weighs R, G and B equally
         o.radiance_estimate = cfg.radiance_estimate;
         o.reduce_continuation = cfg.reduce;
         return o;
@@ -180,6 +185,58 @@ double mean_variance(const RenderResult& r) {
     return v / double(r.variance.size());
 }
 
+/// --analysis (furnace): what 000 section 2.2's formula can gain in this room at all, from a
+/// model with no geometry. The furnace is a cube, and from any face the five others subtend
+/// form factors of 0.1998-0.2000, so a cosine-sampled walk moves, on average, to one of the
+/// other five walls uniformly. Along that chain each walk's estimate X = sum_k F_k Le_k is
+/// exactly 1 per band without roulette (sum_k prod_{j<k} a_j (1 - a_k) telescopes), so all
+/// its error is termination's: the model's MSE per band and walk length under the library's
+/// own ClassicRoulette and SpectralRoulette predict the tracer's ratio without pixel or
+/// geometry noise. (The tracer's camera sees the walls unevenly and per-point form factors
+/// vary, so expect agreement within a few percent, not exactly.)
+template <class R>
+std::pair<double, double> furnace_chain(const Scene<float>& scene, const R& roulette, int first_wall, long walks) {
+    std::vector<const Material<float>*> walls;
+    for (const auto& m : scene.materials) walls.push_back(&m);
+    const int n = int(walls.size());
+    if (n < 2) throw Error("furnace_chain: the furnace needs at least two walls");
+    Pcg32 rng(11);
+    double se = 0, bounces = 0;
+    for (long w = 0; w < walks; ++w) {
+        int wall = first_wall >= 0 ? first_wall : int(rng.uniform<double>() * n) % n;
+        Rgb<float> F(1.0f), X(0.0f);
+        for (int depth = 0; depth < 256; ++depth) {
+            const Material<float>& m = *walls[std::size_t(wall)];
+            X += F * m.emission;
+            const float s = roulette.selection_weight(F, m.kd);
+            if (!(rng.uniform<float>() < s)) break;
+            F = F * m.kd / s;
+            bounces += 1;
+            int next = int(rng.uniform<double>() * (n - 1)) % (n - 1);
+            wall = next >= wall ? next + 1 : next;
+        }
+        for (std::size_t c = 0; c < 3; ++c) se += double(X[c] - 1.0f) * double(X[c] - 1.0f);
+    }
+    return {se / (3.0 * double(walks)), bounces / double(walks)};
+}
+
+void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* weights) {
+    const ClassicRoulette<float, 3> classic{H};
+    const SpectralRoulette<float, 3> spectral{H};
+    const auto [mse_c, len_c] = furnace_chain(scene, classic, -1, 2'000'000);
+    const auto [mse_s, len_s] = furnace_chain(scene, spectral, -1, 2'000'000);
+    // Rays per walk: the camera ray plus one per bounce; time taken proportional to rays.
+    const double eff = (mse_c / mse_s) * ((1.0 + len_c) / (1.0 + len_s));
+    std::printf("  chain model (H = %s, 2e6 walks from a random wall, next wall uniform over the others):\n", weights);
+    std::printf("    MSE per band: classic %.4f, spectral %.4f (ratio %.3f); bounces per walk %.3f, %.3f\n",
+                mse_c, mse_s, mse_c / mse_s, len_c, len_s);
+    std::printf("    predicted efficiency spectral / classic (time ~ rays) = %.3f\n", eff);
+    std::printf("    MSE ratio by the wall a walk starts on (the camera's view decides the mix):");
+    for (int w = 0; w < int(scene.materials.size()); ++w)
+        std::printf(" %.2f", furnace_chain(scene, classic, w, 500'000).first / furnace_chain(scene, spectral, w, 500'000).first);
+    std::printf("\n");
+}
+
 /// --analysis (roulette scenes): what bounds the radiance-estimate roulette of 000 section
 /// 2.3. The goodness d = E[(X - a L~)^2] / E[X^2] of the closed-scene and the pilot-fitted L~,
 /// the floor no estimate can go below (the ideal per-vertex L~, from runs of 8 samples at
@@ -189,7 +246,8 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
                        const Config& cfg) {
     RenderOptions o = methods_for(name, cfg).front().options;  // classic, the scene's lighting
     o.settings.spp = cfg.max_spp;
-    const Rgb<float> H(1.0f / 3.0f);
+    const Rgb<float> H = cfg.weights == "mean" ? Rgb<float>(1.0f / 3.0f) : Rgb<float>::default_luminance_weights();
+    if (name == "furnace") furnace_model(scene, H, cfg.weights.c_str());
     using R = RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>;
     const R roulette{ClassicRoulette<float, 3>{H}, {}};
     const std::size_t repeats = 8;
@@ -204,7 +262,8 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
     float area;
     scene.radiance_estimate_inputs(power, area, albedo);
     const Rgb<float> scene_L = global_radiance_estimate(power, area, albedo), pilot_L = fitted_radiance_estimate(v);
-    std::printf("  analysis (direct %s, H = 1/3): goodness d of L~ (000 2.3; 1 = no better than L~ = 0)\n", o.direct.c_str());
+    std::printf("  analysis (direct %s, H = %s): goodness d of L~ (000 2.3; 1 = no better than L~ = 0)\n", o.direct.c_str(),
+                cfg.weights.c_str());
     std::printf("    scene formula L~ = (%.4f %.4f %.4f)  d = %.3f\n", scene_L[0], scene_L[1], scene_L[2],
                 estimate_goodness(v, scene_L, H));
     std::printf("    pilot fit     L~ = (%.4f %.4f %.4f)  d = %.3f\n", pilot_L[0], pilot_L[1], pilot_L[2],
@@ -264,9 +323,13 @@ int main(int argc, char** argv) {
             else if (a == "--estimate") cfg.radiance_estimate = value();
             else if (a == "--reduce") cfg.reduce = true;
             else if (a == "--analysis") cfg.analysis = true;
+            else if (a == "--weights") cfg.weights = value();
             else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
-                             "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce --analysis --quick)");
+                             "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce "
+                             "--weights mean|luminance --analysis --quick)");
         }
+        if (cfg.weights != "mean" && cfg.weights != "luminance")
+            throw Error("--weights expects mean or luminance, not '" + cfg.weights + "'");
         if (cfg.quick) {
             cfg.size = 16;
             cfg.max_spp = 4;
