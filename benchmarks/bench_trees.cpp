@@ -184,6 +184,7 @@ struct Options {
     bool quick = false, generated = true, all = false, memory = false, few = false;
     std::size_t rays = 1'000'000;
     int reps = 3;
+    KdBuildOptions kd{};  // --ki, --empty-bonus: the kd-tree's SAH constants (K_T = 1)
 };
 
 struct Row {
@@ -335,9 +336,11 @@ Options parse(int argc, char** argv) {
         else if (a == "--memory") o.memory = true;
         else if (a == "--rays") o.rays = std::stoul(value());
         else if (a == "--reps") o.reps = std::max(1, std::stoi(value()));
+        else if (a == "--ki") o.kd.intersection_cost = std::stod(value());
+        else if (a == "--empty-bonus") o.kd.empty_bonus = std::stod(value());
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
-                      "[--only SCENE] [--all | --few] [--memory]");
+                      "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -390,7 +393,7 @@ int main(int argc, char** argv) try {
 #else
         std::puts("# Embree 3 not found: no peer comparison");
 #endif
-        const BuiltTree<float> kd = KdTreeBuilder<float>{}.build(sc.mesh);
+        const BuiltTree<float> kd = KdTreeBuilder<float>{opt.kd}.build(sc.mesh);
         const BuiltTree<float> bih = BihBuilder<float>{}.build(sc.mesh);
         run_intersector<Ivm<float>>(sc, kd, bih, peer.get(), opt, rows);
         run_intersector<MollerTrumbore<float>>(sc, kd, bih, peer.get(), opt, rows);

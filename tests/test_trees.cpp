@@ -21,6 +21,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -319,6 +320,24 @@ TEST_CASE("exact: kd-tree of two separated triangles splits between them") {
     std::vector<int> seen(m.size(), 0);
     for (auto id : t.prims) ++seen[id];
     for (int s : seen) CHECK(s >= 1);
+}
+
+TEST_CASE("errors: kd-tree cost constants out of range are rejected by name") {
+    const Mesh<float> m{{Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)}};
+    const auto build = [&](KdBuildOptions o) { return KdTreeBuilder<float>{o}.build(m); };
+    KdBuildOptions o;
+    CHECK_NOTHROW(build(o));
+    o.intersection_cost = -1;
+    CHECK_THROWS_WITH_AS(build(o), doctest::Contains("intersection_cost"), Error);
+    o = {};
+    o.traversal_cost = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(build(o), doctest::Contains("traversal_cost"), Error);
+    o = {};
+    o.empty_bonus = 1.0;
+    CHECK_THROWS_WITH_AS(build(o), doctest::Contains("empty_bonus"), Error);
+    o = {};
+    o.max_depth = -3;
+    CHECK_THROWS_WITH_AS(build(o), doctest::Contains("max_depth"), Error);
 }
 
 TEST_CASE("agreement: Ivm, all trees and layouts vs brute force") { check_intersector<Ivm<float>>(); }

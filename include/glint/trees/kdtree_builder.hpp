@@ -39,9 +39,11 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/intersection/triangle.hpp>
 #include <glint/trees/tree.hpp>
@@ -122,7 +124,18 @@ public:
     using Event = KdEvent<T>;
     using Events = std::array<std::vector<Event>, 3>;
 
-    KdBuild(std::span<const TriangleVertices<T>> tris, const KdBuildOptions& opt) : tris_(tris), opt_(opt) {}
+    KdBuild(std::span<const TriangleVertices<T>> tris, const KdBuildOptions& opt) : tris_(tris), opt_(opt) {
+        // Costs outside these ranges make the SAH prefer leaves or splits without bound.
+        const auto bad = [](const char* what, double v) {
+            throw Error(std::string("glint::KdTreeBuilder: ") + what + ", got " + std::to_string(v));
+        };
+        if (!(opt.traversal_cost > 0) || !std::isfinite(opt.traversal_cost))
+            bad("traversal_cost (K_T) must be positive and finite", opt.traversal_cost);
+        if (!(opt.intersection_cost > 0) || !std::isfinite(opt.intersection_cost))
+            bad("intersection_cost (K_I) must be positive and finite", opt.intersection_cost);
+        if (!(opt.empty_bonus >= 0 && opt.empty_bonus < 1)) bad("empty_bonus must lie in [0, 1)", opt.empty_bonus);
+        if (opt.max_depth < 0) bad("max_depth must be >= 0 (0: automatic)", double(opt.max_depth));
+    }
 
     BuiltTree<T> run() {
         out_.kind = TreeKind::kd;
