@@ -280,8 +280,30 @@ TEST_CASE("ReducedContinuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 
     const ReducedContinuation<double, 3, decltype(est)> same{est, 1.0}, shorter{est, 0.25};
     CHECK(same.selection_weight(F, a) == doctest::Approx(0.6));
     CHECK(shorter.selection_weight(F, a) == doctest::Approx(0.6 * 0.25 / (1.0 - 0.75 * 0.6)));
-    // The speedup of 000 line 1530: expected walk length ratio 1 / (1 - (1 - d) s_old).
-    const double s_new = shorter.selection_weight(F, a);
-    CHECK((1.0 - s_new) / (1.0 - 0.6) == doctest::Approx(1.0 / (1.0 - 0.75 * 0.6)));
+    // What s_new is for (000 lines 1500-1520): the variance termination adds, (1/s - 1) E[..^2],
+    // is the same with the estimate at goodness d and s_new as without it at s_old.
+    const double s_new = shorter.selection_weight(F, a), d = 0.25;
+    CHECK((1.0 / s_new - 1.0) * d == doctest::Approx(1.0 / 0.6 - 1.0));
+    // The speedup of 000 line 1530, measured: walks continued with probability s (walk
+    // length = number of continuations + 1, geometric) at s_old and s_new, fixed seed; the
+    // ratio of mean lengths must be 1 / (1 - (1 - d) s_old) within 4 standard errors (delta
+    // method on the two means, variance s / (1 - s)^2 each).
+    Pcg32 rng(2024);
+    const auto mean_length = [&](double s, int n) {
+        double sum = 0;
+        for (int i = 0; i < n; ++i) {
+            int len = 1;
+            while (rng.uniform<double>() < s) ++len;
+            sum += len;
+        }
+        return sum / n;
+    };
+    const int n = 200000;
+    const double l_old = mean_length(0.6, n), l_new = mean_length(s_new, n);
+    const double ratio = l_old / l_new, expected = 1.0 / (1.0 - (1.0 - d) * 0.6);
+    const double var_old = 0.6 / ((1 - 0.6) * (1 - 0.6)), var_new = s_new / ((1 - s_new) * (1 - s_new));
+    const double se = ratio * std::sqrt(var_old / (n * l_old * l_old) + var_new / (n * l_new * l_new));
+    INFO("walk length ratio ", ratio, " expected ", expected, " se ", se);
+    CHECK(std::abs(ratio - expected) <= 4 * se);
     CHECK(shorter.terminated(a) == est.terminated(a));
 }
