@@ -10,6 +10,10 @@
 #include <fstream>
 #include <string>
 
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
 #include <glint/io/png.hpp>
@@ -231,16 +235,48 @@ TEST_CASE("io: EXR round trip with layers, PNG preview, and clear errors") {
     for (int y = 0; y < 3; ++y)
         for (int x = 0; x < 5; ++x) img.at(x, y) = Rgb<float>(float(x), float(y), 0.25f * float(x + y));
     const std::string exr = temp_path("roundtrip.exr");
-    write_exr(exr, img, {ExrLayer{"lambda", {"Y"}, std::vector<float>(15, 0.5f)}});
+    // Layers with distinct values per pixel and channel, so a wrong stride or offset shows.
+    std::vector<float> lambda(15), var(45);
+    for (std::size_t i = 0; i < lambda.size(); ++i) lambda[i] = 0.1f * float(i) - 0.3f;
+    for (std::size_t i = 0; i < var.size(); ++i) var[i] = 1.0f + 0.01f * float(i);
+    write_exr(exr, img, {ExrLayer{"lambda", {"Y"}, lambda}, ExrLayer{"variance", {"R", "G", "B"}, var}});
     const Image<Rgb<float>> back = read_exr_rgb(exr);
     CHECK(back.width == 5);
     CHECK(back.height == 3);
     CHECK(back.pixels == img.pixels);
+    {
+        Imf::InputFile file(exr.c_str());
+        std::vector<float> lambda_back(15, -1.0f), var_back(45, -1.0f);
+        Imf::FrameBuffer fb;
+        fb.insert("lambda.Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(lambda_back.data()), sizeof(float),
+                                         5 * sizeof(float)));
+        const char* rgb[3] = {"R", "G", "B"};
+        for (int c = 0; c < 3; ++c)
+            fb.insert(std::string("variance.") + rgb[c],
+                      Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(var_back.data() + c), 3 * sizeof(float),
+                                 15 * sizeof(float)));
+        file.setFrameBuffer(fb);
+        file.readPixels(0, 2);
+        CHECK(lambda_back == lambda);
+        CHECK(var_back == var);
+    }
     CHECK_THROWS_AS(write_exr(exr, img, {ExrLayer{"bad", {"Y"}, std::vector<float>(3, 0.0f)}}), Error);
     CHECK_THROWS_AS(read_exr_rgb(temp_path("does_not_exist.exr")), Error);
     const std::string png = temp_path("preview.png");
     write_png(png, img);
-    CHECK(std::filesystem::file_size(png) > 0);
+    {
+        // Decoded back, every byte is the clamped value through the sRGB curve.
+        int w = 0, h = 0, n = 0;
+        unsigned char* px = stbi_load(png.c_str(), &w, &h, &n, 3);
+        REQUIRE(px != nullptr);
+        CHECK(w == 5);
+        CHECK(h == 3);
+        int wrong = 0;
+        for (std::size_t i = 0; i < img.size(); ++i)
+            for (std::size_t c = 0; c < 3; ++c) wrong += px[3 * i + c] != to_srgb8(img.pixels[i][c]);
+        stbi_image_free(px);
+        CHECK(wrong == 0);
+    }
     std::filesystem::remove(exr);
     std::filesystem::remove(png);
 }
