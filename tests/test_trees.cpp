@@ -7,7 +7,8 @@
 // hit point within t_tol: a wrong triangle id with the right t fails). A disagreement is otherwise
 // allowed only when the nearer reported hit lies on its triangle's boundary (barycentric
 // distance below edge_tol: 1e-4 plus the coordinates' rounding relative to the triangle's
-// size), or its t lies within t_tol of the ray's tmin or tmax (found by the 10^6-ray runs:
+// size) or at one of its vertices (within t_tol: needle triangles' barycentrics are
+// ill-conditioned), or its t lies within t_tol of the ray's tmin or tmax (found by the 10^6-ray runs:
 // rays starting 10^-4 above the stadium's ground, 1000 units from the frame origin), where
 // the tree and brute force may legitimately round differently: IVM records
 // live in a frame per leaf in the tree and per triangle in brute force, and with FMA
@@ -173,11 +174,23 @@ bool boundary_crossing(const Scene& sc, const Ray<float>& r) {
     return false;
 }
 
+/// Whether the point the ray reaches at t is one of the triangle's vertices, up to t_tol. A
+/// needle triangle's plane and barycentrics are ill-conditioned (the UV sphere's pole rows,
+/// met by rays along the axis through the pole), but a hit at its vertex is a boundary hit.
+bool near_vertex(const Scene& sc, const Ray<float>& r, const TriangleVertices<float>& tri, float t) {
+    const Vec3d p = Vec3d(r.origin) + double(t) * Vec3d(r.direction);
+    const double tol = double(t_tol(sc, r, tri, t)) * glm::length(Vec3d(r.direction));
+    for (const auto& v : tri)
+        if (glm::length(p - Vec3d(v)) <= tol) return true;
+    return false;
+}
+
 /// Whether the point the ray reaches at t lies on triangle `tri`, up to the tolerance of t
 /// (t_tol, in distance along the ray): within that distance of the triangle's plane and of
 /// its bounding box. Used to check a tie's triangle; the box, not the barycentrics, because
 /// ties at a vertex shared with a needle triangle (the UV sphere's poles) are legitimate.
 bool on_triangle(const Scene& sc, const Ray<float>& r, const TriangleVertices<float>& tri, float t) {
+    if (near_vertex(sc, r, tri, t)) return true;
     const Vec3d a(tri[0]), d(r.direction);
     const Vec3d p = Vec3d(r.origin) + double(t) * d;
     const Vec3d n = glm::cross(Vec3d(tri[1]) - a, Vec3d(tri[2]) - a);
@@ -228,7 +241,8 @@ void compare(const Scene& sc, std::size_t i, const StoreHit<float>& h, bool foun
         const float near_tol = t_tol(sc, r, tri, near.t);
         const bool at_interval_end = near.t - r.tmin <= near_tol || r.tmax - near.t <= near_tol;
         // |distance|: a point outside the triangle (negative distance) is not an edge case.
-        if (std::abs(edge_distance(tri, r, near.t)) < edge_tol(sc, r, tri) || at_interval_end) {
+        if (std::abs(edge_distance(tri, r, near.t)) < edge_tol(sc, r, tri) || near_vertex(sc, r, tri, near.t) ||
+            at_interval_end) {
             ++tally.edges;
             tally.generic_edges += generic;
             return;
