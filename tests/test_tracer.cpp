@@ -222,6 +222,31 @@ TEST_CASE("determinism: the image does not depend on the thread count") {
     CHECK(a.image.pixels == b.image.pixels);
 }
 
+TEST_CASE("pixel_jitter off: every sample of a pixel follows the ray through its centre") {
+    // Emission seen directly (max depth 1, no light sampling) is then the same for every
+    // sample: zero variance in every pixel, the light's pixels exactly its emission. With
+    // jitter, the pixels on the light's edges see it some of the time.
+    const Scene<float> s = builtin_scene<float>("cornell");
+    RenderOptions o;
+    o.settings.width = o.settings.height = 32;
+    o.settings.spp = 8;
+    o.settings.max_depth = 1;
+    o.direct = "brdf";
+    o.settings.pixel_jitter = false;
+    const RenderResult centres = render_scene(s, o);
+    o.settings.pixel_jitter = true;
+    const RenderResult jittered = render_scene(s, o);
+    int light_pixels = 0, noisy_centres = 0, noisy_jittered = 0;
+    for (std::size_t i = 0; i < centres.image.size(); ++i) {
+        noisy_centres += centres.variance.pixels[i].max() > 0.0f;
+        noisy_jittered += jittered.variance.pixels[i].max() > 0.0f;
+        light_pixels += centres.image.pixels[i] == Rgb<float>(17.0f, 12.0f, 4.0f);
+    }
+    CHECK(noisy_centres == 0);
+    CHECK(light_pixels > 0);
+    CHECK(noisy_jittered > 0);
+}
+
 TEST_CASE("every built-in scene renders finite, non-negative images with every direct policy") {
     for (const auto& name : builtin_scene_names()) {
         const Scene<float> s = builtin_scene<float>(name);

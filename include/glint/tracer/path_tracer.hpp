@@ -65,6 +65,12 @@ struct RenderSettings {
     /// the (2r + 1)^2 pixel neighbourhood (000 section 3.1.1); -1 estimates it per vertex.
     int lambda_filter_radius = 1;
     bool progress = false;       // progress bar on stderr
+    /// Camera rays through uniformly jittered points of each pixel (the pixel's area average,
+    /// the default) or through its centre only. With centres, an image estimates the radiance
+    /// along fixed rays, so that its error against a reference of the same rays is light
+    /// transport's alone: comparisons of estimators (bench_convergence) are not diluted by
+    /// the pixel-footprint noise at silhouettes and light edges that every method shares.
+    bool pixel_jitter = true;
 };
 
 struct RenderResult {
@@ -277,7 +283,8 @@ public:
             const std::uint64_t k = (std::uint64_t(i) * 0x9E3779B1u) % pixels;
             const int x = int(k % std::uint64_t(settings_.width)), y = int(k / std::uint64_t(settings_.width));
             sampler.start_pixel_sample(x, y, std::uint64_t(0x9000000 + i));
-            const Vec2<T> p = sampler.get_pixel_2d();
+            Vec2<T> p = sampler.get_pixel_2d();  // drawn either way: the sampler's dimensions stay aligned
+            if (!settings_.pixel_jitter) p = Vec2<T>(T(0.5));
             const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
             StoreHit<T> hit;
             if (!accel_.closest_hit(ray, hit)) continue;
@@ -335,7 +342,8 @@ private:
         int lambda_count = 0;
         for (int i = 0; i < spp; ++i) {
             sampler.start_pixel_sample(x, y, std::uint64_t(i));
-            const Vec2<T> p = sampler.get_pixel_2d();
+            Vec2<T> p = sampler.get_pixel_2d();  // drawn either way: the sampler's dimensions stay aligned
+            if (!settings_.pixel_jitter) p = Vec2<T>(T(0.5));
             const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
             T lambda = std::numeric_limits<T>::quiet_NaN();
             PrimaryDirect<T> pd;
