@@ -252,6 +252,17 @@ void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* w
     std::printf("    MSE per band: classic %.4f, spectral %.4f (ratio %.3f); bounces per walk %.3f, %.3f\n",
                 mse_c, mse_s, mse_c / mse_s, len_c, len_s);
     std::printf("    predicted efficiency spectral / classic (time ~ rays) = %.3f\n", eff);
+    // At the first vertex F = 1, so both roulettes continue with the same s = <a, H>; the
+    // variance of that first decision, Var(E[X | continue?]) = (1/s - 1) a^2 per band, is
+    // common to both methods (walks start on a uniformly chosen wall here).
+    double shared = 0;
+    for (const auto& m : scene.materials) {
+        const float s = classic.selection_weight(Rgb<float>(1.0f), m.kd);
+        for (std::size_t c = 0; c < 3; ++c) shared += (1.0 / s - 1.0) * double(m.kd[c]) * double(m.kd[c]);
+    }
+    shared /= 3.0 * double(scene.materials.size());
+    std::printf("    first decision's variance, common to both: %.4f per band (%.0f%% of classic's MSE); "
+                "MSE ratio of the rest %.3f\n", shared, 100.0 * shared / mse_c, (mse_c - shared) / (mse_s - shared));
     std::printf("    MSE ratio by the wall a walk starts on (the camera's view decides the mix):");
     for (int w = 0; w < int(scene.materials.size()); ++w)
         std::printf(" %.2f", furnace_chain(scene, classic, w, 500'000).first / furnace_chain(scene, spectral, w, 500'000).first);

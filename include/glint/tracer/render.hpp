@@ -47,7 +47,7 @@ struct RenderOptions {
     /// gathered during a preprocessing phase"; "scene": 000's closed-scene formula
     /// a~ Phi_e / (pi S (1 - a~)). Measured (bench_convergence --analysis): on the open
     /// Cornell box the formula overestimates, goodness d = 1.08 (worse than no estimate, the
-    /// case 000 says to avoid), the pilot's d = 0.81; on the furnace, whose radiance is 1
+    /// case 000 says to avoid), the pilot's d = 0.83; on the furnace, whose radiance is 1
     /// everywhere, the pilot finds L~ = 1 and the roulette adds almost no variance.
     std::string radiance_estimate = "pilot";
     /// Radiance-estimate roulettes: shorten walks by the goodness d of the estimate measured
