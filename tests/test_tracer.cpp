@@ -144,6 +144,32 @@ TEST_CASE("accuracy: every roulette agrees with classic on the open Cornell box"
         }
 }
 
+TEST_CASE("grey scenes: the spectral roulettes render classic's image, colour or not in the lights") {
+    // With every reflectance grey, 000's spectral rule <F a, H> / <F, H> is the albedo itself
+    // (test_sampling: spectral == classic for grey albedo), so render() gives grey scenes the
+    // classic policies; the images are the same. The coloured Cornell box is not grey.
+    Scene<float> s = builtin_scene<float>("cornell");
+    CHECK_FALSE(s.features().grey);
+    for (auto& m : s.materials) {
+        m.kd = Rgb<float>(m.kd.luminance());
+        m.ks = Rgb<float>(m.ks.luminance());
+    }
+    const SceneFeatures f = s.features();
+    CHECK(f.grey);  // the light's emission (17, 12, 4) stays coloured
+    const RenderAccel accel(s.triangles);
+    RenderOptions o;
+    o.settings.width = o.settings.height = 16;
+    o.settings.spp = 8;
+    for (const auto& [spectral, classic] : {std::pair{"spectral", "classic"}, std::pair{"spectral+estimate", "estimate"}}) {
+        o.roulette = spectral;
+        const RenderResult a = render(s, accel, o);
+        o.roulette = classic;
+        const RenderResult b = render(s, accel, o);
+        CAPTURE(spectral);
+        CHECK(a.image.pixels == b.image.pixels);
+    }
+}
+
 TEST_CASE("accuracy: the furnace with the Halton sampler") {
     RenderOptions o;
     o.settings.width = o.settings.height = 16;

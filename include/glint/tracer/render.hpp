@@ -167,11 +167,16 @@ RenderResult render_roulette(const Scene<float>& scene, const RenderAccel& accel
     else throw Error("unknown roulette weights '" + o.roulette_weights + "' (luminance, mean)");
     const ClassicRoulette<float, 3> classic{H};
     const SpectralRoulette<float, 3> spectral{H};
-    if (r == "classic") return render_direct(scene, accel, classic, o.settings, o.direct, sampler);
+    using ClassicEstimate = RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>;
+    // In a grey scene every throughput F stays grey, and there 000's spectral rule
+    // <F a, H> / <F, H> is exactly the albedo, which the classic rule <a, H> also gives (both
+    // weight sets sum to 1, to float rounding): grey scenes get the classic policies and pay
+    // for no spectral bookkeeping.
+    const bool grey = scene.features().grey;
+    if (r == "classic" || (r == "spectral" && grey)) return render_direct(scene, accel, classic, o.settings, o.direct, sampler);
     if (r == "spectral") return render_direct(scene, accel, spectral, o.settings, o.direct, sampler);
-    if (r == "estimate")
-        return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>{classic, {}}, o,
-                               H, sampler);
+    if (r == "estimate" || (r == "spectral+estimate" && grey))
+        return render_estimate(scene, accel, ClassicEstimate{classic, {}}, o, H, sampler);
     if (r == "spectral+estimate")
         return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3>{spectral, {}}, o, H, sampler);
     throw Error("unknown roulette '" + r + "' (classic, spectral, estimate, spectral+estimate)");

@@ -100,7 +100,10 @@ struct SceneFeatures {
     bool point_lights = false;
     bool area_lights = false;
     bool specular = false;
-    bool grey = true;  // every reflectance and emission equal in all bands
+    /// Every reflectance (kd, ks) equal in all bands, so that every walk's throughput stays
+    /// grey whatever the lights' colours: the spectral roulettes then reduce exactly to the
+    /// classic ones (render() uses those).
+    bool grey = true;
 };
 
 template <Scalar T>
@@ -168,7 +171,7 @@ public:
         auto grey = [](const Rgb<T>& s) { return s[0] == s[1] && s[1] == s[2]; };
         for (const auto& m : materials) {
             f.specular |= m.specular();
-            f.grey &= grey(m.kd) && grey(m.ks) && grey(m.emission);
+            f.grey &= grey(m.kd) && grey(m.ks);
         }
         return f;
     }
