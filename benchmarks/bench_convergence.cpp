@@ -43,6 +43,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <utility>
@@ -73,10 +74,10 @@ struct Config {
     std::string radiance_estimate = "pilot";  // L~ of the estimate roulettes: pilot | scene
     bool reduce = false;                      // shorten walks by the estimate's goodness
     std::string weights = "mean";             // roulette band weights H: mean | luminance
-    std::string sampler = "random";           // random | halton (Owen-scrambled, glint-render's)
+    std::string sampler = "random";           // random | halton | halton-cp | halton-perm (render()'s names)
     int size = 96, max_spp = 64, threads = 0;
     bool jitter = false;  // --jitter: camera rays jittered over each pixel (default: through its centre)
-    int light_samples = 0;
+    int light_samples = 0;   // --light-samples N: light samples per vertex (0: 1; 10 on arealight)
     std::uint64_t seed = 0;  // --seed N: methods render with seed 1000 N + spp (N = 0: seed = spp)  // 0: the scene's default (1; 10 on arealight)
     bool quick = false;
     bool analysis = false;  // --analysis: 000 section 2.3's goodness d and termination's share
@@ -116,7 +117,7 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
         for (const std::string d : {"importance", "correlated", "combined"}) {
             RenderOptions o = base();
             o.direct = d;
-            o.settings.light_samples = 10;
+            o.settings.light_samples = cfg.light_samples > 0 ? cfg.light_samples : 10;
             o.settings.max_depth = 1;
             m.push_back({d, o});
         }
@@ -127,7 +128,11 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
     return m;
 }
 
-/// The reference image and the mean of its per-pixel variances (its own squared error).
+/// The reference image and the mean of its per-pixel variances (its own squared error): 16x
+/// max-spp with another seed, light sampling by MIS with 4 samples; on arealight (direct light
+/// only) the correlated estimator with 10 samples (lambda = 1: unbiased, and exact at every
+/// point that sees the whole light, so the reference's own variance stays well below the
+/// methods' errors; with MIS it exceeded combined's MSE at 64 spp).
 Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& scene, const RenderAccel& accel,
                             const Config& cfg, double& ref_var) {
     ref_var = 0;
@@ -135,7 +140,7 @@ Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& s
     const int spp = 16 * cfg.max_spp;
     std::filesystem::create_directories(cfg.cache);
     const std::string path = cfg.cache + "/" + scene_name + "_" + std::to_string(cfg.size) + "_" +
-                             std::to_string(spp) + (cfg.jitter ? "_jitter" : "_centres") + "_v2.exr";
+                             std::to_string(spp) + (cfg.jitter ? "_jitter" : "_centres") + "_v3.exr";
     const std::string var_path = path + ".var";
     if (std::filesystem::exists(path) && std::filesystem::exists(var_path)) {
         std::ifstream(var_path) >> ref_var;
@@ -151,7 +156,11 @@ Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& s
     o.direct = "mis";
     o.seed = 0x5eed;
     o.settings.pixel_jitter = cfg.jitter;
-    if (scene_name == "arealight") o.settings.max_depth = 1;  // direct illumination only
+    if (scene_name == "arealight") {
+        o.settings.max_depth = 1;  // direct illumination only
+        o.direct = "correlated";
+        o.settings.light_samples = 10;
+    }
     const RenderResult r = render(scene, accel, o);
     for (const auto& v : r.variance.pixels) ref_var += double(v[0] + v[1] + v[2]) / (3.0 * double(r.variance.size()));
     std::vector<ExrLayer> layers{ExrLayer{"variance", {"R", "G", "B"}, {}}};
@@ -206,6 +215,18 @@ double mean_variance(const RenderResult& r) {
     return v / double(r.variance.size());
 }
 
+/// Share of an image's summed per-pixel variance held by its `fraction` noisiest pixels.
+double top_pixel_share(const RenderResult& r, double fraction) {
+    std::vector<double> v;
+    for (const auto& p : r.variance.pixels) v.push_back(double(p[0] + p[1] + p[2]));
+    std::sort(v.begin(), v.end(), std::greater<>());
+    const std::size_t k = std::max<std::size_t>(1, std::size_t(fraction * double(v.size())));
+    double top = 0, all = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) (i < k ? top : all) += v[i];
+    all += top;
+    return all > 0 ? top / all : 0.0;
+}
+
 /// --analysis (furnace): what 000 section 2.2's formula can gain in this room at all, from a
 /// model with no geometry. The furnace is a cube, and from any face the five others subtend
 /// form factors of 0.1998-0.2000, so a cosine-sampled walk moves, on average, to one of the
@@ -215,46 +236,28 @@ double mean_variance(const RenderResult& r) {
 /// own ClassicRoulette and SpectralRoulette predict the tracer's ratio without pixel or
 /// geometry noise. (The tracer's camera sees the walls unevenly and per-point form factors
 /// vary, so expect agreement within a few percent, not exactly.)
-/// `group` > 1: walks come in groups of that many from the same wall (a pixel's samples), the
-/// first roulette decision's uniform stratified over the group as a low-discrepancy sampler
-/// would, the rest random; the returned MSE is then group * the squared error of each group's
-/// mean, i.e. the per-walk variance that would give the same pixel error.
 template <class R>
-std::pair<double, double> furnace_chain(const Scene<float>& scene, const R& roulette, int first_wall, long walks,
-                                        int group = 1) {
+std::pair<double, double> furnace_chain(const Scene<float>& scene, const R& roulette, int first_wall, long walks) {
     std::vector<const Material<float>*> walls;
     for (const auto& m : scene.materials) walls.push_back(&m);
     const int n = int(walls.size());
     if (n < 2) throw Error("furnace_chain: the furnace needs at least two walls");
-    if (group < 1 || walks % group != 0) throw Error("furnace_chain: walks must be a multiple of the group size");
     Pcg32 rng(11);
     double se = 0, bounces = 0;
-    Rgb<float> group_sum(0.0f);
-    int group_wall = 0;
     for (long w = 0; w < walks; ++w) {
-        if (w % group == 0) group_wall = first_wall >= 0 ? first_wall : int(rng.uniform<double>() * n) % n;
-        int wall = group_wall;
+        int wall = first_wall >= 0 ? first_wall : int(rng.uniform<double>() * n) % n;
         Rgb<float> F(1.0f), X(0.0f);
         for (int depth = 0; depth < 256; ++depth) {
             const Material<float>& m = *walls[std::size_t(wall)];
             X += F * m.emission;
             const float s = roulette.selection_weight(F, m.kd);
-            const float u = group > 1 && depth == 0 ? (float(w % group) + rng.uniform<float>()) / float(group)
-                                                    : rng.uniform<float>();
-            if (!(u < s)) break;
+            if (!(rng.uniform<float>() < s)) break;
             F = F * m.kd / s;
             bounces += 1;
             int next = int(rng.uniform<double>() * (n - 1)) % (n - 1);
             wall = next >= wall ? next + 1 : next;
         }
-        group_sum += X;
-        if ((w + 1) % group == 0) {
-            for (std::size_t c = 0; c < 3; ++c) {
-                const double e = double(group_sum[c]) / group - 1.0;
-                se += e * e * group * group;  // group * (squared error of the mean), summed per walk below
-            }
-            group_sum = Rgb<float>(0.0f);
-        }
+        for (std::size_t c = 0; c < 3; ++c) se += double(X[c] - 1.0f) * double(X[c] - 1.0f);
     }
     return {se / (3.0 * double(walks)), bounces / double(walks)};
 }
@@ -280,12 +283,7 @@ void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* w
     }
     shared /= 3.0 * double(scene.materials.size());
     std::printf("    first decision's variance, common to both: %.4f per band (%.0f%% of classic's MSE); "
-                "MSE ratio of the rest %.3f\n", shared, 100.0 * shared / mse_c, (mse_c - shared) / (mse_s - shared));
-    const double strat_c = furnace_chain(scene, classic, -1, 2'000'000, 64).first;
-    const double strat_s = furnace_chain(scene, spectral, -1, 2'000'000, 64).first;
-    std::printf("    with each pixel's first decisions stratified (64 walks a pixel): MSE per band classic %.4f, "
-                "spectral %.4f (ratio %.3f), predicted efficiency %.3f\n", strat_c, strat_s, strat_c / strat_s,
-                (strat_c / strat_s) * ((1.0 + len_c) / (1.0 + len_s)));
+                "MSE ratio of the rest %.3f (the most that stratifying the first decisions could give)\n", shared, 100.0 * shared / mse_c, (mse_c - shared) / (mse_s - shared));
     std::printf("    MSE ratio by the wall a walk starts on (the camera's view decides the mix):");
     for (int w = 0; w < int(scene.materials.size()); ++w)
         std::printf(" %.2f", furnace_chain(scene, classic, w, 500'000).first / furnace_chain(scene, spectral, w, 500'000).first);
@@ -326,12 +324,14 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
     std::printf("    floor (ideal per-vertex L~)             d = %.3f\n", estimate_goodness_floor(v, repeats, H));
     double mse[2] = {0, 0}, seconds[2] = {0, 0}, rays[2] = {0, 0};
     const int seeds = 4;
+    double top_share = 0;
     for (int seed = 0; seed < seeds; ++seed)
         for (int k = 0; k < 2; ++k) {
             const RandomSampler<float> sampler(std::uint64_t(1000 + seed));
             const RenderResult r = k == 0 ? detail::render_direct(scene, accel, ClassicRoulette<float, 3>{H}, o.settings, o.direct, sampler)
                                           : detail::render_direct(scene, accel, NoRoulette<float, 3>{}, o.settings, o.direct, sampler);
             mse[k] += mean_variance(r) / seeds;
+            if (k == 0 && seed == 0) top_share = top_pixel_share(r, 0.01);
             seconds[k] += r.seconds / seeds;
             rays[k] += double(r.rays) / (double(o.settings.width) * o.settings.height * o.settings.spp) / seeds;
         }
@@ -339,6 +339,8 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
                 cfg.max_spp, mse[0], mse[1], 100.0 * (1.0 - mse[1] / mse[0]));
     std::printf("    rays per camera path: classic %.2f, no roulette %.2f; seconds %.3f, %.3f\n", rays[0], rays[1],
                 seconds[0], seconds[1]);
+    std::printf("    the 1%% of pixels with the largest variance hold %.1f%% of classic's (camera rays %s)\n",
+                100.0 * top_share, cfg.jitter ? "jittered over each pixel" : "through pixel centres");
 }
 
 /// Geometric mean over spp >= 4 (or all levels when there are fewer) of eff(m) / eff(base).
@@ -385,10 +387,8 @@ int main(int argc, char** argv) {
             else if (a == "--weights") cfg.weights = value();
             else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
                              "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce "
-                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton --seed N)");
+                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-cp|halton-perm --seed N)");
         }
-        if (cfg.sampler != "random" && cfg.sampler != "halton")
-            throw Error("--sampler expects random or halton, not '" + cfg.sampler + "'");
         if (cfg.weights != "mean" && cfg.weights != "luminance")
             throw Error("--weights expects mean or luminance, not '" + cfg.weights + "'");
         if (cfg.quick) {

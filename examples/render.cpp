@@ -37,9 +37,16 @@ void usage() {
         "  --direct NAME       brdf, mis, importance, correlated, combined (default mis)\n"
         "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"
         "  --light-samples N   light samples per vertex (default 1)\n"
-        "  --sampler NAME      random, halton (default random)\n"
+        "  --sampler NAME      random, halton (Owen-scrambled), halton-cp, halton-perm (default random)\n"
         "  --threads N         worker threads (default: all cores)\n"
+        "  --weights NAME      roulette band weights H: luminance or mean (default luminance)\n"
+        "  --estimate NAME     L~ of the estimate roulettes: pilot (fitted on pilot paths) or scene\n"
+        "                      (000's closed-scene formula) (default pilot)\n"
+        "  --reduce            estimate roulettes: shorten walks by the estimate's goodness\n"
+        "  --pixel-centres     camera rays through pixel centres (default: jittered over the pixel)\n"
         "  --exposure EV       PNG preview exposure (default 0)\n"
+        "  --tonemap NAME      PNG preview: clamp (exposure, clip at 1, sRGB) or reinhard\n"
+        "                      (x / (1 + x) first) (default clamp)\n"
         "  --seed N            random seed (default 0)\n");
 }
 
@@ -88,6 +95,7 @@ int main(int argc, char** argv) {
         RenderOptions o;
         o.settings.progress = isatty(STDERR_FILENO) != 0;  // a progress bar only on a terminal
         float exposure = 0;
+        bool reinhard = false;
         for (int i = 1; i < argc; ++i) {
             const std::string a = argv[i];
             auto value = [&]() -> const char* {
@@ -107,7 +115,16 @@ int main(int argc, char** argv) {
             else if (a == "--light-samples") o.settings.light_samples = to_int("--light-samples", value());
             else if (a == "--sampler") o.sampler = value();
             else if (a == "--threads") o.settings.threads = to_int("--threads", value());
+            else if (a == "--weights") o.roulette_weights = value();
+            else if (a == "--estimate") o.radiance_estimate = value();
+            else if (a == "--reduce") o.reduce_continuation = true;
+            else if (a == "--pixel-centres") o.settings.pixel_jitter = false;
             else if (a == "--exposure") exposure = std::strtof(value(), nullptr);
+            else if (a == "--tonemap") {
+                const std::string t = value();
+                if (t != "clamp" && t != "reinhard") throw Error("--tonemap expects clamp or reinhard, not '" + t + "'");
+                reinhard = t == "reinhard";
+            }
             else if (a == "--seed") o.seed = std::strtoull(value(), nullptr, 10);
             else throw Error("unknown option '" + a + "' (see --help)");
         }
@@ -130,7 +147,7 @@ int main(int argc, char** argv) {
             layers.push_back(ExrLayer{"lambda", {"Y"}, r.lambda.pixels});
         write_exr(out, r.image, layers);
         const std::string png = (out.size() > 4 && out.substr(out.size() - 4) == ".exr" ? out.substr(0, out.size() - 4) : out) + ".png";
-        write_png(png, r.image, exposure);
+        write_png(png, r.image, exposure, reinhard);
         std::printf("rendered %s in %.2f s (build %.2f s): %.2f Mrays/s, %llu rays; wrote %s and %s\n", scene.name.c_str(),
                     r.seconds, accel.build_seconds(), double(r.rays) / r.seconds * 1e-6, (unsigned long long)r.rays,
                     out.c_str(), png.c_str());

@@ -47,6 +47,13 @@ def ratio(data, scene, m, b):
     return math.exp(sum(logs) / len(logs)) if logs else None
 
 
+def fmt(x):
+    """Two decimals below 10; two significant digits above (the large ratios vary that much)."""
+    if x < 10:
+        return f'{x:.2f}'
+    return f'{round(x, 1 - int(math.floor(math.log10(x)))):.0f}'
+
+
 def main(args):
     runs = []
     for a in args or ['docs/convergence.csv']:
@@ -58,7 +65,7 @@ def main(args):
         cells = [ratio(data, scene, m, b) for _, data in runs]
         if all(c is None for c in cells):
             continue
-        text = ' | '.join('-' if c is None else f'**{c:.2f}**' for c in cells)
+        text = ' | '.join('-' if c is None else f'**{fmt(c)}**' for c in cells)
         print(f'| {scene} | {m} | {b} | {text} | {claim} | {target} |')
     print()
     for label, data in runs:

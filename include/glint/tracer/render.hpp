@@ -8,7 +8,7 @@
 // Names: roulette  classic | spectral | estimate | spectral+estimate
 //        direct    brdf | mis | importance | correlated | combined
 //        selection dis | w | mis
-//        sampler   random | halton
+//        sampler   random | halton | halton-cp | halton-perm
 #pragma once
 
 #include <algorithm>
@@ -188,11 +188,16 @@ RenderResult render_roulette(const Scene<float>& scene, const RenderAccel& accel
 /// policies.
 inline RenderResult render(const Scene<float>& scene, const RenderAccel& accel, const RenderOptions& o) {
     if (o.sampler == "random") return detail::render_roulette(scene, accel, o, RandomSampler<float>(o.seed));
-    if (o.sampler == "halton")
-        return detail::render_roulette(scene, accel, o,
-                                       HaltonSampler<float>(o.settings.width, o.settings.height, 256,
-                                                            HaltonRandomization::owen, o.seed));
-    throw Error("unknown sampler '" + o.sampler + "' (random, halton)");
+    // Halton walks (sampling/halton.hpp), randomized by Owen scrambling ("halton"), a
+    // Cranley-Patterson rotation ("halton-cp", cheapest) or random digit permutations
+    // ("halton-perm"): each point uniform, so every estimator stays unbiased.
+    HaltonRandomization randomization;
+    if (o.sampler == "halton") randomization = HaltonRandomization::owen;
+    else if (o.sampler == "halton-cp") randomization = HaltonRandomization::cranley_patterson;
+    else if (o.sampler == "halton-perm") randomization = HaltonRandomization::digit_permutation;
+    else throw Error("unknown sampler '" + o.sampler + "' (random, halton, halton-cp, halton-perm)");
+    return detail::render_roulette(
+        scene, accel, o, HaltonSampler<float>(o.settings.width, o.settings.height, 256, randomization, o.seed));
 }
 
 }  // namespace glint
