@@ -46,6 +46,7 @@
 #include <functional>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <utility>
 #include <string>
 #include <vector>
@@ -78,7 +79,7 @@ struct Config {
     int size = 96, max_spp = 64, threads = 0;
     bool jitter = false;  // --jitter: camera rays jittered over each pixel (default: through its centre)
     int light_samples = 0;   // --light-samples N: light samples per vertex (0: 1; 10 on arealight)
-    std::uint64_t seed = 0;  // --seed N: methods render with seed 1000 N + spp (N = 0: seed = spp)  // 0: the scene's default (1; 10 on arealight)
+    std::uint64_t seed = 0;  // --seed N: methods render with seed 1000 N + spp (N = 0: seed = spp)
     bool quick = false;
     bool analysis = false;  // --analysis: 000 section 2.3's goodness d and termination's share
 };
@@ -221,9 +222,8 @@ double top_pixel_share(const RenderResult& r, double fraction) {
     for (const auto& p : r.variance.pixels) v.push_back(double(p[0] + p[1] + p[2]));
     std::sort(v.begin(), v.end(), std::greater<>());
     const std::size_t k = std::max<std::size_t>(1, std::size_t(fraction * double(v.size())));
-    double top = 0, all = 0;
-    for (std::size_t i = 0; i < v.size(); ++i) (i < k ? top : all) += v[i];
-    all += top;
+    const double top = std::accumulate(v.begin(), v.begin() + std::ptrdiff_t(k), 0.0);
+    const double all = std::accumulate(v.begin(), v.end(), 0.0);
     return all > 0 ? top / all : 0.0;
 }
 

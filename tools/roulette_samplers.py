@@ -14,26 +14,13 @@ that a sampler's own cost shows: a ratio within a slow configuration is not a sp
 the fast one.
 """
 import argparse
-import csv
-import math
 import os
 import subprocess
 import sys
 import tempfile
 from collections import defaultdict
 
-
-def load(path):
-    data = defaultdict(list)
-    with open(path) as f:
-        for r in csv.DictReader(f):
-            data[r['method']].append((int(r['spp']), float(r['seconds']), float(r['rmse'])))
-    return data
-
-
-def ratio(m, b):
-    logs = [math.log((pb[2] ** 2 * pb[1]) / (pm[2] ** 2 * pm[1])) for pm, pb in zip(m, b) if pm[0] >= 4]
-    return math.exp(sum(logs) / len(logs))
+from convergence_table import fmt, load, ratio  # the same CSV reading and ratio as the README table
 
 
 def main():
@@ -67,15 +54,16 @@ def main():
             cols = defaultdict(list)
             for seed in args.seeds:
                 d, base = runs[(scene, sampler, seed)], runs[(scene, 'random', seed)]
-                cols['s'].append(ratio(d['spectral'], d['classic']))
-                cols['e'].append(ratio(d['estimate'], d['classic']))
-                cols['ac'].append(ratio(d['classic'], base['classic']))
-                cols['as'].append(ratio(d['spectral'], base['classic']))
-                cols['t'].append(sum(p[1] for p in d['classic']) / sum(p[1] for p in base['classic']))
-            fmt = lambda v: ', '.join(f'{x:.2f}' if x < 10 else f'{round(x, 1 - int(math.floor(math.log10(x)))):.0f}'
-                                      for x in v)
-            print(f"| {scene} | {sampler} | {fmt(cols['s'])} | {fmt(cols['e'])} | {fmt(cols['ac'])} | "
-                  f"{fmt(cols['as'])} | {fmt(cols['t'])} |")
+                cols['s'].append(ratio(d, scene, 'spectral', 'classic'))
+                cols['e'].append(ratio(d, scene, 'estimate', 'classic'))
+                # Across runs: this configuration's method against PCG classic of the same seed.
+                both = {**d, (scene, 'pcg-classic'): base[(scene, 'classic')]}
+                cols['ac'].append(ratio(both, scene, 'classic', 'pcg-classic'))
+                cols['as'].append(ratio(both, scene, 'spectral', 'pcg-classic'))
+                cols['t'].append(sum(p[1] for p in d[(scene, 'classic')]) / sum(p[1] for p in base[(scene, 'classic')]))
+            row = lambda v: ', '.join(fmt(x) for x in v)
+            print(f"| {scene} | {sampler} | {row(cols['s'])} | {row(cols['e'])} | {row(cols['ac'])} | "
+                  f"{row(cols['as'])} | {row(cols['t'])} |")
     print(f'\nseeds {args.seeds}; CSVs in {work}')
 
 

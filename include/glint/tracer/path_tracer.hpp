@@ -274,7 +274,6 @@ public:
         repeats = std::max(repeats, 1);
         out.reserve(std::size_t(std::max(n, 0)) * std::size_t(repeats));
         std::uint64_t rays = 0;
-        const T aspect = T(settings_.width) / T(settings_.height);
         const std::uint64_t pixels = std::uint64_t(settings_.width) * std::uint64_t(settings_.height);
         for (int i = 0; i < n; ++i) {
             // Pixels spread over the whole image (an odd multiplier not divisible by 3 permutes
@@ -282,10 +281,7 @@ public:
             // widely), not the first rows: the fit must see every part of the scene.
             const std::uint64_t k = (std::uint64_t(i) * 0x9E3779B1u) % pixels;
             const int x = int(k % std::uint64_t(settings_.width)), y = int(k / std::uint64_t(settings_.width));
-            sampler.start_pixel_sample(x, y, std::uint64_t(0x9000000 + i));
-            Vec2<T> p = sampler.get_pixel_2d();  // drawn either way: the sampler's dimensions stay aligned
-            if (!settings_.pixel_jitter) p = Vec2<T>(T(0.5));
-            const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
+            const Ray<T> ray = camera_ray(x, y, std::uint64_t(0x9000000 + i), sampler);
             StoreHit<T> hit;
             if (!accel_.closest_hit(ray, hit)) continue;
             const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
@@ -336,15 +332,11 @@ private:
 
     void render_pixel(int x, int y, int spp, S& sampler, RenderResult& out, std::uint64_t& rays,
                       PrimaryDirect<T>* primary) const {
-        const T aspect = T(settings_.width) / T(settings_.height);
         Rgb<T> mean(T(0)), m2(T(0));
         T lambda_sum = 0;
         int lambda_count = 0;
         for (int i = 0; i < spp; ++i) {
-            sampler.start_pixel_sample(x, y, std::uint64_t(i));
-            Vec2<T> p = sampler.get_pixel_2d();  // drawn either way: the sampler's dimensions stay aligned
-            if (!settings_.pixel_jitter) p = Vec2<T>(T(0.5));
-            const Ray<T> ray = scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
+            const Ray<T> ray = camera_ray(x, y, std::uint64_t(i), sampler);
             T lambda = std::numeric_limits<T>::quiet_NaN();
             PrimaryDirect<T> pd;
             Rgb<T> L = radiance(ray, sampler, rays, &lambda, primary ? &pd : nullptr);
@@ -369,6 +361,17 @@ private:
             out.variance.at(x, y)[c] = spp > 1 ? float(m2[c] / T(spp - 1) / T(spp)) : 0.0f;
         }
         out.lambda.at(x, y) = lambda_count ? float(lambda_sum / T(lambda_count)) : 0.0f;
+    }
+
+    /// Starts sample `index` of pixel (x, y) and returns its camera ray: through a jittered
+    /// point of the pixel, or through its centre when pixel_jitter is off (the pixel sample is
+    /// drawn either way, so the sampler's later dimensions stay the same).
+    Ray<T> camera_ray(int x, int y, std::uint64_t index, S& sampler) const {
+        sampler.start_pixel_sample(x, y, index);
+        Vec2<T> p = sampler.get_pixel_2d();
+        if (!settings_.pixel_jitter) p = Vec2<T>(T(0.5));
+        const T aspect = T(settings_.width) / T(settings_.height);
+        return scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
     }
 
     /// Offset origin on the side of the surface the new direction leaves to.
