@@ -23,13 +23,19 @@
 // Efficiency is
 // 1 / (MSE * seconds); a method's ratio to its baseline is the geometric mean over the spp
 // levels >= 4 of the ratio at equal spp. Methods per scene:
-//   furnace         roulette: classic (baseline), spectral, estimate, spectral+estimate
-//   cornell         roulette: classic (baseline), spectral, estimate, spectral+estimate
+//   furnace         roulette: classic (000's baseline), spectral, estimate, spectral+estimate,
+//                   throughput (the field's baseline: pbrt-v4, Mitsuba 3, Cycles), 000's ideas on
+//                   it (throughput+spectral, throughput+estimate, throughput+spectral+estimate),
+//                   none (no roulette, throughput cut-off); each with its efficiency against
+//                   classic and against throughput
+//   cornell         roulette: as furnace
 //   cornell-glossy  BRDF selection: mis (baseline), dis, w
 //   arealight       direct lighting, 10 light samples: importance (baseline), correlated, combined
 //                   (direct illumination only, max depth 1, as 000 section 3.2 compares it:
 //                   with indirect light the shared path-tracing noise would hide the
 //                   difference)
+// --compare roulette runs the roulette methods on any scene (e.g. cornell-glossy); --rr-depth N
+// sets the throughput roulettes' first decision depth (default 3).
 // --analysis (furnace, cornell) prints instead what bounds the radiance-estimate roulette: the
 // goodness d of 000 section 2.3 for the closed-scene and the pilot-fitted estimate, the floor no
 // estimate can reach below, and the share of the MSE that termination adds at all; on the
@@ -82,7 +88,18 @@ struct Config {
     std::uint64_t seed = 0;  // --seed N: methods render with seed 1000 N + spp (N = 0: seed = spp)
     bool quick = false;
     bool analysis = false;  // --analysis: 000 section 2.3's goodness d and termination's share
+    std::string compare;    // --compare roulette: the roulette methods on every scene
+    int rr_depth = 3;       // --rr-depth N: the throughput roulettes' min_depth
 };
+
+/// The roulettes compared: 000's four, the field's throughput rule, 000's ideas on top of it,
+/// and no roulette.
+const std::vector<std::string>& compared_roulettes() {
+    static const std::vector<std::string> v{"classic", "spectral", "estimate", "spectral+estimate", "throughput",
+                                            "throughput+spectral", "throughput+estimate",
+                                            "throughput+spectral+estimate", "none"};
+    return v;
+}
 
 std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
     auto base = [&] {
@@ -99,11 +116,12 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
         if (cfg.light_samples > 0) o.settings.light_samples = cfg.light_samples;
         o.settings.pixel_jitter = cfg.jitter;
         o.sampler = cfg.sampler;
+        o.rr_depth = cfg.rr_depth;
         return o;
     };
     std::vector<Method> m;
-    if (scene == "furnace" || scene == "cornell") {
-        for (const std::string r : {"classic", "spectral", "estimate", "spectral+estimate"}) {
+    if (scene == "furnace" || scene == "cornell" || cfg.compare == "roulette") {
+        for (const std::string& r : compared_roulettes()) {
             RenderOptions o = base();
             o.roulette = r;
             m.push_back({r, o});
@@ -141,7 +159,7 @@ Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& s
     const int spp = 16 * cfg.max_spp;
     std::filesystem::create_directories(cfg.cache);
     const std::string path = cfg.cache + "/" + scene_name + "_" + std::to_string(cfg.size) + "_" +
-                             std::to_string(spp) + (cfg.jitter ? "_jitter" : "_centres") + "_v3.exr";
+                             std::to_string(spp) + (cfg.jitter ? "_jitter" : "_centres") + "_v4.exr";
     const std::string var_path = path + ".var";
     if (std::filesystem::exists(path) && std::filesystem::exists(var_path)) {
         std::ifstream(var_path) >> ref_var;
@@ -250,7 +268,7 @@ std::pair<double, double> furnace_chain(const Scene<float>& scene, const R& roul
         for (int depth = 0; depth < 256; ++depth) {
             const Material<float>& m = *walls[std::size_t(wall)];
             X += F * m.emission;
-            const float s = roulette.selection_weight(F, m.kd);
+            const float s = roulette.continuation(F, m.kd, depth);
             if (!(rng.uniform<float>() < s)) break;
             F = F * m.kd / s;
             bounces += 1;
@@ -278,7 +296,7 @@ void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* w
     // common to both methods (walks start on a uniformly chosen wall here).
     double shared = 0;
     for (const auto& m : scene.materials) {
-        const float s = classic.selection_weight(Rgb<float>(1.0f), m.kd);
+        const float s = classic.continuation(Rgb<float>(1.0f), m.kd, 0);
         for (std::size_t c = 0; c < 3; ++c) shared += (1.0 / s - 1.0) * double(m.kd[c]) * double(m.kd[c]);
     }
     shared /= 3.0 * double(scene.materials.size());
@@ -385,10 +403,14 @@ int main(int argc, char** argv) {
             else if (a == "--seed") cfg.seed = std::strtoull(value().c_str(), nullptr, 10);
             else if (a == "--light-samples") cfg.light_samples = std::max(1, std::atoi(value().c_str()));
             else if (a == "--weights") cfg.weights = value();
+            else if (a == "--compare") cfg.compare = value();
+            else if (a == "--rr-depth") cfg.rr_depth = std::max(0, std::atoi(value().c_str()));
             else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
                              "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce "
-                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-cp|halton-perm --seed N)");
+                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-cp|halton-perm --seed N --compare roulette --rr-depth N)");
         }
+        if (!cfg.compare.empty() && cfg.compare != "roulette")
+            throw Error("--compare expects roulette, not '" + cfg.compare + "'");
         if (cfg.weights != "mean" && cfg.weights != "luminance")
             throw Error("--weights expects mean or luminance, not '" + cfg.weights + "'");
         if (cfg.quick) {
@@ -434,11 +456,15 @@ int main(int argc, char** argv) {
                     if (csv) csv << name << ',' << m.name << ',' << spp << ',' << p.seconds << ',' << p.rmse << '\n';
                 }
             const std::string& base = methods.front().name;
-            std::printf("  %-20s %10s %10s %12s\n", "method", "rmse@max", "seconds", "efficiency");
+            const bool field = results[name].count("throughput") > 0;  // the field's baseline was run
+            std::printf("  %-28s %10s %10s %12s%s\n", "method", "rmse@max", "seconds", "efficiency",
+                        field ? "   efficiency" : "");
             for (const Method& m : methods) {
                 const auto& pts = results[name][m.name];
-                std::printf("  %-20s %10.5f %10.3f %11.3fx vs %s\n", m.name.c_str(), pts.back().rmse,
-                            pts.back().seconds, efficiency_ratio(pts, results[name][base]), base.c_str());
+                std::printf("  %-28s %10.5f %10.3f %8.3fx vs %s", m.name.c_str(), pts.back().rmse, pts.back().seconds,
+                            efficiency_ratio(pts, results[name][base]), base.c_str());
+                if (field) std::printf("  %8.3fx vs throughput", efficiency_ratio(pts, results[name]["throughput"]));
+                std::printf("\n");
             }
             if (name == "arealight") {
                 const auto& imp = results[name]["importance"];

@@ -7,6 +7,7 @@
 // mesh, writes an OpenEXR file (RGB plus the per-pixel variance layer, and the lambda layer
 // of correlated sampling) and a tone-mapped PNG preview next to it, and prints the time and
 // the ray throughput. Policies are chosen by flags; see --help.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -33,7 +34,11 @@ void usage() {
         "  --size N            image width and height (default 256)\n"
         "  --spp N             samples per pixel (default 16)\n"
         "  --out FILE.exr      output (default out.exr; a .png preview is written beside it)\n"
-        "  --roulette NAME     classic, spectral, estimate, spectral+estimate (default spectral)\n"
+        "  --roulette NAME     classic, spectral, estimate, spectral+estimate (000's rules);\n"
+        "                      throughput, throughput+spectral, throughput+estimate,\n"
+        "                      throughput+spectral+estimate (the field's rule from --rr-depth);\n"
+        "                      none (no roulette, throughput cut-off 1e-3) (default spectral)\n"
+        "  --rr-depth N        throughput roulettes: vertices before the first decision (default 3)\n"
         "  --direct NAME       brdf, mis, importance, correlated, combined (default mis)\n"
         "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"
         "  --light-samples N   light samples per vertex (default 1)\n"
@@ -110,6 +115,7 @@ int main(int argc, char** argv) {
             else if (a == "--spp") o.settings.spp = to_int("--spp", value());
             else if (a == "--out") out = value();
             else if (a == "--roulette") o.roulette = value();
+            else if (a == "--rr-depth") o.rr_depth = to_int("--rr-depth", value());
             else if (a == "--direct") o.direct = value();
             else if (a == "--selection") o.settings.selection = parse_selection(value());
             else if (a == "--light-samples") o.settings.light_samples = to_int("--light-samples", value());
@@ -148,9 +154,13 @@ int main(int argc, char** argv) {
         write_exr(out, r.image, layers);
         const std::string png = (out.size() > 4 && out.substr(out.size() - 4) == ".exr" ? out.substr(0, out.size() - 4) : out) + ".png";
         write_png(png, r.image, exposure, reinhard);
-        std::printf("rendered %s in %.2f s (build %.2f s): %.2f Mrays/s, %llu rays; wrote %s and %s\n", scene.name.c_str(),
-                    r.seconds, accel.build_seconds(), double(r.rays) / r.seconds * 1e-6, (unsigned long long)r.rays,
-                    out.c_str(), png.c_str());
+        std::printf("rendered %s in %.2f s (build %.2f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
+                    scene.name.c_str(), r.seconds, accel.build_seconds(), double(r.rays) / r.seconds * 1e-6,
+                    (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), out.c_str(),
+                    png.c_str());
+        if (r.capped_walks > 0)
+            std::fprintf(stderr, "glint-render: warning: %llu walks reached the depth cap of %d vertices and were cut "
+                         "(biased); raise RenderSettings::max_depth\n", (unsigned long long)r.capped_walks, o.settings.max_depth);
         return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "glint-render: %s\n", e.what());

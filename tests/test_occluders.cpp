@@ -470,6 +470,7 @@ VplScene<float> closed_box() {
 struct NeverContinue {
     static constexpr bool has_radiance_estimate = false;
     float selection_weight(const Rgb<float>&, const Rgb<float>&) const { return 0.f; }
+    float continuation(const Rgb<float>&, const Rgb<float>&, int) const { return 0.f; }
     Rgb<float> terminated(const Rgb<float>&) const { return Rgb<float>(0.f); }
     Rgb<float> continued_offset(const Rgb<float>&, float) const { return Rgb<float>(0.f); }
 };

@@ -406,7 +406,7 @@ using Rgbd = Rgb<double>;
 /// cannot be tested against standard errors. W is therefore tested with e = 2, DIS and MIS
 /// with a sharp e = 20.
 template <BrdfSelection C, class R>
-void check_scatter_unbiased(const R& roulette, std::uint64_t seed) {
+void check_scatter_unbiased(const R& roulette, std::uint64_t seed, int depth = 0) {
     const double exponent = C == BrdfSelection::weighted ? 2.0 : 20.0;
     DiffuseGlossyBrdf<double, 3> brdf{Rgbd(0.5, 0.3, 0.1), Rgbd(0.2, 0.4, 0.6), exponent};
     const Rgbd tint(1.0, 0.5, 2.0);
@@ -419,7 +419,7 @@ void check_scatter_unbiased(const R& roulette, std::uint64_t seed) {
     for (int k = 0; k < n; ++k) {
         const double us = rng.uniform<double>();
         const Vec2<double> ud(rng.uniform<double>(), rng.uniform<double>());
-        const ScatterSample<double, 3> s = scatter<C>(brdf, roulette, throughput, us, ud);
+        const ScatterSample<double, 3> s = scatter<C>(brdf, roulette, throughput, us, ud, depth);
         Rgbd value = s.offset;
         if (!s.terminated()) value += s.weight * tint * (1 + s.direction.z);
         for (int l = 0; l < 3; ++l) stats[l].add(value[l]);
@@ -446,6 +446,21 @@ void check_all_roulettes(std::uint64_t seed) {
         r.estimate = Rgbd(0.8, 0.5, 1.5);
         check_scatter_unbiased<C>(r, seed + 4);
     }
+    // The throughput rule before its first decision (no termination) and after it, with the
+    // max norm, 000's H-weighted norm, and a radiance estimate on top; no roulette.
+    ThroughputRoulette<double, 3> t;
+    t.min_depth = 2;
+    SUBCASE("throughput, before min_depth") { check_scatter_unbiased<C>(t, seed + 5, 1); }
+    SUBCASE("throughput, after min_depth") { check_scatter_unbiased<C>(t, seed + 6, 2); }
+    SUBCASE("throughput, H-weighted norm") {
+        t.norm = ThroughputNorm::weighted;
+        check_scatter_unbiased<C>(t, seed + 7, 5);
+    }
+    SUBCASE("throughput + radiance estimate") {
+        RadianceEstimateRoulette<double, 3, ThroughputRoulette<double, 3>> r{t, Rgbd(0.8, 0.5, 1.5)};
+        check_scatter_unbiased<C>(r, seed + 8, 3);
+    }
+    SUBCASE("no roulette") { check_scatter_unbiased<C>(NoRoulette<double, 3>{}, seed + 9, 7); }
 }
 
 }  // namespace
@@ -453,6 +468,8 @@ void check_all_roulettes(std::uint64_t seed) {
 static_assert(RoulettePolicy<ClassicRoulette<float, 3>, float, 3>);
 static_assert(RoulettePolicy<SpectralRoulette<double, 8>, double, 8>);
 static_assert(RoulettePolicy<RadianceEstimateRoulette<float, 3>, float, 3>);
+static_assert(RoulettePolicy<ThroughputRoulette<float, 3>, float, 3>);
+static_assert(RoulettePolicy<NoRoulette<double, 8>, double, 8>);
 static_assert(MultiLobeBrdf<DiffuseGlossyBrdf<float, 3>, float, 3>);
 
 TEST_CASE("statistics: DIS with every roulette is unbiased (10^6 samples)") {
@@ -474,11 +491,11 @@ TEST_CASE("exact: spectral roulette stops blue light on a yellow surface, equals
     CHECK(ClassicRoulette<double, 3>::mean().selection_weight(blue, yellow) == doctest::Approx(2.0 / 3.0));
     const std::array<Rgbd, 1> lobes = {yellow};
     for (double u : {0.0, 0.3, 0.999}) {
-        CHECK(select_lobe(spectral, blue, std::span<const Rgbd>(lobes), u).terminated());
+        CHECK(select_lobe(spectral, blue, std::span<const Rgbd>(lobes), u, 0).terminated());
     }
     // A yellow diffuse + blue specular surface lit by blue selects the specular lobe always.
     const std::array<Rgbd, 2> two = {Rgbd(0.8, 0.8, 0), Rgbd(0, 0, 0.9)};
-    const auto sel = select_lobe(spectral, blue, std::span<const Rgbd>(two), 0.5);
+    const auto sel = select_lobe(spectral, blue, std::span<const Rgbd>(two), 0.5, 0);
     CHECK(sel.probability[0] == 0.0);
     CHECK(sel.probability[1] == doctest::Approx(0.9));
     CHECK(sel.lobe == 1);
@@ -519,12 +536,17 @@ TEST_CASE("exact: pilot fit, goodness and its floor; no roulette never terminate
     CHECK(estimate_goodness(v, L, H) == doctest::Approx(2.0 / 18.0));
     CHECK(estimate_goodness_floor(v, 2, H) == doctest::Approx(1.0 / 4.5));
     CHECK_THROWS_AS(estimate_goodness_floor(v, 1, H), Error);
-    // No roulette: some lobe is always chosen, weight 1 each, however dark the albedo.
+    // No roulette: some lobe is always chosen, however dark the albedo; with a cut-off, walks
+    // whose throughput falls to it stop.
     const std::array<Rgbd, 2> lobes = {Rgbd(0.01), Rgbd(0.0)};
+    NoRoulette<double, 3> cut;
+    cut.cutoff = 0.02;
     for (double u : {0.0, 0.5, 0.999999}) {
-        const auto sel = select_lobe(NoRoulette<double, 3>{}, Rgbd(1.0), std::span<const Rgbd>(lobes), u);
+        const auto sel = select_lobe(NoRoulette<double, 3>{}, Rgbd(1.0), std::span<const Rgbd>(lobes), u, 100);
         CHECK(sel.lobe == 0);
         CHECK(sel.total == 1.0);
+        CHECK(select_lobe(cut, Rgbd(1.0), std::span<const Rgbd>(lobes), u, 0).terminated());
+        CHECK(select_lobe(cut, Rgbd(3.0), std::span<const Rgbd>(lobes), u, 0).lobe == 0);
     }
 }
 
@@ -545,7 +567,7 @@ MomentStats furnace_walks(const R& roulette, const Rgbd& albedo, int walks, std:
         Rgbd F(1.0), result(0.0);
         for (int depth = 0; depth < 1000; ++depth) {
             result += F * emission;
-            const auto sel = select_lobe(roulette, F, std::span<const Rgbd>(lobes), rng.uniform<double>());
+            const auto sel = select_lobe(roulette, F, std::span<const Rgbd>(lobes), rng.uniform<double>(), depth);
             result += F * sel.offset;
             if (sel.terminated()) break;
             steps += 1;
@@ -873,7 +895,7 @@ TEST_CASE("stress: float instantiations, degenerate and non-finite inputs give n
     // float versions compile and agree with double.
     DiffuseGlossyBrdf<float, 3> brdf{Rgb<float>(0.5f, 0.3f, 0.1f), Rgb<float>(0.2f, 0.4f, 0.6f), 20.0f};
     const auto s = scatter<BrdfSelection::mis>(brdf, SpectralRoulette<float, 3>{}, Rgb<float>(1.0f), 0.1f,
-                                               Vec2<float>(0.3f, 0.7f));
+                                               Vec2<float>(0.3f, 0.7f), 0);
     CHECK_FALSE(s.terminated());
     CHECK(s.weight.is_finite());
     const std::vector<Vec3<float>> sq = {{-0.5f, -0.5f, 1}, {-0.5f, 0.5f, 1}, {0.5f, 0.5f, 1}, {0.5f, -0.5f, 1}};
@@ -889,7 +911,9 @@ TEST_CASE("stress: float instantiations, degenerate and non-finite inputs give n
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const std::array<Rgbd, 1> lobe = {Rgbd(0.5)};
     for (const Rgbd& F : {Rgbd(nan), Rgbd(std::numeric_limits<double>::infinity()), Rgbd(0.0)}) {
-        const auto sel = select_lobe(SpectralRoulette<double, 3>{}, F, std::span<const Rgbd>(lobe), 0.2);
+        for (int depth : {0, 5})
+            CHECK(select_lobe(ThroughputRoulette<double, 3>{}, F, std::span<const Rgbd>(lobe), 0.2, depth).terminated());
+        const auto sel = select_lobe(SpectralRoulette<double, 3>{}, F, std::span<const Rgbd>(lobe), 0.2, 0);
         CHECK(sel.terminated());
         CHECK(sel.offset.is_finite());
     }

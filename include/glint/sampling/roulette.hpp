@@ -13,12 +13,21 @@
 // (000 line 1210: "the specular sampling cannot sample the whole domain of the diffuse
 // reflection"); DIS and MIS need only that p_i covers w_i, resp. the mixture covers w.
 //
-// Roulette policies choose the s_i:
+// Roulette policies choose the s_i in two parts: the probability s of continuing at all
+// (continuation(F, a, depth), a = sum_i a_i the local albedo, depth = scattering vertices
+// before this one) and each lobe's share of it (selection_weight(F, a_i)): s_i = s w_i / sum w_j.
 //   ClassicRoulette   s_i = <a_i, H>, the weighted mean of the lobe's albedo (lines 1236-1248);
 //   SpectralRoulette  s_i = sum_l F(l) W_i(l) H(l) / sum_l F(l) H(l)  (000 section 2.2, lines
 //                     1227-1384, with W_i approximated by the lobe albedo a_i, its expectation
 //                     under ideal BRDF sampling, line 1127), F = the walk's throughput so far;
 //                     a walk carrying blue light meeting a yellow surface stops;
+//   ThroughputRoulette the field's standard rule (pbrt-v4, Mitsuba 3, Cycles): no termination
+//                     before a minimum depth k, then s = min(cap, |F a|), a norm of the
+//                     throughput the walk would carry on: the max over bands (pbrt-v4,
+//                     Mitsuba 3), or 000 section 2.2's H-weighted sum (which, with F = 1 at
+//                     the camera, is the spectral rule deferred to depth k);
+//   NoRoulette        continue while |F a| stays above a cut-off (biased by what the cut-off
+//                     drops; 0: only the tracer's depth cap ends walks);
 //   RadianceEstimateRoulette (000 section 2.3, lines 1385-1545): with an estimate L~ of the
 //                     incoming radiance, a terminated walk returns a L~ instead of 0 and a
 //                     continued one (W_i/s_i) L_in - (1 - s)/s a L~, where a = sum_i a_i is the
@@ -49,51 +58,68 @@ namespace glint {
 /// Most lobes a MultiLobeBrdf may have (selection probabilities live on the stack).
 inline constexpr std::size_t max_brdf_lobes = 8;
 
-/// A roulette policy: how likely a lobe of albedo a is to be continued with, given the walk's
-/// throughput F, and what a terminated / continued walk adds.
+/// A roulette policy: how likely a walk with throughput F is to continue at a vertex of local
+/// albedo a (`depth` scattering vertices after the camera), how the continuations are shared
+/// among the lobes (in proportion to selection_weight(F, a_i)), and what a terminated /
+/// continued walk adds.
 template <class P, class T, std::size_t N>
 concept RoulettePolicy = Scalar<T> && requires(const P& p, const Spectrum<T, N>& F,
-                                               const Spectrum<T, N>& a, T s) {
+                                               const Spectrum<T, N>& a, T s, int depth) {
     { P::has_radiance_estimate } -> std::convertible_to<bool>;
     { p.selection_weight(F, a) } -> std::same_as<T>;
+    { p.continuation(F, a, depth) } -> std::same_as<T>;
     { p.terminated(a) } -> std::same_as<Spectrum<T, N>>;
     { p.continued_offset(a, s) } -> std::same_as<Spectrum<T, N>>;
+};
+
+/// The zero offsets of a roulette without a radiance estimate.
+template <Scalar T, std::size_t N>
+struct NoRadianceEstimate {
+    static constexpr bool has_radiance_estimate = false;
+    Spectrum<T, N> terminated(const Spectrum<T, N>&) const { return Spectrum<T, N>(T(0)); }
+    Spectrum<T, N> continued_offset(const Spectrum<T, N>&, T) const { return Spectrum<T, N>(T(0)); }
 };
 
 /// Continuation probability from the albedo alone: its weighted mean <a, H> (H = luminance
 /// weights by default, or 1/N each for the plain mean).
 template <Scalar T, std::size_t N>
-struct ClassicRoulette {
-    static constexpr bool has_radiance_estimate = false;
+struct ClassicRoulette : NoRadianceEstimate<T, N> {
     Spectrum<T, N> weights = Spectrum<T, N>::default_luminance_weights();
 
+    ClassicRoulette() = default;
+    explicit ClassicRoulette(const Spectrum<T, N>& H) : weights(H) {}
     static ClassicRoulette mean() { return ClassicRoulette{Spectrum<T, N>(T(1) / T(N))}; }
 
     T selection_weight(const Spectrum<T, N>&, const Spectrum<T, N>& a) const {
         return std::clamp(a.luminance(weights), T(0), T(1));
     }
-    Spectrum<T, N> terminated(const Spectrum<T, N>&) const { return Spectrum<T, N>(T(0)); }
-    Spectrum<T, N> continued_offset(const Spectrum<T, N>&, T) const { return Spectrum<T, N>(T(0)); }
+    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int) const { return selection_weight(F, a); }
 };
 
-/// No Russian roulette: every lobe that reflects anything gets weight 1 (select_lobe then
-/// picks among them uniformly), so walks end only at the tracer's depth cap. Not a method to
-/// render with: the reference for how much variance termination adds at all, which bounds
+/// No Russian roulette: a walk continues while the throughput it would carry on, max(F a),
+/// stays above `cutoff` (lobes shared by max(F a_i)). With cutoff 0 only the tracer's depth
+/// cap ends walks: the reference for how much variance termination adds at all, which bounds
 /// what any radiance estimate L~ can gain at equal samples (bench_convergence --analysis).
+/// A positive cut-off is the "no roulette" baseline renderers offer: biased by the light it
+/// drops, which bench_convergence's error against the reference includes.
 template <Scalar T, std::size_t N>
-struct NoRoulette {
-    static constexpr bool has_radiance_estimate = false;
-    T selection_weight(const Spectrum<T, N>&, const Spectrum<T, N>& a) const { return a.max() > T(0) ? T(1) : T(0); }
-    Spectrum<T, N> terminated(const Spectrum<T, N>&) const { return Spectrum<T, N>(T(0)); }
-    Spectrum<T, N> continued_offset(const Spectrum<T, N>&, T) const { return Spectrum<T, N>(T(0)); }
+struct NoRoulette : NoRadianceEstimate<T, N> {
+    T cutoff = T(0);
+
+    T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const { return std::max((F * a).max(), T(0)); }
+    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int) const {
+        return selection_weight(F, a) > cutoff ? T(1) : T(0);
+    }
 };
 
 /// 000 section 2.2: s_i = sum F a_i H / sum F H, so that the H-weighted throughput stays
 /// constant in expectation. Zero when the walk carries nothing the lobe reflects.
 template <Scalar T, std::size_t N>
-struct SpectralRoulette {
-    static constexpr bool has_radiance_estimate = false;
+struct SpectralRoulette : NoRadianceEstimate<T, N> {
     Spectrum<T, N> weights = Spectrum<T, N>::default_luminance_weights();
+
+    SpectralRoulette() = default;
+    explicit SpectralRoulette(const Spectrum<T, N>& H) : weights(H) {}
 
     T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
         T num = 0, den = 0;
@@ -103,8 +129,36 @@ struct SpectralRoulette {
         }
         return den > T(0) ? std::clamp(num / den, T(0), T(1)) : T(0);
     }
-    Spectrum<T, N> terminated(const Spectrum<T, N>&) const { return Spectrum<T, N>(T(0)); }
-    Spectrum<T, N> continued_offset(const Spectrum<T, N>&, T) const { return Spectrum<T, N>(T(0)); }
+    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int) const { return selection_weight(F, a); }
+};
+
+/// How ThroughputRoulette measures the throughput: the largest band (pbrt-v4, Mitsuba 3) or
+/// the H-weighted sum <F, H> (000 section 2.2).
+enum class ThroughputNorm { max, weighted };
+
+/// The field's standard roulette: walks always continue before `min_depth` scattering
+/// vertices, then with s = min(cap, |F a|), where F a is the throughput the walk carries on
+/// in expectation (exactly, for a cosine-sampled diffuse lobe). pbrt-v4 applies
+/// min(1, max band) from its second vertex on; Mitsuba 3 min(0.95, max band) from depth 5.
+/// After a continuation the throughput's norm is 1 again (F a / s), so the walk ends when
+/// the light it carries drops below what it started with, not at the first dark wall.
+template <Scalar T, std::size_t N>
+struct ThroughputRoulette : NoRadianceEstimate<T, N> {
+    int min_depth = 3;
+    ThroughputNorm norm = ThroughputNorm::max;
+    Spectrum<T, N> weights = Spectrum<T, N>::default_luminance_weights();  // for ThroughputNorm::weighted
+    T cap = T(1);
+
+    T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
+        const Spectrum<T, N> Fa = F * a;
+        const T v = norm == ThroughputNorm::max ? Fa.max() : Fa.luminance(weights);
+        return v > T(0) ? v : T(0);  // NaN and negative throughputs select nothing
+    }
+    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
+        const T v = selection_weight(F, a);
+        if (depth < min_depth) return v > T(0) ? T(1) : T(0);
+        return std::min(v, cap);
+    }
 };
 
 /// 000 section 2.3: selection as `Inner` (classic or spectral), but a terminated walk returns
@@ -118,6 +172,9 @@ struct RadianceEstimateRoulette {
 
     T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
         return inner.selection_weight(F, a);
+    }
+    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
+        return inner.continuation(F, a, depth);
     }
     Spectrum<T, N> terminated(const Spectrum<T, N>& a) const { return a * estimate; }
     Spectrum<T, N> continued_offset(const Spectrum<T, N>& a, T s) const {
@@ -234,7 +291,10 @@ struct ReducedContinuation {
     T goodness = T(1);
 
     T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
-        const T s = inner.selection_weight(F, a);
+        return inner.selection_weight(F, a);
+    }
+    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
+        const T s = inner.continuation(F, a, depth);
         const T den = T(1) - (T(1) - goodness) * s;
         return den > T(0) ? s * goodness / den : s;
     }
@@ -253,31 +313,29 @@ struct LobeSelection {
     bool terminated() const { return lobe < 0; }
 };
 
-/// Selection probabilities s_i = roulette.selection_weight(F, a_i) (rescaled if they sum
-/// above 1), the choice of a lobe or termination by u in [0,1), and the roulette's offset.
-/// `albedos` beyond max_brdf_lobes are ignored (precondition: at most max_brdf_lobes).
+/// Selection probabilities s_i = s w_i / sum_j w_j, with w_i = roulette.selection_weight(F,
+/// a_i) and s = roulette.continuation(F, sum a_i, depth) clamped to [0, 1]; the choice of a
+/// lobe or termination by u in [0,1); the roulette's offset. `albedos` beyond max_brdf_lobes
+/// are ignored (precondition: at most max_brdf_lobes).
 template <Scalar T, std::size_t N, RoulettePolicy<T, N> R>
 LobeSelection<T, N> select_lobe(const R& roulette, const Spectrum<T, N>& throughput,
-                                std::span<const Spectrum<T, N>> albedos, T u) {
+                                std::span<const Spectrum<T, N>> albedos, T u, int depth) {
     LobeSelection<T, N> sel;
     sel.count = std::min(albedos.size(), max_brdf_lobes);
     Spectrum<T, N> albedo(T(0));
+    T shares = 0;
     for (std::size_t i = 0; i < sel.count; ++i) {
-        sel.probability[i] = roulette.selection_weight(throughput, albedos[i]);
-        sel.total += sel.probability[i];
+        sel.probability[i] = std::max(roulette.selection_weight(throughput, albedos[i]), T(0));
+        shares += sel.probability[i];
         albedo += albedos[i];
     }
-    if (sel.total > T(1)) {
-        for (std::size_t i = 0; i < sel.count; ++i) sel.probability[i] /= sel.total;
-        sel.total = T(1);
-    }
+    const T s = shares > T(0) ? roulette.continuation(throughput, albedo, depth) : T(0);
+    sel.total = s > T(0) ? std::min(s, T(1)) : T(0);  // NaN continues nothing
     T cdf = 0;
     for (std::size_t i = 0; i < sel.count; ++i) {
+        sel.probability[i] = sel.total > T(0) ? sel.total * (sel.probability[i] / shares) : T(0);
         cdf += sel.probability[i];
-        if (u < cdf && sel.probability[i] > T(0)) {
-            sel.lobe = int(i);
-            break;
-        }
+        if (sel.lobe < 0 && u < cdf && sel.probability[i] > T(0)) sel.lobe = int(i);
     }
     if constexpr (R::has_radiance_estimate) {
         sel.offset = sel.lobe < 0 ? roulette.terminated(albedo)
@@ -321,15 +379,16 @@ struct ScatterSample {
 };
 
 /// Russian roulette and lobe selection, then a direction from the chosen lobe and the weight of
-/// the DIS, W or MIS estimator. u_select and u_direction are independent uniforms.
+/// the DIS, W or MIS estimator. u_select and u_direction are independent uniforms; `depth`
+/// counts the walk's scattering vertices before this one.
 template <BrdfSelection C, Scalar T, std::size_t N, MultiLobeBrdf<T, N> M, RoulettePolicy<T, N> R>
 ScatterSample<T, N> scatter(const M& brdf, const R& roulette, const Spectrum<T, N>& throughput,
-                            T u_select, const Vec2<T>& u_direction) {
+                            T u_select, const Vec2<T>& u_direction, int depth) {
     std::array<Spectrum<T, N>, max_brdf_lobes> albedos;
     const std::size_t n = std::min<std::size_t>(brdf.lobe_count(), max_brdf_lobes);
     for (std::size_t i = 0; i < n; ++i) albedos[i] = brdf.albedo(i);
     const LobeSelection<T, N> sel =
-        select_lobe(roulette, throughput, std::span<const Spectrum<T, N>>(albedos.data(), n), u_select);
+        select_lobe(roulette, throughput, std::span<const Spectrum<T, N>>(albedos.data(), n), u_select, depth);
     ScatterSample<T, N> out;
     out.offset = sel.offset;
     if (sel.terminated()) return out;

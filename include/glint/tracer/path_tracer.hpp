@@ -10,7 +10,9 @@
 //   Roulette glint::RoulettePolicy (classic, spectral, radiance estimate);
 //   Direct   BrdfOnlyDirect (no next-event estimation: emission is collected where paths hit
 //            it), MisDirect (light sampling and BRDF sampling combined by the balance
-//            heuristic, Veach 1995), CorrelatedDirect (000 section 3.2: multiple correlated
+//            heuristic, Veach and Guibas 1995; the BRDF sample is the walk's continuation ray,
+//            so a vertex costs one closest-hit ray and one shadow ray per light sample),
+//            CorrelatedDirect (000 section 3.2: multiple correlated
 //            sampling of polygon lights, with the importance, correlated or combined
 //            estimator chosen at run time so that the three are compared on equal code).
 //   Env, Points  compile-time switches: a scene without an environment map or point lights
@@ -56,7 +58,10 @@ enum class DirectEstimator { importance, correlated, combined };
 struct RenderSettings {
     int width = 256, height = 256;
     int spp = 16;
-    int max_depth = 64;          // hard cap; roulette usually stops walks much earlier
+    /// Cap on a walk's vertices, far beyond where roulette stops walks (a grey furnace of
+    /// albedo 0.99 continues past 1024 vertices with probability about 3e-5); walks that reach
+    /// it are counted in RenderResult::capped_walks, since a cap truncates (biases) them.
+    int max_depth = 1024;
     int light_samples = 1;       // per area light and vertex (CorrelatedDirect, MisDirect)
     int threads = 0;             // 0: std::thread::hardware_concurrency()
     BrdfSelection selection = BrdfSelection::mis;
@@ -79,6 +84,25 @@ struct RenderResult {
     Image<float> lambda;         // mean lambda of the primary vertices (CorrelatedDirect)
     double seconds = 0;
     std::uint64_t rays = 0;      // closest-hit plus shadow rays
+    std::uint64_t paths = 0;     // camera paths (pixel samples)
+    std::uint64_t capped_walks = 0;  // walks cut at RenderSettings::max_depth (biased)
+};
+
+/// What a walk counts as it goes: rays traced and walks cut by the depth cap.
+struct PathCounters {
+    std::uint64_t rays = 0;
+    std::uint64_t capped = 0;
+};
+
+/// How emission found at the end of a ray is weighted, given the vertex the ray left: whole
+/// (camera rays, specular bounces, no light sampling), or, where lights were also sampled
+/// there, by the BRDF sample's balance-heuristic weight with `pdf` the BRDF-sampling density
+/// of the ray's direction (MisDirect; CorrelatedDirect's area lights get weight 0, since its
+/// light samples estimate their whole contribution).
+template <Scalar T>
+struct Arrival {
+    bool lights_sampled = false;
+    T pdf = T(0);
 };
 
 /// The per-vertex inputs of a direct-lighting policy.
@@ -149,7 +173,7 @@ public:
         RenderResult out{Image<Rgb<float>>(w, h), Image<Rgb<float>>(w, h), Image<float>(w, h), 0, 0};
         const int tile = 16, tx = (w + tile - 1) / tile, ty = (h + tile - 1) / tile, tiles = tx * ty;
         std::atomic<int> next{0}, done{0};
-        std::atomic<std::uint64_t> rays{0};
+        std::atomic<std::uint64_t> rays{0}, capped{0};
         std::mutex progress_mutex;
         const auto start = std::chrono::steady_clock::now();
         const bool pool_lambda = std::is_same_v<D, CorrelatedDirect> && settings_.estimator == DirectEstimator::combined &&
@@ -157,12 +181,12 @@ public:
         std::vector<PrimaryDirect<T>> primaries(pool_lambda ? std::size_t(w) * std::size_t(h) : 0);
         auto worker = [&] {
             S sampler = prototype;
-            std::uint64_t local_rays = 0;
+            PathCounters local;
             for (int t = next++; t < tiles; t = next++) {
                 const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
                 for (int y = y0; y < std::min(y0 + tile, h); ++y)
                     for (int x = x0; x < std::min(x0 + tile, w); ++x)
-                        render_pixel(x, y, spp, sampler, out, local_rays,
+                        render_pixel(x, y, spp, sampler, out, local,
                                      pool_lambda ? &primaries[std::size_t(y) * std::size_t(w) + std::size_t(x)] : nullptr);
                 const int d = ++done;
                 if (settings_.progress) {
@@ -173,7 +197,8 @@ public:
                     if (d == tiles) std::fprintf(stderr, "\n");
                 }
             }
-            rays += local_rays;
+            rays += local.rays;
+            capped += local.capped;
         };
         int threads = settings_.threads > 0 ? settings_.threads : int(std::thread::hardware_concurrency());
         threads = std::clamp(threads, 1, tiles);
@@ -184,22 +209,25 @@ public:
         if (pool_lambda) apply_pooled_lambda(primaries, spp, out);
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out.rays = rays;
+        out.capped_walks = capped;
+        out.paths = std::uint64_t(w) * std::uint64_t(h) * std::uint64_t(spp);
         return out;
     }
 
-    /// Radiance along one camera ray (for tests); `rays` counts traced rays.
-    /// `count_first_emission = false` leaves out the emission of the first surface hit, as a
-    /// continued walk does where the direct light is sampled (MisDirect, CorrelatedDirect).
-    Rgb<T> radiance(Ray<T> ray, S& sampler, std::uint64_t& rays, T* lambda_out = nullptr,
-                    PrimaryDirect<T>* primary = nullptr, bool count_first_emission = true) const {
+    /// Radiance along one camera ray (for tests); `count` counts traced rays and capped walks.
+    /// `from` says how emission met by `ray` is weighted (Arrival: whole for a camera ray).
+    Rgb<T> radiance(Ray<T> ray, S& sampler, PathCounters& count, T* lambda_out = nullptr,
+                    PrimaryDirect<T>* primary = nullptr, Arrival<T> from = {}) const {
         Rgb<T> L(T(0)), F(T(1));
-        bool count_emission = count_first_emission;
-        for (int depth = 0; depth < settings_.max_depth; ++depth) {
+        for (int depth = 0;; ++depth) {
+            if (depth == settings_.max_depth) {
+                ++count.capped;
+                break;
+            }
             StoreHit<T> hit;
-            ++rays;
+            ++count.rays;
             if (!accel_.closest_hit(ray, hit)) {
-                if constexpr (Env)
-                    if (count_emission) L += F * scene_.environment->eval(ray.direction);
+                if constexpr (Env) L += F * scene_.environment->eval(ray.direction) * environment_weight(from, ray.direction);
                 break;
             }
             const std::uint32_t tri = hit.id;
@@ -208,24 +236,11 @@ public:
             const bool front = glm::dot(ng, ray.direction) < T(0);
             const Vec3<T> n = front ? ng : -ng;
             const Vec3<T> x = ray.at(hit.t);
-            if (count_emission && front && m.emissive()) L += F * m.emission;
+            if (front && m.emissive()) L += F * m.emission * emission_weight(from, ray, hit);
 
             if (m.specular()) {
-                Vec3<T> wi;
-                Rgb<T> albedo = m.ks;
-                if (m.kind == MaterialKind::mirror) {
-                    wi = ray.direction - n * (T(2) * glm::dot(ray.direction, n));
-                } else {
-                    wi = refract_or_reflect(ray.direction, ng, m.ior, sampler.get_1d());
-                    albedo = Rgb<T>(T(1));
-                }
-                const std::array<Rgb<T>, 1> lobes{albedo};
-                const auto sel = select_lobe(roulette_, F, std::span<const Rgb<T>>(lobes), sampler.get_1d());
-                if constexpr (R::has_radiance_estimate) L += F * sel.offset;
-                if (sel.terminated()) break;
-                F *= albedo / sel.probability[0];
-                ray = spawn(x, ng, wi);
-                count_emission = true;
+                if (!specular_step(m, x, ng, n, depth, sampler, ray, F, L)) break;
+                from = Arrival<T>{};
                 continue;
             }
 
@@ -233,47 +248,71 @@ public:
             const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
             const ShadingPoint<T> sp{x, n, frame, &brdf};
             if constexpr (!D::collects_emission) {
-                L += F * direct(sp, sampler, rays, depth == 0 ? lambda_out : nullptr, depth == 0 ? primary : nullptr);
+                L += F * direct(sp, sampler, count.rays, depth == 0 ? lambda_out : nullptr, depth == 0 ? primary : nullptr);
             }
-            if constexpr (Points) L += F * point_lights(sp, rays);
+            if constexpr (Points) L += F * point_lights(sp, count.rays);
 
-            const T u_select = sampler.get_1d();
-            const Vec2<T> u_dir = sampler.get_2d();
-            ScatterSample<T, 3> s;
-            switch (settings_.selection) {
-                case BrdfSelection::decomposition:
-                    s = scatter<BrdfSelection::decomposition>(brdf, roulette_, F, u_select, u_dir);
-                    break;
-                case BrdfSelection::weighted:
-                    s = scatter<BrdfSelection::weighted>(brdf, roulette_, F, u_select, u_dir);
-                    break;
-                default: s = scatter<BrdfSelection::mis>(brdf, roulette_, F, u_select, u_dir); break;
-            }
+            const ScatterSample<T, 3> s = scatter_step(brdf, F, sampler, depth);
             if constexpr (R::has_radiance_estimate) L += F * s.offset;
             if (s.terminated()) break;
             F *= s.weight;
             if (F.max() <= T(0) || !F.is_finite()) break;  // nothing more can contribute
             ray = spawn(x, ng, frame.to_world(s.direction));
-            count_emission = D::collects_emission;
+            if constexpr (!D::collects_emission) from = Arrival<T>{true, brdf.sampling_pdf(s.direction)};
         }
         return L;
+    }
+
+    /// A mirror or dielectric vertex: the deterministic direction (Fresnel choice for
+    /// dielectrics), then the roulette on the one lobe. Updates ray, F and L (the roulette's
+    /// offset); false when the walk stops.
+    bool specular_step(const Material<T>& m, const Vec3<T>& x, const Vec3<T>& ng, const Vec3<T>& n, int depth,
+                       S& sampler, Ray<T>& ray, Rgb<T>& F, Rgb<T>& L) const {
+        Vec3<T> wi;
+        Rgb<T> albedo = m.ks;
+        if (m.kind == MaterialKind::mirror) {
+            wi = ray.direction - n * (T(2) * glm::dot(ray.direction, n));
+        } else {
+            wi = refract_or_reflect(ray.direction, ng, m.ior, sampler.get_1d());
+            albedo = Rgb<T>(T(1));
+        }
+        const std::array<Rgb<T>, 1> lobes{albedo};
+        const auto sel = select_lobe(roulette_, F, std::span<const Rgb<T>>(lobes), sampler.get_1d(), depth);
+        if constexpr (R::has_radiance_estimate) L += F * sel.offset;
+        if (sel.terminated()) return false;
+        F *= albedo / sel.probability[0];
+        ray = spawn(x, ng, wi);
+        return true;
+    }
+
+    /// Roulette, lobe choice and direction at a diffuse/glossy vertex, with the BRDF-selection
+    /// estimator of settings (000 section 2.1).
+    ScatterSample<T, 3> scatter_step(const SurfaceBrdf<T>& brdf, const Rgb<T>& F, S& sampler, int depth) const {
+        const T u_select = sampler.get_1d();
+        const Vec2<T> u_dir = sampler.get_2d();
+        switch (settings_.selection) {
+            case BrdfSelection::decomposition:
+                return scatter<BrdfSelection::decomposition>(brdf, roulette_, F, u_select, u_dir, depth);
+            case BrdfSelection::weighted:
+                return scatter<BrdfSelection::weighted>(brdf, roulette_, F, u_select, u_dir, depth);
+            default: return scatter<BrdfSelection::mis>(brdf, roulette_, F, u_select, u_dir, depth);
+        }
     }
 
     /// Pilot observations for 000 section 2.3's radiance-estimate roulette: at the first
     /// diffuse vertex of `n` camera paths, the albedo a and the one-sample reflected radiance
     /// X = (w/p) L_in (L_in traced by this tracer, so unbiased), `repeats` of them per vertex
     /// (consecutive; more than 1 for estimate_goodness_floor). X is exactly what the
-    /// roulette decides about, what a terminated walk loses: with light sampling the emission
-    /// met by the continued ray is already in the vertex's direct-light estimate, so it is
-    /// not part of X. (An earlier version counted it, so that X's variance was that of
-    /// hitting a small light by chance: d = 0.98 on cornell instead of 0.81.) A direction
-    /// the BRDF cannot sample gives X = 0, as in the walk.
+    /// roulette decides about, what a terminated walk loses: with light sampling, emission
+    /// met by the continued ray counts only with the BRDF sample's MIS weight (the rest is in
+    /// the vertex's light samples), as in the walk. A direction the BRDF cannot sample gives
+    /// X = 0, as in the walk.
     std::vector<RoulettePilotSample<T, 3>> pilot_samples(const S& prototype, int n, int repeats = 1) const {
         S sampler = prototype;
         std::vector<RoulettePilotSample<T, 3>> out;
         repeats = std::max(repeats, 1);
         out.reserve(std::size_t(std::max(n, 0)) * std::size_t(repeats));
-        std::uint64_t rays = 0;
+        PathCounters count;
         const std::uint64_t pixels = std::uint64_t(settings_.width) * std::uint64_t(settings_.height);
         for (int i = 0; i < n; ++i) {
             // Pixels spread over the whole image (an odd multiplier not divisible by 3 permutes
@@ -296,8 +335,8 @@ public:
                 Rgb<T> X(T(0));
                 if (pdf > T(0) && wi.z > T(0))
                     X = brdf.f(wi) * (wi.z / pdf) *
-                        radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, rays, nullptr, nullptr,
-                                 D::collects_emission);
+                        radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, count, nullptr, nullptr,
+                                 Arrival<T>{!D::collects_emission, pdf});
                 out.push_back({m.kd + m.ks, X});
             }
         }
@@ -330,7 +369,7 @@ private:
             }
     }
 
-    void render_pixel(int x, int y, int spp, S& sampler, RenderResult& out, std::uint64_t& rays,
+    void render_pixel(int x, int y, int spp, S& sampler, RenderResult& out, PathCounters& count,
                       PrimaryDirect<T>* primary) const {
         Rgb<T> mean(T(0)), m2(T(0));
         T lambda_sum = 0;
@@ -339,7 +378,7 @@ private:
             const Ray<T> ray = camera_ray(x, y, std::uint64_t(i), sampler);
             T lambda = std::numeric_limits<T>::quiet_NaN();
             PrimaryDirect<T> pd;
-            Rgb<T> L = radiance(ray, sampler, rays, &lambda, primary ? &pd : nullptr);
+            Rgb<T> L = radiance(ray, sampler, count, &lambda, primary ? &pd : nullptr);
             if (!L.is_finite()) L = Rgb<T>(T(0));  // never let one sample poison a pixel
             else if (primary && pd.a.is_finite() && pd.b.is_finite()) {
                 primary->used += pd.used;
@@ -467,20 +506,26 @@ private:
             }
         } else if constexpr (std::is_same_v<D, MisDirect>) {
             const int k = std::max(1, settings_.light_samples);
-            for (int i = 0; i < k; ++i) L += mis_area_light(sp, sampler, rays) / T(k);
+            for (int i = 0; i < k; ++i) L += mis_area_light(sp, sampler, rays, T(k));
         }
         if constexpr (Env) L += mis_environment(sp, sampler, rays);
         return L;
     }
 
-    /// One light sample and one BRDF sample for the area lights, balance heuristic.
-    Rgb<T> mis_area_light(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays) const {
-        Rgb<T> L(T(0));
+    /// Light-sampling density (solid angle, light chosen by power) of the direction towards a
+    /// point of area light `l` at squared distance r2, seen under cosine cos_l there.
+    T area_light_pdf(const AreaLight<T>& l, T r2, T cos_l) const {
+        return l.emission.luminance() / light_power_ * r2 / cos_l;
+    }
+
+    /// One light sample of the area lights (light by power, then uniform on it). With k light
+    /// samples per vertex and the continuation ray as the one BRDF sample, the balance
+    /// heuristic over both strategies (Veach and Guibas 1995, with sample counts) gives each
+    /// light sample f Le cos / (k p_light + p_brdf) (emission_weight gives the BRDF sample's).
+    Rgb<T> mis_area_light(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays, T k) const {
         const T u_light = sampler.get_1d();
         const Vec2<T> u_point = sampler.get_2d();
-        const Vec2<T> u_dir = sampler.get_2d();
-        if (lights_.empty()) return L;
-        // Light sampling.
+        if (lights_.empty()) return Rgb<T>(T(0));
         T prob;
         const std::size_t li = pick_light(u_light, prob);
         const auto& light = lights_[li];
@@ -490,30 +535,35 @@ private:
         const Vec3<T> wi = d / std::sqrt(r2);
         const T cos_l = -glm::dot(wi, light.sampler().normal());
         const Vec3<T> wl = sp.frame.to_local(wi);
-        if (cos_l > T(0) && wl.z > T(0)) {
-            const T pdf_light = prob / light.sampler().area() * r2 / cos_l;
-            const Rgb<T> f = sp.brdf->f(wl);
-            if (f.max() > T(0) && visible(sp.x, sp.n, y, rays))
-                L += light.radiance() * f * (wl.z * balance(pdf_light, sp.brdf->sampling_pdf(wl)) / pdf_light);
+        if (!(cos_l > T(0)) || wl.z <= T(0)) return Rgb<T>(T(0));
+        const T pdf_light = prob / light.sampler().area() * r2 / cos_l;
+        const Rgb<T> f = sp.brdf->f(wl);
+        if (f.max() <= T(0) || !visible(sp.x, sp.n, y, rays)) return Rgb<T>(T(0));
+        return light.radiance() * f * (wl.z / (k * pdf_light + sp.brdf->sampling_pdf(wl)));
+    }
+
+    /// Weight of area-light emission met at `hit` by `ray`, which left a vertex as `from` says.
+    T emission_weight(const Arrival<T>& from, const Ray<T>& ray, const StoreHit<T>& hit) const {
+        if (!from.lights_sampled) return T(1);
+        if constexpr (!std::is_same_v<D, MisDirect>) {
+            return T(0);  // CorrelatedDirect: its light samples estimate the area lights whole
+        } else {
+            const std::int32_t li = scene_.light_of[hit.id];
+            if (li < 0) return T(1);  // emissive but not a sampled light: only BRDF sampling finds it
+            const auto& al = scene_.area_lights[std::size_t(li)];
+            const T len2 = glm::dot(ray.direction, ray.direction);
+            const T cos_l = -glm::dot(ray.direction, al.normal) / std::sqrt(len2);
+            if (!(cos_l > T(0))) return T(0);
+            const T k = T(std::max(1, settings_.light_samples));
+            const T pdf_light = area_light_pdf(al, hit.t * hit.t * len2, cos_l);
+            return from.pdf / (from.pdf + k * pdf_light);
         }
-        // BRDF sampling: a lobe by the luminance of its albedo, then its direction.
-        const Vec3<T> wb = sample_brdf(*sp.brdf, u_dir);
-        const T pdf_brdf = sp.brdf->sampling_pdf(wb);
-        if (!(pdf_brdf > T(0)) || wb.z <= T(0)) return L;
-        const Ray<T> r = spawn(sp.x, sp.n, sp.frame.to_world(wb));
-        StoreHit<T> h;
-        ++rays;
-        if (!accel_.closest_hit(r, h)) return L;
-        const std::int32_t hit_light = scene_.light_of[h.id];
-        if (hit_light < 0) return L;
-        const auto& al = scene_.area_lights[std::size_t(hit_light)];
-        const T cos_l2 = -glm::dot(r.direction, al.normal) / glm::length(r.direction);
-        if (cos_l2 <= T(0)) return L;
-        const T dist2 = h.t * h.t * glm::dot(r.direction, r.direction);
-        const T p_pick = al.emission.luminance() * al.area / light_power_;
-        const T pdf_light = p_pick / al.area * dist2 / cos_l2;
-        L += al.emission * sp.brdf->f(wb) * (wb.z * balance(pdf_brdf, pdf_light) / pdf_brdf);
-        return L;
+    }
+
+    /// Weight of the environment seen along `dir` by a ray that left a vertex as `from` says.
+    T environment_weight(const Arrival<T>& from, const Vec3<T>& dir) const {
+        if (!from.lights_sampled) return T(1);
+        return balance(from.pdf, scene_.environment->pdf(safe_normalize(dir)));
     }
 
     static Vec3<T> sample_brdf(const SurfaceBrdf<T>& brdf, Vec2<T> u) {
@@ -528,28 +578,20 @@ private:
         return brdf.sample(1, u);
     }
 
+    /// One environment-map sample, weighted by the balance heuristic against the BRDF sample
+    /// (the continuation ray, weighted by environment_weight where it escapes).
     Rgb<T> mis_environment(const ShadingPoint<T>& sp, S& sampler, std::uint64_t& rays) const {
-        Rgb<T> L(T(0));
         const auto& env = *scene_.environment;
-        const Vec2<T> u_env = sampler.get_2d(), u_dir = sampler.get_2d();
+        const Vec2<T> u_env = sampler.get_2d();
         T pdf_env;
         const Vec3<T> we = env.sample(u_env, pdf_env);
         const Vec3<T> wl = sp.frame.to_local(we);
-        if (pdf_env > T(0) && wl.z > T(0)) {
-            const Rgb<T> f = sp.brdf->f(wl);
-            ++rays;
-            if (f.max() > T(0) && !accel_.any_hit(spawn(sp.x, sp.n, we)))
-                L += env.eval(we) * f * (wl.z * balance(pdf_env, sp.brdf->sampling_pdf(wl)) / pdf_env);
-        }
-        const Vec3<T> wb = sample_brdf(*sp.brdf, u_dir);
-        const T pdf_brdf = sp.brdf->sampling_pdf(wb);
-        if (pdf_brdf > T(0) && wb.z > T(0)) {
-            const Vec3<T> w = sp.frame.to_world(wb);
-            ++rays;
-            if (!accel_.any_hit(spawn(sp.x, sp.n, w)))
-                L += env.eval(w) * sp.brdf->f(wb) * (wb.z * balance(pdf_brdf, env.pdf(w)) / pdf_brdf);
-        }
-        return L;
+        if (!(pdf_env > T(0)) || wl.z <= T(0)) return Rgb<T>(T(0));
+        const Rgb<T> f = sp.brdf->f(wl);
+        if (f.max() <= T(0)) return Rgb<T>(T(0));
+        ++rays;
+        if (accel_.any_hit(spawn(sp.x, sp.n, we))) return Rgb<T>(T(0));
+        return env.eval(we) * f * (wl.z * balance(pdf_env, sp.brdf->sampling_pdf(wl)) / pdf_env);
     }
 
     Rgb<T> point_lights(const ShadingPoint<T>& sp, std::uint64_t& rays) const {

@@ -5,7 +5,11 @@
 // exactly those, for the named sampler, roulette and direct-lighting policies. The
 // accelerator is the kd-tree with IVM leaves and the compact-subtree layout (trees/).
 //
-// Names: roulette  classic | spectral | estimate | spectral+estimate
+// Names: roulette  classic | spectral | estimate | spectral+estimate (000's rules, from the
+//                  first vertex); throughput | throughput+spectral | throughput+estimate |
+//                  throughput+spectral+estimate (the field's throughput rule from
+//                  rr_depth, with 000's spectral norm and radiance estimate on top); none
+//                  (no roulette, throughput cut-off)
 //        direct    brdf | mis | importance | correlated | combined
 //        selection dis | w | mis
 //        sampler   random | halton | halton-cp | halton-perm
@@ -36,6 +40,11 @@ using RenderAccel = KdTree<float, Ivm<float>, CompactSubtrees<15>>;
 struct RenderOptions {
     RenderSettings settings{};
     std::string roulette = "spectral";
+    /// Throughput roulettes: vertices before the first roulette decision (ThroughputRoulette's
+    /// min_depth).
+    int rr_depth = 3;
+    /// Roulette "none": walks stop once the throughput they carry on falls below this.
+    float throughput_cutoff = 1e-3f;
     std::string direct = "mis";
     std::string sampler = "random";
     std::uint64_t seed = 0;
@@ -59,7 +68,9 @@ struct RenderOptions {
 };
 
 inline const std::vector<std::string>& roulette_names() {
-    static const std::vector<std::string> v{"classic", "spectral", "estimate", "spectral+estimate"};
+    static const std::vector<std::string> v{"classic", "spectral", "estimate", "spectral+estimate",
+                                            "throughput", "throughput+spectral", "throughput+estimate",
+                                            "throughput+spectral+estimate", "none"};
     return v;
 }
 inline const std::vector<std::string>& direct_names() {
@@ -157,29 +168,50 @@ RenderResult render_estimate(const Scene<float>& scene, const RenderAccel& accel
     return r;
 }
 
+/// Renders with roulette `inner`, or with a radiance estimate on top of it when `estimate`.
+template <class S, class R>
+RenderResult render_inner(const Scene<float>& scene, const RenderAccel& accel, const R& inner, bool estimate,
+                          const RenderOptions& o, const Rgb<float>& H, const S& sampler) {
+    if (estimate) return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3, R>{inner, {}}, o, H, sampler);
+    return render_direct(scene, accel, inner, o.settings, o.direct, sampler);
+}
+
 template <class S>
 RenderResult render_roulette(const Scene<float>& scene, const RenderAccel& accel, const RenderOptions& o,
                              const S& sampler) {
-    const std::string& r = o.roulette;
     Rgb<float> H;
     if (o.roulette_weights == "luminance") H = Rgb<float>::default_luminance_weights();
     else if (o.roulette_weights == "mean") H = Rgb<float>(1.0f / 3.0f);
     else throw Error("unknown roulette weights '" + o.roulette_weights + "' (luminance, mean)");
-    const ClassicRoulette<float, 3> classic{H};
-    const SpectralRoulette<float, 3> spectral{H};
-    using ClassicEstimate = RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>;
+    if (o.rr_depth < 0) throw Error("roulette depth must be >= 0, got " + std::to_string(o.rr_depth));
+    std::string r = o.roulette == "estimate" ? "classic+estimate" : o.roulette;  // 000's name for it
+    const bool estimate = r.ends_with("+estimate");
+    if (estimate) r.resize(r.size() - std::string("+estimate").size());
     // In a grey scene every throughput F stays grey, and there 000's spectral rule
     // <F a, H> / <F, H> is exactly the albedo, which the classic rule <a, H> also gives (both
-    // weight sets sum to 1, to float rounding): grey scenes get the classic policies and pay
-    // for no spectral bookkeeping.
+    // weight sets sum to 1, to float rounding), and the H-weighted throughput norm equals the
+    // largest band: grey scenes get the non-spectral policies and pay for no spectral
+    // bookkeeping.
     const bool grey = scene.features().grey;
-    if (r == "classic" || (r == "spectral" && grey)) return render_direct(scene, accel, classic, o.settings, o.direct, sampler);
-    if (r == "spectral") return render_direct(scene, accel, spectral, o.settings, o.direct, sampler);
-    if (r == "estimate" || (r == "spectral+estimate" && grey))
-        return render_estimate(scene, accel, ClassicEstimate{classic, {}}, o, H, sampler);
-    if (r == "spectral+estimate")
-        return render_estimate(scene, accel, RadianceEstimateRoulette<float, 3>{spectral, {}}, o, H, sampler);
-    throw Error("unknown roulette '" + r + "' (classic, spectral, estimate, spectral+estimate)");
+    if (grey && r == "spectral") r = "classic";
+    if (grey && r == "throughput+spectral") r = "throughput";
+    if (r == "classic") return render_inner(scene, accel, ClassicRoulette<float, 3>{H}, estimate, o, H, sampler);
+    if (r == "spectral") return render_inner(scene, accel, SpectralRoulette<float, 3>{H}, estimate, o, H, sampler);
+    if (r == "throughput" || r == "throughput+spectral") {
+        ThroughputRoulette<float, 3> t;
+        t.min_depth = o.rr_depth;
+        t.weights = H;
+        t.norm = r == "throughput" ? ThroughputNorm::max : ThroughputNorm::weighted;
+        return render_inner(scene, accel, t, estimate, o, H, sampler);
+    }
+    if (r == "none" && !estimate) {
+        NoRoulette<float, 3> none;
+        none.cutoff = o.throughput_cutoff;
+        return render_direct(scene, accel, none, o.settings, o.direct, sampler);
+    }
+    std::string names;
+    for (const auto& n : roulette_names()) names += (names.empty() ? "" : ", ") + n;
+    throw Error("unknown roulette '" + o.roulette + "' (" + names + ")");
 }
 
 }  // namespace detail

@@ -150,7 +150,7 @@ std::vector<Vpl<T>> shoot_vpls(const VplScene<T>& scene, const Accel& accel, con
             out.push_back({p, n, power, a});
             DiffuseGlossyBrdf<T, 3> brdf{a, Rgb<T>(T(0)), T(1)};
             const ScatterSample<T, 3> s = scatter<BrdfSelection::decomposition>(
-                brdf, roulette, power, rng.uniform<T>(), Vec2<T>(rng.uniform<T>(), rng.uniform<T>()));
+                brdf, roulette, power, rng.uniform<T>(), Vec2<T>(rng.uniform<T>(), rng.uniform<T>()), int(depth));
             if (s.terminated()) break;
             power = power * s.weight;
             dir = Frame<T>::from_normal(n).to_world(s.direction);
