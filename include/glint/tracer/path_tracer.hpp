@@ -109,6 +109,7 @@ struct Arrival {
 template <Scalar T>
 struct ShadingPoint {
     Vec3<T> x;          // position
+    Vec3<T> err;        // bound on x's rounding error, per axis
     Vec3<T> n;          // normal on the side of the outgoing direction
     Frame<T> frame;     // local frame about n
     const SurfaceBrdf<T>* brdf;
@@ -235,18 +236,18 @@ public:
             const Vec3<T> ng = scene_.normal(tri);
             const bool front = glm::dot(ng, ray.direction) < T(0);
             const Vec3<T> n = front ? ng : -ng;
-            const Vec3<T> x = ray.at(hit.t);
+            const auto [x, err] = surface_point(hit);  // not captured by any lambda (clang 14)
             if (front && m.emissive()) L += F * m.emission * emission_weight(from, ray, hit);
 
             if (m.specular()) {
-                if (!specular_step(m, x, ng, n, depth, sampler, ray, F, L)) break;
+                if (!specular_step(m, ShadingPoint<T>{x, err, n, {}, nullptr}, ng, depth, sampler, ray, F, L)) break;
                 from = Arrival<T>{};
                 continue;
             }
 
             const Frame<T> frame = Frame<T>::from_normal(n);
             const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
-            const ShadingPoint<T> sp{x, n, frame, &brdf};
+            const ShadingPoint<T> sp{x, err, n, frame, &brdf};
             if constexpr (!D::collects_emission) {
                 L += F * direct(sp, sampler, count.rays, depth == 0 ? lambda_out : nullptr, depth == 0 ? primary : nullptr);
             }
@@ -257,7 +258,7 @@ public:
             if (s.terminated()) break;
             F *= s.weight;
             if (F.max() <= T(0) || !F.is_finite()) break;  // nothing more can contribute
-            ray = spawn(x, ng, frame.to_world(s.direction));
+            ray = spawn(sp, frame.to_world(s.direction));
             if constexpr (!D::collects_emission) from = Arrival<T>{true, brdf.sampling_pdf(s.direction)};
         }
         return L;
@@ -266,8 +267,9 @@ public:
     /// A mirror or dielectric vertex: the deterministic direction (Fresnel choice for
     /// dielectrics), then the roulette on the one lobe. Updates ray, F and L (the roulette's
     /// offset); false when the walk stops.
-    bool specular_step(const Material<T>& m, const Vec3<T>& x, const Vec3<T>& ng, const Vec3<T>& n, int depth,
-                       S& sampler, Ray<T>& ray, Rgb<T>& F, Rgb<T>& L) const {
+    bool specular_step(const Material<T>& m, const ShadingPoint<T>& sp, const Vec3<T>& ng, int depth, S& sampler,
+                       Ray<T>& ray, Rgb<T>& F, Rgb<T>& L) const {
+        const Vec3<T>& n = sp.n;
         Vec3<T> wi;
         Rgb<T> albedo = m.ks;
         if (m.kind == MaterialKind::mirror) {
@@ -281,7 +283,7 @@ public:
         if constexpr (R::has_radiance_estimate) L += F * sel.offset;
         if (sel.terminated()) return false;
         F *= albedo / sel.probability[0];
-        ray = spawn(x, ng, wi);
+        ray = spawn(sp, wi);
         return true;
     }
 
@@ -327,6 +329,7 @@ public:
             if (m.specular()) continue;
             const Vec3<T> ng = scene_.normal(hit.id);
             const Vec3<T> nn = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
+            const auto [p, err] = surface_point(hit);
             const Frame<T> frame = Frame<T>::from_normal(nn);
             const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
             for (int j = 0; j < repeats; ++j) {
@@ -335,7 +338,7 @@ public:
                 Rgb<T> X(T(0));
                 if (pdf > T(0) && wi.z > T(0))
                     X = brdf.f(wi) * (wi.z / pdf) *
-                        radiance(spawn(ray.at(hit.t), ng, frame.to_world(wi)), sampler, count, nullptr, nullptr,
+                        radiance(spawn(ShadingPoint<T>{p, err, nn, {}, nullptr}, frame.to_world(wi)), sampler, count, nullptr, nullptr,
                                  Arrival<T>{!D::collects_emission, pdf});
                 out.push_back({m.kd + m.ks, X});
             }
@@ -413,18 +416,66 @@ private:
         return scene_.camera.ray((T(x) + p.x) / T(settings_.width), (T(y) + p.y) / T(settings_.height), aspect);
     }
 
-    /// Offset origin on the side of the surface the new direction leaves to.
-    static Ray<T> spawn(const Vec3<T>& x, const Vec3<T>& ng, const Vec3<T>& dir) {
-        const T scale = T(1) + std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z)});
-        const T eps = scale * T(sizeof(T) == 4 ? 2e-5 : 1e-10);
-        const Vec3<T> side = glm::dot(dir, ng) >= T(0) ? ng : -ng;
-        return Ray<T>{x + side * eps, dir, T(0), infinity<T>};
+    /// gamma(n) = n u / (1 - n u), u = unit roundoff: the relative error bound of n roundings.
+    static constexpr T gamma(int n) {
+        const T u = std::numeric_limits<T>::epsilon() / T(2);
+        return T(n) * u / (T(1) - T(n) * u);
     }
-    /// Shadow ray from x (offset along n) to y, stopping short of y.
-    bool visible(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& y, std::uint64_t& rays) const {
-        const Ray<T> r = spawn(x, n, y - x);
+
+    /// Bound on the rounding error, per axis, of a point computed from vertices whose largest
+    /// coordinate is m, and of the triangle tests' distances to their planes: gamma(16) m on
+    /// every axis. Interpolation alone errs by gamma(7) sum |b_i v_i| per axis (Pharr, Jakob,
+    /// Humphreys 2023, section 6.8.5), but an intersector mixes the axes (cross products), so
+    /// the floor at y = 0 of a box 1 wide still has distance errors of ulps of 1, not of 0.
+    static Vec3<T> coordinate_error(T m) { return Vec3<T>(gamma(16) * m); }
+
+    /// The hit point interpolated from the triangle's vertices by the hit's barycentrics, and
+    /// its error bound. Unlike o + t d, whose error grows with the ray's length and origin, the
+    /// bound depends only on the triangle's own coordinates.
+    std::pair<Vec3<T>, Vec3<T>> surface_point(const StoreHit<T>& hit) const {
+        const auto& v = scene_.triangles[hit.id];
+        const T b0 = T(1) - hit.u - hit.v;
+        const Vec3<T> p = v[0] * b0 + v[1] * hit.u + v[2] * hit.v;
+        const Vec3<T> m = glm::max(glm::max(glm::abs(v[0]), glm::abs(v[1])), glm::abs(v[2]));
+        return {p, coordinate_error(std::max({m.x, m.y, m.z}))};
+    }
+
+    /// Origin of a ray leaving point p (rounding error `err` per axis) of a surface with normal
+    /// n towards `dir`: p moved along n, to the side dir leaves to, past its error bound, and
+    /// each coordinate then rounded away from the surface (Pharr, Jakob, Humphreys 2023, section
+    /// 6.8.6). The offset scales with the coordinates' own rounding, so the same scene renders
+    /// the same image at any translation and scale float resolves.
+    static Vec3<T> offset_origin(const Vec3<T>& p, const Vec3<T>& err, const Vec3<T>& n, const Vec3<T>& dir) {
+        const T d = glm::dot(glm::abs(n), err) * T(2);
+        const Vec3<T> offset = glm::dot(dir, n) >= T(0) ? n * d : -n * d;
+        Vec3<T> po = p + offset;
+        for (int i = 0; i < 3; ++i) {
+            if (offset[i] > T(0)) po[i] = std::nextafter(po[i], infinity<T>);
+            else if (offset[i] < T(0)) po[i] = std::nextafter(po[i], -infinity<T>);
+        }
+        return po;
+    }
+
+    /// A ray leaving shading point sp in direction dir.
+    static Ray<T> spawn(const ShadingPoint<T>& sp, const Vec3<T>& dir) {
+        return Ray<T>{offset_origin(sp.x, sp.err, sp.n, dir), dir, T(0), infinity<T>};
+    }
+
+    /// Shadow ray from sp to point y (rounding error y_err, on a surface of normal ny; zero
+    /// for a point light), both ends offset off their surfaces, stopping just short of y.
+    bool visible(const ShadingPoint<T>& sp, const Vec3<T>& y, const Vec3<T>& y_err, const Vec3<T>& ny,
+                 std::uint64_t& rays) const {
+        const Vec3<T> xo = offset_origin(sp.x, sp.err, sp.n, y - sp.x);
+        const Vec3<T> yo = offset_origin(y, y_err, ny, xo - y);
         ++rays;
-        return !accel_.any_hit(Ray<T>{r.origin, y - r.origin, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)});
+        return !accel_.any_hit(Ray<T>{xo, yo - xo, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)});
+    }
+    bool visible(const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, const Vec3<T>& y,
+                 std::uint64_t& rays) const {
+        // A point of the light polygon is a convex combination of its vertices.
+        T m = 0;
+        for (const auto& v : light.sampler().vertices()) m = std::max({m, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+        return visible(sp, y, coordinate_error(m), light.sampler().normal(), rays);
     }
 
     static T balance(T a, T b) { return a + b > T(0) ? a / (a + b) : T(0); }
@@ -476,7 +527,7 @@ private:
                         for (std::size_t i = 0; i < k; ++i) {
                             const Vec3<T> y = light.sampler().sample(u[i]);
                             const T G = light.geometry(sp.x, sp.n, y) * area;
-                            if (G > T(0) && visible(sp.x, sp.n, y, rays))
+                            if (G > T(0) && visible(sp, light, y, rays))
                                 L += light.radiance() * sp.brdf->f(sp.frame.to_local(safe_normalize(y - sp.x))) * (G / T(k));
                         }
                         continue;
@@ -484,7 +535,7 @@ private:
                     const Rgb<T> fr_approx = sp.brdf->kd() / pi<T>;
                     const auto res = correlated_direct(
                         light, sp.x, sp.n, [&](const Vec3<T>& wi) { return sp.brdf->f(sp.frame.to_local(wi)); },
-                        fr_approx, [&](const Vec3<T>& a, const Vec3<T>& b) { return visible(a, sp.n, b, rays); },
+                        fr_approx, [&](const Vec3<T>&, const Vec3<T>& b) { return visible(sp, light, b, rays); },
                         std::span<const Vec2<T>>(u.data(), k));
                     switch (settings_.estimator) {
                         case DirectEstimator::importance: L += res.importance; break;
@@ -538,7 +589,7 @@ private:
         if (!(cos_l > T(0)) || wl.z <= T(0)) return Rgb<T>(T(0));
         const T pdf_light = prob / light.sampler().area() * r2 / cos_l;
         const Rgb<T> f = sp.brdf->f(wl);
-        if (f.max() <= T(0) || !visible(sp.x, sp.n, y, rays)) return Rgb<T>(T(0));
+        if (f.max() <= T(0) || !visible(sp, light, y, rays)) return Rgb<T>(T(0));
         return light.radiance() * f * (wl.z / (k * pdf_light + sp.brdf->sampling_pdf(wl)));
     }
 
@@ -590,7 +641,7 @@ private:
         const Rgb<T> f = sp.brdf->f(wl);
         if (f.max() <= T(0)) return Rgb<T>(T(0));
         ++rays;
-        if (accel_.any_hit(spawn(sp.x, sp.n, we))) return Rgb<T>(T(0));
+        if (accel_.any_hit(spawn(sp, we))) return Rgb<T>(T(0));
         return env.eval(we) * f * (wl.z * balance(pdf_env, sp.brdf->sampling_pdf(wl)) / pdf_env);
     }
 
@@ -601,7 +652,7 @@ private:
             const T r2 = glm::dot(d, d);
             const Vec3<T> wl = sp.frame.to_local(d / std::sqrt(r2));
             if (wl.z <= T(0)) continue;  // behind the shading plane: culled before any ray
-            if (visible(sp.x, sp.n, pl.position, rays)) L += pl.intensity * sp.brdf->f(wl) * (wl.z / r2);
+            if (visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0)), rays)) L += pl.intensity * sp.brdf->f(wl) * (wl.z / r2);
         }
         return L;
     }

@@ -39,7 +39,9 @@ using RenderAccel = KdTree<float, Ivm<float>, CompactSubtrees<15>>;
 
 struct RenderOptions {
     RenderSettings settings{};
-    std::string roulette = "spectral";
+    /// The default is the most efficient roulette across bench_convergence's scenes
+    /// (docs/tracer.md): the field's throughput rule with 000 section 2.3's radiance estimate.
+    std::string roulette = "throughput+estimate";
     /// Throughput roulettes: vertices before the first roulette decision (ThroughputRoulette's
     /// min_depth).
     int rr_depth = 3;
