@@ -508,3 +508,33 @@ TEST_CASE("scale and translation: the Cornell box renders the same image whereve
         }
     }
 }
+
+TEST_CASE("depth cap: far out of reach by default, and walks it cuts are counted") {
+    // A grey furnace of albedo 0.99 and emission 0.01 has radiance 1 everywhere; walks are
+    // ~100 vertices long. With the default cap (1024) the image is 1 within 4 standard errors;
+    // a cap of 64 cuts most walks (biased: about 1 - 0.99^64 = 47% of the light reaches the
+    // camera), and the result says how many it cut.
+    Scene<float> s = builtin_scene<float>("furnace");
+    for (auto& m : s.materials) {
+        m.kd = Rgb<float>(0.99f);
+        m.ks = Rgb<float>(0.0f);
+        m.emission = Rgb<float>(0.01f);
+    }
+    RenderOptions o;
+    o.settings.width = o.settings.height = 12;
+    o.settings.spp = 32;
+    o.direct = "brdf";
+    o.roulette = "throughput";
+    const RenderResult r = render_scene(s, o);
+    Rgb<double> mean, se;
+    image_mean(r, mean, se);
+    const double paths = double(r.paths);
+    CHECK(r.paths == std::uint64_t(12 * 12 * 32));
+    CHECK(double(r.capped_walks) < 1e-3 * paths);
+    CHECK(std::abs(mean[0] - 1.0) < 4.0 * se[0]);
+    o.settings.max_depth = 64;
+    const RenderResult capped = render_scene(s, o);
+    image_mean(capped, mean, se);
+    CHECK(double(capped.capped_walks) > 0.3 * paths);
+    CHECK(mean[0] < 0.7);
+}
