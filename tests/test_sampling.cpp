@@ -22,6 +22,7 @@
 #include <glint/core/spectrum.hpp>
 #include <glint/sampling/correlated.hpp>
 #include <glint/sampling/halton.hpp>
+#include <glint/sampling/permuted_radical_inverse.hpp>
 #include <glint/sampling/primes.hpp>
 #include <glint/sampling/radical_inverse.hpp>
 #include <glint/sampling/roulette.hpp>
@@ -262,48 +263,248 @@ TEST_CASE("exact: Hammersley set of N points has first coordinate i/N") {
 
 TEST_CASE("exact: HaltonSampler enumerates exactly the global points inside each pixel") {
     for (auto [w, h] : {std::pair{8, 6}, std::pair{5, 7}, std::pair{130, 3}}) {
-        HaltonSampler<double> sampler(w, h, 6, HaltonRandomization::owen, 3);
-        const std::uint64_t stride = sampler.stride();
-        const std::uint64_t sx = sampler.scale(0), sy = sampler.scale(1);
-        CHECK(sx >= std::uint64_t(std::min(w, 128)));
-        CHECK(sy >= std::uint64_t(std::min(h, 128)));
-        std::set<std::uint64_t> indices;
-        for (int y = 0; y < int(sy); ++y) {
-            for (int x = 0; x < int(sx); ++x) {
-                for (std::uint64_t s = 0; s < 3; ++s) {
-                    const std::uint64_t g = sampler.global_index(x, y, s);
-                    indices.insert(g);
-                    // The global point, scaled to the image, lies in pixel (x, y) ...
-                    // (Phi is rounded down: an exact k/3 reads k/3 - ulp, hence the nudge.)
-                    const double gx = radical_inverse<double>(2, g) * double(sx) + 0x1p-40;
-                    const double gy = radical_inverse<double>(3, g) * double(sy) + 0x1p-40;
-                    REQUIRE(int(gx) == x);
-                    REQUIRE(int(gy) == y);
-                    // ... at the offset the sampler reports.
-                    const Vec2<double> o = sampler.pixel_offset(g);
-                    CHECK(std::abs(gx - x - o.x) < 1e-9);
-                    CHECK(std::abs(gy - y - o.y) < 1e-9);
-                    CHECK(o.x < 1.0);
-                    CHECK(o.y < 1.0);
+        for (auto r : {HaltonRandomization::owen, HaltonRandomization::digit_permutation}) {
+            HaltonSampler<double> sampler(w, h, 6, r, 3);
+            const std::uint64_t stride = sampler.stride();
+            const std::uint64_t sx = sampler.scale(0), sy = sampler.scale(1);
+            CHECK(sx >= std::uint64_t(std::min(w, 128)));
+            CHECK(sy >= std::uint64_t(std::min(h, 128)));
+            std::set<std::uint64_t> indices;
+            for (int y = 0; y < int(sy); ++y) {
+                for (int x = 0; x < int(sx); ++x) {
+                    for (std::uint64_t s = 0; s < 3; ++s) {
+                        const std::uint64_t g = sampler.global_index(x, y, s);
+                        indices.insert(g);
+                        // The global point, scaled to the image, lies in pixel (x, y) ...
+                        // (Phi is rounded down: an exact k/3 reads k/3 - ulp, hence the nudge.)
+                        const double gx = radical_inverse<double>(2, g) * double(sx) + 0x1p-40;
+                        const double gy = radical_inverse<double>(3, g) * double(sy) + 0x1p-40;
+                        REQUIRE(int(gx) == x);
+                        REQUIRE(int(gy) == y);
+                        // ... at the offset the sampler reports.
+                        const Vec2<double> o = sampler.pixel_offset(g);
+                        CHECK(std::abs(gx - x - o.x) < 1e-9);
+                        CHECK(std::abs(gy - y - o.y) < 1e-9);
+                        CHECK(o.x < 1.0);
+                        CHECK(o.y < 1.0);
+                    }
                 }
             }
+            // Three samples per pixel use exactly the first 3 * stride points of the sequence.
+            CHECK(indices.size() == 3 * stride);
+            CHECK(*indices.rbegin() == 3 * stride - 1);
         }
-        // Three samples per pixel use exactly the first 3 * stride points of the sequence.
-        CHECK(indices.size() == 3 * stride);
-        CHECK(*indices.rbegin() == 3 * stride - 1);
     }
-    // Sampler interface: dimensions >= 2 are the randomized Halton dimensions.
-    HaltonSampler<float> s(16, 16, 4, HaltonRandomization::cranley_patterson, 9);
+    // Sampler interface: dimensions 2 .. dims-1 are the randomized Halton dimensions.
     static_assert(Sampler<HaltonSampler<float>, float>);
     static_assert(Sampler<RandomSampler<float>, float>);
-    s.start_pixel_sample(3, 5, 2);
-    const std::uint64_t g = s.global_index(3, 5, 2);
-    CHECK(s.get_1d() == s.sample(g, 2));
-    CHECK(s.get_1d() == s.sample(g, 3));
-    CHECK(s.get_1d() == s.sample(g, 2));  // wraps to dimension 2
+    for (auto r : {HaltonRandomization::cranley_patterson, HaltonRandomization::digit_permutation}) {
+        HaltonSampler<float> s(16, 16, 4, r, 9);
+        s.start_pixel_sample(3, 5, 2);
+        const std::uint64_t g = s.global_index(3, 5, 2);
+        CHECK(s.get_1d() == s.sample(g, 2));
+        CHECK(s.get_1d() == s.sample(g, 3));
+        CHECK_THROWS_AS(s.sample(g, 4), Error);  // past the last Halton dimension
+    }
     CHECK_THROWS_AS(HaltonSampler<float>(0, 4, 4), Error);
+    CHECK_THROWS_AS(HaltonSampler<float>(4, 4, 2), Error);
     CHECK_THROWS_AS(Halton<float>(prime_count + 1), Error);
     CHECK_THROWS_AS(Halton<float>(0), Error);
+}
+
+namespace {
+
+/// R = sum_j pi_j(a_j) b^(n-1-j) digit by digit with plain division (the reference the table
+/// lookups of PermutedRadicalInverse must equal).
+template <class T>
+detail::u128 reference_reversed_digits(const PermutedRadicalInverse<T>& p, std::size_t dim, std::uint64_t index) {
+    const std::uint32_t b = p.base(dim);
+    const int n = p.digits(dim);
+    detail::u128 reversed = 0;
+    for (int j = 0; j < n; ++j) {
+        reversed = reversed * b + p.permutation(dim, j, std::uint32_t(index % b));
+        index /= b;
+    }
+    return reversed;
+}
+
+detail::u128 power(std::uint32_t b, int n) {
+    detail::u128 p = 1;
+    for (int i = 0; i < n; ++i) p *= b;
+    return p;
+}
+
+template <class T>
+void check_permuted_radical_inverse(std::uint32_t max_group_base, std::size_t identity_dims) {
+    const std::size_t dims = 120;
+    const PermutedRadicalInverse<T> p(dims, 77, identity_dims, max_group_base);
+    Pcg32 rng(5, 6);
+    for (std::size_t dim = 0; dim < dims; ++dim) {
+        const std::uint32_t b = p.base(dim);
+        const int n = p.digits(dim);
+        INFO("T digits " << std::numeric_limits<T>::digits << " dim " << dim << " base " << b
+                         << " digits " << n << " max group base " << max_group_base);
+        REQUIRE(b == primes[dim]);
+        // Enough digits for T's precision unless b^n would reach 2^64.
+        CHECK(power(b, n) < (detail::u128(1) << 64));
+        CHECK((power(b, n) >= (detail::u128(1) << std::numeric_limits<T>::digits) ||
+               n == scrambled_digit_count(b)));
+        // Each digit position's map is a permutation (the identity below identity_dims).
+        for (int j = 0; j < n; ++j) {
+            std::vector<int> seen(b, 0);
+            bool identity = true;
+            for (std::uint32_t a = 0; a < b; ++a) {
+                const std::uint32_t v = p.permutation(dim, j, a);
+                REQUIRE(v < b);
+                seen[v]++;
+                identity = identity && v == a;
+            }
+            CHECK(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
+            if (dim < identity_dims) CHECK(identity);
+        }
+        CHECK(p.offset(dim) >= 0.0);
+        CHECK(p.offset(dim) < 1.0);
+        if (dim < identity_dims) CHECK(p.offset(dim) == 0.0);
+        // Table lookups equal the digit-by-digit reference; the value is (R + u) / b^n.
+        const long double bn = static_cast<long double>(power(b, n));
+        for (int t = 0; t < 300; ++t) {
+            const std::uint64_t index = t < 200 ? std::uint64_t(t) : t < 250 ? rng.next_u64() : ~std::uint64_t(t - 250);
+            const std::uint64_t r = p.reversed_digits(dim, index);
+            REQUIRE(detail::u128(r) == reference_reversed_digits(p, dim, index));
+            const T x = p(dim, index);
+            REQUIRE(x >= T(0));
+            REQUIRE(x < T(1));
+            // Rounding: R to double, + u, * 1/b^n (each at most half a double ulp of a value
+            // below 1, 1/b^n itself rounded), then to T (half an ulp of T).
+            const long double exact = (static_cast<long double>(r) + p.offset(dim)) / bn;
+            CHECK(std::abs(static_cast<long double>(x) - exact) <=
+                  std::ldexp(1.0L, -std::numeric_limits<T>::digits) + std::ldexp(4.0L, -53));
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("exact: InvariantDivisor equals integer division for 64-bit numerators") {
+    Pcg32 rng(11, 12);
+    std::vector<std::uint32_t> divisors = {1, 2, 3, 5, 7, 8, 625, 4096, 7919, 8161, 65536, 3u * 3u * 3u * 3u * 3u,
+                                           0x80000000u, 0xffffffffu};
+    for (int i = 0; i < 200; ++i) divisors.push_back(rng.next_u32() >> (rng.next_u32() % 32));
+    for (std::uint32_t d : divisors) {
+        if (d == 0) continue;
+        const InvariantDivisor div(d);
+        INFO("d " << d);
+        CHECK(div.divisor() == d);
+        for (std::uint64_t n : {std::uint64_t(0), std::uint64_t(d - 1), std::uint64_t(d), ~std::uint64_t(0),
+                                ~std::uint64_t(0) - 1, std::uint64_t(1) << 63})
+            CHECK(div.quotient(n) == n / d);
+        for (int t = 0; t < 2000; ++t) {
+            const std::uint64_t n = rng.next_u64() >> (t % 64);
+            REQUIRE(div.quotient(n) == n / d);
+        }
+    }
+}
+
+TEST_CASE("exact: permuted radical inverse equals the digit-by-digit reference") {
+    // Digit groups up to 4096 (the default), 64 and 2 (one digit per table: no grouping), with
+    // the pixel dimensions unpermuted or every dimension permuted, at float and double precision.
+    for (std::uint32_t g : {4096u, 64u, 2u}) {
+        check_permuted_radical_inverse<float>(g, 2);
+        check_permuted_radical_inverse<double>(g, 0);
+    }
+    check_permuted_radical_inverse<double>(4096, 120);  // plain radical inverse, truncated
+    CHECK(PermutedRadicalInverse<double>(3, 0, 3)(1, 1234) == doctest::Approx(radical_inverse<double>(3, 1234)).epsilon(1e-15));
+    CHECK_THROWS_AS(PermutedRadicalInverse<float>(0, 1), Error);
+    CHECK_THROWS_AS(PermutedRadicalInverse<float>(prime_count + 1, 1), Error);
+    CHECK_THROWS_AS(PermutedRadicalInverse<float>(4, 1, 0, 70000), Error);
+}
+
+TEST_CASE("exact: permuted radical inverse keeps the first b^k points of each dimension stratified") {
+    // Points 0 .. b^k - 1 of dimension `dim` fall one into each interval [i / b^k, (i+1) / b^k):
+    // exactly on the integer R (its leading k digits), and on the value up to T's rounding.
+    const PermutedRadicalInverse<float> p(40, 2024, 2);
+    for (std::size_t dim : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(5),
+                            std::size_t(10), std::size_t(39)}) {
+        const std::uint32_t b = p.base(dim);
+        for (int k = 1; k <= 3 && power(b, k) <= 200000; ++k) {
+            const auto count = std::uint64_t(power(b, k));
+            const auto below = std::uint64_t(power(b, p.digits(dim) - k));
+            std::vector<int> strata(count, 0);
+            int value_misses = 0;
+            for (std::uint64_t i = 0; i < count; ++i) {
+                const std::uint64_t stratum = p.reversed_digits(dim, i) / below;
+                REQUIRE(stratum < count);
+                strata[stratum]++;
+                const double x = double(p(dim, i)) * double(count);
+                if (std::uint64_t(x) != stratum) ++value_misses;
+                CHECK(std::abs(x - double(stratum) - 0.5) <= 0.5 + double(count) * 0x1p-24);
+            }
+            INFO("dim " << dim << " base " << b << " k " << k << " value rounded across a stratum edge " << value_misses);
+            CHECK(std::all_of(strata.begin(), strata.end(), [](int c) { return c == 1; }));
+        }
+    }
+}
+
+TEST_CASE("statistics: permuted radical inverse points are uniform over seeds (unbiased)") {
+    // For fixed indices, the mean over seeds of x and x^2 is 1/2 and 1/3: each point is uniform
+    // on [0, 1) (random digits plus the random offset of the last digit).
+    const std::size_t dims[] = {2, 3, 9, 23};
+    const std::uint64_t indices[] = {0, 1, 31104 * 5 + 17};
+    std::vector<Stats> stats(std::size(dims) * std::size(indices) * 2);
+    for (std::uint64_t seed = 1; seed <= 1500; ++seed) {
+        const PermutedRadicalInverse<float> p(24, seed, 2);
+        std::size_t c = 0;
+        for (std::size_t dim : dims)
+            for (std::uint64_t index : indices) {
+                const double x = p(dim, index);
+                stats[c++].add(x);
+                stats[c++].add(x * x);
+            }
+    }
+    std::size_t c = 0;
+    for (std::size_t dim : dims)
+        for (std::uint64_t index : indices)
+            for (int k = 1; k <= 2; ++k, ++c) {
+                INFO("dim " << dim << " index " << index << " moment " << k << " mean " << stats[c].mean
+                            << " stderr " << stats[c].stderr_mean());
+                CHECK(std::abs(stats[c].mean - 1.0 / (k + 1)) <= 4 * stats[c].stderr_mean());
+            }
+}
+
+TEST_CASE("exact: HaltonSampler past its last dimension continues with fresh numbers, never reuses") {
+    // With dims = 5 the walk draws Halton dimensions 2, 3, 4, then a PCG32 stream seeded by
+    // (seed, pixel, sample index): no value repeats, and the stream differs between samples.
+    for (auto r : {HaltonRandomization::digit_permutation, HaltonRandomization::owen,
+                   HaltonRandomization::none}) {
+        HaltonSampler<float> s(16, 16, 5, r, 9);
+        std::vector<float> first;
+        s.start_pixel_sample(3, 5, 2);
+        for (int i = 0; i < 40; ++i) first.push_back(s.get_1d());
+        const std::uint64_t g = s.global_index(3, 5, 2);
+        for (std::size_t d = 2; d < 5; ++d) CHECK(first[d - 2] == s.sample(g, d));
+        const std::set<float> distinct(first.begin(), first.end());
+        INFO("randomization " << std::string(short_name(r)));
+        CHECK(distinct.size() == first.size());
+        s.start_pixel_sample(3, 5, 2);  // the same sample again: the same numbers
+        for (int i = 0; i < 40; ++i) CHECK(s.get_1d() == first[std::size_t(i)]);
+        s.start_pixel_sample(3, 5, 3);  // the next sample: another tail
+        for (int i = 0; i < 3; ++i) s.get_1d();
+        int same = 0;
+        for (int i = 3; i < 40; ++i) same += s.get_1d() == first[std::size_t(i)];
+        CHECK(same == 0);
+    }
+    // The tail numbers are uniform: mean 1/2 within standard errors over pixels and samples.
+    HaltonSampler<double> s(8, 8, 3, HaltonRandomization::digit_permutation, 4);
+    Stats tail;
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x)
+            for (std::uint64_t i = 0; i < 16; ++i) {
+                s.start_pixel_sample(x, y, i);
+                s.get_1d();
+                for (int k = 0; k < 10; ++k) tail.add(s.get_1d());
+            }
+    INFO("tail mean " << tail.mean << " stderr " << tail.stderr_mean());
+    CHECK(std::abs(tail.mean - 0.5) <= 4 * tail.stderr_mean());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/random.hpp>
+#include <glint/sampling/permuted_radical_inverse.hpp>
 #include <glint/sampling/primes.hpp>
 #include <glint/sampling/radical_inverse.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -200,24 +202,36 @@ constexpr std::uint64_t multiplicative_inverse(std::int64_t x, std::int64_t n) {
 }  // namespace detail
 
 /// Per-pixel enumeration of one global (randomized) Halton sequence; satisfies Sampler<T>.
-/// Dimensions 0 and 1 (bases 2 and 3) place the point in the image and are never randomized
-/// (that would break the enumeration); dimensions 2 .. dims-1 carry the randomization. Asking
-/// for more than `dims` dimensions wraps around to dimension 2.
+///
+/// Dimension policy. Dimensions 0 and 1 (bases 2 and 3) place the point in the image and are
+/// never randomized (that would break the enumeration). Dimensions 2 .. dims-1 are Halton
+/// dimensions randomized as asked: `digit_permutation` (and `none`) by the tables of
+/// PermutedRadicalInverse (permuted_radical_inverse.hpp, the fast path), `cranley_patterson`
+/// and `owen` by Halton<T>. A walk that asks for more than `dims` dimensions continues with
+/// independent uniform numbers from a PCG32 stream seeded by (seed, pixel, sample index),
+/// like RandomSampler: no number is ever reused, so estimators stay unbiased however long
+/// the walk (high Halton dimensions converge like random numbers anyway, see docs/sampling.md).
 template <Scalar T>
 class HaltonSampler {
 public:
     HaltonSampler(int width, int height, std::size_t dims,
                   HaltonRandomization randomization = HaltonRandomization::none,
                   std::uint64_t seed = 0, int max_resolution = 128)
-        : halton_(dims, randomization, seed) {
+        : randomization_(randomization), dims_(dims), seed_(seed) {
         if (width <= 0 || height <= 0)
             throw Error("glint::HaltonSampler: image size " + std::to_string(width) + "x" +
                         std::to_string(height) + " must be positive");
-        if (dims < 3)
-            throw Error("glint::HaltonSampler: needs at least 3 dimensions (2 for the pixel)");
+        if (dims < 3 || dims > prime_count)
+            throw Error("glint::HaltonSampler: dimension count " + std::to_string(dims) + " outside [3, " +
+                        std::to_string(prime_count) + "] (2 for the pixel, one prime base each)");
         if (max_resolution <= 0 || max_resolution > 4096)
             throw Error("glint::HaltonSampler: max_resolution must be in [1, 4096]");
         max_resolution_ = max_resolution;
+        const bool table = randomization == HaltonRandomization::none ||
+                           randomization == HaltonRandomization::digit_permutation;
+        table_ = std::make_shared<const PermutedRadicalInverse<T>>(
+            table ? dims : 2, seed, randomization == HaltonRandomization::none ? dims : 2);
+        if (!table) halton_ = std::make_shared<const Halton<T>>(dims, randomization, seed);
         const int res[2] = {width, height};
         for (int i = 0; i < 2; ++i) {
             const std::uint64_t base = primes[std::size_t(i)];
@@ -230,11 +244,15 @@ public:
             scales_[i] = scale;
             exponents_[i] = exponent;
         }
+        scale_y_ = InvariantDivisor(std::uint32_t(scales_[1]));
         stride_ = scales_[0] * scales_[1];
         inverses_[0] = detail::multiplicative_inverse(std::int64_t(scales_[1]), std::int64_t(scales_[0]));
         inverses_[1] = detail::multiplicative_inverse(std::int64_t(scales_[0]), std::int64_t(scales_[1]));
     }
 
+    /// Number of dimensions drawn from the Halton sequence (the pixel's two included).
+    std::size_t dims() const { return dims_; }
+    HaltonRandomization randomization() const { return randomization_; }
     /// Number of consecutive global indices that visit every pixel (of a max_resolution tile)
     /// exactly once: 2^e0 * 3^e1.
     std::uint64_t stride() const { return stride_; }
@@ -243,55 +261,89 @@ public:
 
     /// Index in the global sequence of sample `sample_index` of pixel (x, y).
     std::uint64_t global_index(int x, int y, std::uint64_t sample_index) const {
-        std::uint64_t index = 0;
-        if (stride_ > 1) {
-            const int m = max_resolution_;
-            const std::uint64_t pm[2] = {std::uint64_t(((x % m) + m) % m),
-                                         std::uint64_t(((y % m) + m) % m)};
-            for (int i = 0; i < 2; ++i) {
-                const std::uint64_t offset =
-                    inverse_radical_inverse(pm[i], primes[std::size_t(i)], exponents_[i]);
-                index += offset * (stride_ / scales_[i]) * inverses_[i];
-            }
-            index %= stride_;
-        }
-        return index + sample_index * stride_;
+        return pixel_first_index(x, y) + sample_index * stride_;
     }
 
     /// Position inside its pixel of global point `index`: the fractional parts of
     /// Phi_2(index) * 2^e0 and Phi_3(index) * 3^e1.
     Vec2<T> pixel_offset(std::uint64_t index) const {
-        return Vec2<T>(radical_inverse<T>(2, index >> exponents_[0]),
-                       radical_inverse<T>(3, index / scales_[1]));
+        return Vec2<T>(radical_inverse<T>(2, index >> exponents_[0]), (*table_)(1, scale_y_.quotient(index)));
     }
 
-    /// Dimension `dim` (>= 2) of global point `index`.
+    /// Halton dimension `dim` (2 <= dim < dims()) of global point `index`.
     T sample(std::uint64_t index, std::size_t dim) const {
-        if (dim >= halton_.dims()) dim = 2 + (dim - 2) % (halton_.dims() - 2);
-        return halton_.sample(index, dim);
+        if (dim < 2 || dim >= dims_)
+            throw Error("glint::HaltonSampler::sample: dimension " + std::to_string(dim) + " outside [2, " +
+                        std::to_string(dims_) + ")");
+        return halton_dimension(index, dim);
     }
 
     // Sampler interface.
     void start_pixel_sample(int x, int y, std::uint64_t sample_index) {
-        index_ = global_index(x, y, sample_index);
+        if (x != cached_x_ || y != cached_y_) {  // a pixel's samples come one after another
+            cached_first_ = pixel_first_index(x, y);
+            cached_x_ = x;
+            cached_y_ = y;
+        }
+        index_ = cached_first_ + sample_index * stride_;
+        sample_index_ = sample_index;
         dim_ = 2;
+        tail_started_ = false;
     }
     Vec2<T> get_pixel_2d() const { return pixel_offset(index_); }
-    T get_1d() { return sample(index_, dim_++); }
+    T get_1d() { return dim_ < dims_ ? halton_dimension(index_, dim_++) : tail(); }
     Vec2<T> get_2d() {
-        const T a = sample(index_, dim_++);
-        return Vec2<T>(a, sample(index_, dim_++));
+        const T a = get_1d();
+        return Vec2<T>(a, get_1d());
     }
 
 private:
-    Halton<T> halton_;
+    T halton_dimension(std::uint64_t index, std::size_t dim) const {
+        return halton_ ? halton_->sample(index, dim) : (*table_)(dim, index);
+    }
+
+    /// Past the last Halton dimension: PCG32 seeded by (seed, pixel, sample index).
+    T tail() {
+        if (!tail_started_) {
+            const std::uint64_t pixel =
+                (std::uint64_t(std::uint32_t(cached_x_)) << 32) | std::uint64_t(std::uint32_t(cached_y_));
+            tail_.seed_with(sample_index_ ^ detail::mix_bits(seed_ ^ 0x68616c746f6e7461ULL), pixel);
+            tail_started_ = true;
+        }
+        return tail_.uniform<T>();
+    }
+
+    /// The first global index inside pixel (x, y): congruent to the inverse radical inverses of
+    /// x and y modulo 2^e0 and 3^e1 (Chinese remainder theorem).
+    std::uint64_t pixel_first_index(int x, int y) const {
+        if (stride_ <= 1) return 0;
+        const int m = max_resolution_;
+        const std::uint64_t pm[2] = {std::uint64_t(((x % m) + m) % m), std::uint64_t(((y % m) + m) % m)};
+        std::uint64_t index = 0;
+        for (int i = 0; i < 2; ++i) {
+            const std::uint64_t offset = inverse_radical_inverse(pm[i], primes[std::size_t(i)], exponents_[i]);
+            index += offset * (stride_ / scales_[i]) * inverses_[i];
+        }
+        return index % stride_;
+    }
+
+    HaltonRandomization randomization_;
+    std::size_t dims_;
+    std::uint64_t seed_;
+    std::shared_ptr<const PermutedRadicalInverse<T>> table_;  // dims 0, 1 (and the rest if used)
+    std::shared_ptr<const Halton<T>> halton_;                 // cranley_patterson and owen only
     int max_resolution_ = 128;
     std::uint64_t scales_[2] = {1, 1};
     int exponents_[2] = {0, 0};
+    InvariantDivisor scale_y_;
     std::uint64_t inverses_[2] = {0, 0};
     std::uint64_t stride_ = 1;
-    std::uint64_t index_ = 0;
+    // Current pixel sample.
+    std::uint64_t index_ = 0, sample_index_ = 0, cached_first_ = 0;
     std::size_t dim_ = 2;
+    int cached_x_ = std::numeric_limits<int>::min(), cached_y_ = 0;
+    bool tail_started_ = false;
+    Pcg32 tail_;
 };
 
 }  // namespace glint

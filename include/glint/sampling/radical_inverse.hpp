@@ -97,6 +97,36 @@ constexpr std::uint32_t permutation_element(std::uint32_t i, std::uint32_t n, st
 
 }  // namespace detail
 
+/// Exact floor(n / d) for every 64-bit n by one multiply-high, a subtraction, an addition and
+/// two shifts, with no division (Granlund and Montgomery, "Division by invariant integers using
+/// multiplication", PLDI 1994, Figure 4.1): with l = ceil(log2 d) and
+/// m = floor(2^64 (2^l - d) / d) + 1 < 2^64, t = floor(m n / 2^64) and
+/// floor(n / d) = (t + (n - t) / 2) / 2^(l-1) (shifts; for l = 0 both shifts are 0).
+/// The digit loops of the permuted radical inverse divide by a base this way.
+class InvariantDivisor {
+public:
+    constexpr InvariantDivisor() = default;
+    /// d >= 1 (the caller checks; glint divides by prime bases and their powers).
+    constexpr explicit InvariantDivisor(std::uint32_t d) : divisor_(d) {
+        int l = 0;
+        while ((std::uint64_t(1) << l) < d) ++l;
+        const detail::u128 numerator = (detail::u128(1) << 64) * ((detail::u128(1) << l) - d);
+        multiplier_ = static_cast<std::uint64_t>(numerator / d + 1);
+        shift1_ = l < 1 ? l : 1;
+        shift2_ = l > 0 ? l - 1 : 0;
+    }
+    constexpr std::uint32_t divisor() const { return divisor_; }
+    constexpr std::uint64_t quotient(std::uint64_t n) const {
+        const auto t = static_cast<std::uint64_t>((detail::u128(multiplier_) * n) >> 64);
+        return (t + ((n - t) >> shift1_)) >> shift2_;
+    }
+
+private:
+    std::uint64_t multiplier_ = 1;
+    std::uint32_t divisor_ = 1;
+    int shift1_ = 0, shift2_ = 0;
+};
+
 /// Largest T not above the 64-bit fixed-point fraction `bits` * 2^-64 (truncation, so < 1).
 template <Scalar T>
 constexpr T fraction_to_unit(std::uint64_t bits) {

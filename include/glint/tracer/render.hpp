@@ -12,7 +12,7 @@
 //                  (no roulette, throughput cut-off)
 //        direct    brdf | mis | importance | correlated | combined
 //        selection dis | w | mis
-//        sampler   random | halton | halton-cp | halton-perm
+//        sampler   random | halton (= halton-perm) | halton-owen | halton-cp
 #pragma once
 
 #include <algorithm>
@@ -222,16 +222,17 @@ RenderResult render_roulette(const Scene<float>& scene, const RenderAccel& accel
 /// policies.
 inline RenderResult render(const Scene<float>& scene, const RenderAccel& accel, const RenderOptions& o) {
     if (o.sampler == "random") return detail::render_roulette(scene, accel, o, RandomSampler<float>(o.seed));
-    // Halton walks (sampling/halton.hpp), randomized by Owen scrambling ("halton"), a
-    // Cranley-Patterson rotation ("halton-cp", cheapest) or random digit permutations
-    // ("halton-perm"): each point uniform, so every estimator stays unbiased.
+    // Halton walks (sampling/halton.hpp): "halton" (or "halton-perm") randomized by random
+    // digit permutations from tables (fast), "halton-owen" by Owen scrambling, "halton-cp" by a
+    // Cranley-Patterson rotation; each point uniform, so every estimator stays unbiased.
     HaltonRandomization randomization;
-    if (o.sampler == "halton") randomization = HaltonRandomization::owen;
+    if (o.sampler == "halton" || o.sampler == "halton-perm") randomization = HaltonRandomization::digit_permutation;
+    else if (o.sampler == "halton-owen") randomization = HaltonRandomization::owen;
     else if (o.sampler == "halton-cp") randomization = HaltonRandomization::cranley_patterson;
-    else if (o.sampler == "halton-perm") randomization = HaltonRandomization::digit_permutation;
-    else throw Error("unknown sampler '" + o.sampler + "' (random, halton, halton-cp, halton-perm)");
+    else throw Error("unknown sampler '" + o.sampler + "' (random, halton, halton-perm, halton-owen, halton-cp)");
+    const std::size_t dims = 256;
     return detail::render_roulette(
-        scene, accel, o, HaltonSampler<float>(o.settings.width, o.settings.height, 256, randomization, o.seed));
+        scene, accel, o, HaltonSampler<float>(o.settings.width, o.settings.height, dims, randomization, o.seed));
 }
 
 }  // namespace glint
