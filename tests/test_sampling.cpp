@@ -401,7 +401,11 @@ TEST_CASE("exact: InvariantDivisor equals integer division for 64-bit numerators
         for (int t = 0; t < 2000; ++t) {
             const std::uint64_t n = rng.next_u64() >> (t % 64);
             REQUIRE(div.quotient(n) == n / d);
+            if (d > 1) REQUIRE(div.quotient32(std::uint32_t(n)) == std::uint32_t(n) / d);
         }
+        if (d > 1)
+            for (std::uint32_t n : {0u, d - 1, d, 0xffffffffu, 0xfffffffeu, 0x80000000u})
+                CHECK(div.quotient32(n) == n / d);
     }
 }
 

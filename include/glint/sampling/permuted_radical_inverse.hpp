@@ -47,13 +47,24 @@ struct DigitGrouping {
     int groups = 1;
 };
 
-/// The grouping for base b at `precision` bits: the fewest groups that keep
-/// min(ceil(precision / log2 b), scrambled_digit_count(b)) digits, then the smallest groups.
-constexpr DigitGrouping digit_grouping(std::uint32_t b, int precision, std::uint32_t max_group_base) {
+/// The grouping for base b at `precision` bits: `preferred_groups` groups of the fewest digits
+/// that reach 2^precision, if b^digits < 2^64 and the group base stays <= max(max_group_base, b)
+/// (a fixed group count lets the lookups be unrolled, with no loop branch to mispredict);
+/// otherwise the fewest groups that keep min(ceil(precision / log2 b), scrambled_digit_count(b))
+/// digits.
+constexpr DigitGrouping digit_grouping(std::uint32_t b, int precision, std::uint32_t max_group_base,
+                                       int preferred_groups) {
     const int max_digits = scrambled_digit_count(b);  // b^max_digits < 2^64
+    const detail::u128 target = detail::u128(1) << precision;
+    std::uint64_t group_base = b;
+    for (int k = 1; k * preferred_groups <= max_digits && group_base <= std::max(max_group_base, b);
+         ++k, group_base *= b) {
+        detail::u128 power = 1;
+        for (int i = 0; i < preferred_groups; ++i) power *= group_base;
+        if (power >= target) return {k, preferred_groups};
+    }
     int need = 0;
-    for (detail::u128 power = 1; power < (detail::u128(1) << precision) && need < max_digits; ++need)
-        power *= b;
+    for (detail::u128 power = 1; power < target && need < max_digits; ++need) power *= b;
     int k_max = 1;
     for (std::uint64_t power = std::uint64_t(b) * b; power <= max_group_base; power *= b) ++k_max;
     const int groups = (need + k_max - 1) / k_max;
@@ -114,9 +125,14 @@ public:
     /// Coordinate `dim` (< dims()) of point `index`: (R + u) / b^digits, in [0, 1).
     T operator()(std::size_t dim, std::uint64_t index) const {
         const Dimension& d = dims_[dim];
-        const double x = (double(reversed_digits(dim, index)) + d.offset) * d.scale;
+        const std::uint64_t r = d.groups == fixed_groups ? reversed_fixed(d, index) : reversed_digits(dim, index);
+        const double x = (double(r) + d.offset) * d.scale;
         return std::min(static_cast<T>(x), T(1) - std::numeric_limits<T>::epsilon() / T(2));
     }
+
+    /// The group count of (almost) every dimension: 4 groups of >= 6 bits for float, 6 of
+    /// >= 9 bits for double.
+    static constexpr int fixed_groups = std::numeric_limits<T>::digits <= 24 ? 4 : 6;
 
 private:
     struct Dimension {
@@ -127,9 +143,33 @@ private:
         std::size_t perm_offset = 0;  // k groups permutations of b entries in perms_
     };
 
+    /// reversed_digits for the fixed group count, unrolled; 32-bit indices (every index of a
+    /// render below 2^32 points) by the one-multiply quotient.
+    std::uint64_t reversed_fixed(const Dimension& d, std::uint64_t index) const {
+        const std::uint16_t* table = tables_.data() + d.table_offset;
+        const std::uint32_t B = d.divisor.divisor();
+        std::uint64_t reversed = 0;
+        if (index <= 0xffffffffu && B > 1) {
+            auto i = static_cast<std::uint32_t>(index);
+            for (int g = 0; g < fixed_groups; ++g, table += B) {  // constant trip count: unrolled
+                const std::uint32_t next = d.divisor.quotient32(i);
+                reversed = reversed * B + table[i - next * B];
+                i = next;
+            }
+            return reversed;
+        }
+        for (int g = 0; g < fixed_groups; ++g, table += B) {
+            const std::uint64_t next = d.divisor.quotient(index);
+            reversed = reversed * B + table[index - next * B];
+            index = next;
+        }
+        return reversed;
+    }
+
     void build_dimension(std::size_t dim, bool identity, std::uint32_t max_group_base, Pcg32& rng) {
         const std::uint32_t b = primes[dim];
-        const DigitGrouping grouping = digit_grouping(b, std::numeric_limits<T>::digits, max_group_base);
+        const DigitGrouping grouping =
+            digit_grouping(b, std::numeric_limits<T>::digits, max_group_base, fixed_groups);
         Dimension& d = dims_[dim];
         d.k = grouping.group_digits;
         d.groups = grouping.groups;

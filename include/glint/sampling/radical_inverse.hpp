@@ -112,6 +112,7 @@ public:
         while ((std::uint64_t(1) << l) < d) ++l;
         const detail::u128 numerator = (detail::u128(1) << 64) * ((detail::u128(1) << l) - d);
         multiplier_ = static_cast<std::uint64_t>(numerator / d + 1);
+        reciprocal32_ = d > 1 ? ~std::uint64_t(0) / d + 1 : 0;
         shift1_ = l < 1 ? l : 1;
         shift2_ = l > 0 ? l - 1 : 0;
     }
@@ -120,8 +121,15 @@ public:
         const auto t = static_cast<std::uint64_t>((detail::u128(multiplier_) * n) >> 64);
         return (t + ((n - t) >> shift1_)) >> shift2_;
     }
+    /// floor(n / d) for 32-bit n by one multiply-high alone: with c = floor((2^64 - 1) / d) + 1,
+    /// floor(c n / 2^64) = floor(n / d) for all n, d < 2^32 (Lemire, Kaser, Kurz, "Faster
+    /// remainder by direct computation", 2019, Theorem 1 with N = 32, F = 64).
+    constexpr std::uint32_t quotient32(std::uint32_t n) const {
+        return static_cast<std::uint32_t>((detail::u128(reciprocal32_) * n) >> 64);
+    }
 
 private:
+    std::uint64_t reciprocal32_ = 0;  // c of quotient32 (0 for d = 1, where 2^64 / d overflows)
     std::uint64_t multiplier_ = 1;
     std::uint32_t divisor_ = 1;
     int shift1_ = 0, shift2_ = 0;

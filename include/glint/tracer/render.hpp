@@ -230,7 +230,9 @@ inline RenderResult render(const Scene<float>& scene, const RenderAccel& accel, 
     else if (o.sampler == "halton-owen") randomization = HaltonRandomization::owen;
     else if (o.sampler == "halton-cp") randomization = HaltonRandomization::cranley_patterson;
     else throw Error("unknown sampler '" + o.sampler + "' (random, halton, halton-perm, halton-owen, halton-cp)");
-    const std::size_t dims = 256;
+    // 18 Halton dimensions (the pixel and the first two vertices of a walk), PCG after them:
+    // on the Cornell box as low an MSE as 256 dimensions at less cost (docs/sampling.md).
+    const std::size_t dims = 18;
     return detail::render_roulette(
         scene, accel, o, HaltonSampler<float>(o.settings.width, o.settings.height, dims, randomization, o.seed));
 }
