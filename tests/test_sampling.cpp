@@ -697,6 +697,32 @@ struct DirectScene {
 
 }  // namespace
 
+TEST_CASE("PolygonLight: either winding with LightSides::both; the front side decides with the default") {
+    DirectScene s;
+    const std::vector<Vec3<double>> reversed(s.verts.rbegin(), s.verts.rend());
+    const PolygonLight<double, 3> front_ccw{s.verts, Rgbd(4.0, 2.0, 1.0)};
+    const PolygonLight<double, 3> front_cw{reversed, Rgbd(4.0, 2.0, 1.0)};
+    const PolygonLight<double, 3> both_cw{reversed, Rgbd(4.0, 2.0, 1.0), LightSides::both};
+    const PolygonLight<double, 3> both_ccw{s.verts, Rgbd(4.0, 2.0, 1.0), LightSides::both};
+    Pcg32 rng(21);
+    std::array<Vec2<double>, 16> u;
+    for (auto& v : u) v = Vec2<double>(rng.uniform<double>(), rng.uniform<double>());
+    auto direct = [&](const PolygonLight<double, 3>& light) {
+        return correlated_direct(light, s.x, s.n, [&](const Vec3<double>&) { return s.fr(); }, s.fr(),
+                                 [](const Vec3<double>&, const Vec3<double>&) { return true; },
+                                 std::span<const Vec2<double>>(u));
+    };
+    // The receiver is below the light; the vertex order of DirectScene faces it.
+    const auto ref = direct(front_ccw), cw = direct(both_cw), ccw = direct(both_ccw), back = direct(front_cw);
+    REQUIRE(ref.combined[0] > 0.0);
+    for (int l = 0; l < 3; ++l) {
+        CHECK(cw.combined[l] == doctest::Approx(ref.combined[l]).epsilon(1e-12));
+        CHECK(cw.main_part[l] == doctest::Approx(ref.main_part[l]).epsilon(1e-12));
+        CHECK(ccw.combined[l] == doctest::Approx(ref.combined[l]).epsilon(1e-12));
+        CHECK(back.combined[l] == 0.0);  // a front-only light seen from behind: documented, by choice
+    }
+}
+
 TEST_CASE("exact: correlated direct lighting has zero variance for a fully visible diffuse light") {
     DirectScene s;
     const Rgbd J = s.light.radiance() * s.fr() * s.light.geometry_integral(s.x, s.n);
