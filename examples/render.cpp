@@ -21,6 +21,7 @@
 
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
+#define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>

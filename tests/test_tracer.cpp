@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,6 +18,7 @@
 
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
+#define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
@@ -395,6 +397,51 @@ TEST_CASE("io: EXR round trip with layers, PNG preview, and clear errors") {
     }
     std::filesystem::remove(exr);
     std::filesystem::remove(png);
+}
+
+TEST_CASE("io: an EXR header declaring a huge image is rejected before allocation") {
+    // A valid 2x2 file whose data window is patched to declare a huge image, padded so that
+    // OpenEXR's offset table reads (2.7 kB), as a crafted file would be.
+    const std::string path = temp_path("huge.exr");
+    auto craft = [&](std::int32_t w, std::int32_t h) {
+        write_exr(path, Image<Rgb<float>>(2, 2));
+        std::string bytes;
+        {
+            std::ifstream in(path, std::ios::binary);
+            bytes.assign(std::istreambuf_iterator<char>(in), {});
+        }
+        const std::string key("dataWindow\0box2i\0", 17);
+        const auto at = bytes.find(key);
+        REQUIRE(at != std::string::npos);
+        const std::int32_t box[4] = {0, 0, w - 1, h - 1};
+        std::memcpy(bytes.data() + at + key.size() + 4, box, sizeof box);  // after the 4-byte size
+        bytes.append(2400, '\0');
+        std::ofstream(path, std::ios::binary) << bytes;
+    };
+    auto message = [&](const ExrLimits& limits) -> std::string {
+        try {
+            read_exr_rgb(path, limits);
+        } catch (const Error& e) {
+            return e.what();
+        }
+        return "no error";
+    };
+    craft(1966088, 769);  // 1.5e9 pixels, 18 GB as RGB float: above max_pixels
+    std::string msg = message({});
+    CAPTURE(msg);
+    CHECK(msg.find("declares 1966088 x 769 pixels") != std::string::npos);
+    CHECK(msg.find("max_pixels") != std::string::npos);
+    craft(4000, 4000);  // below max_pixels, but 192 MB of samples in a 2.7 kB file
+    msg = message({});
+    CHECK(msg.find("declares 4000 x 4000 pixels") != std::string::npos);
+    CHECK(msg.find("can hold") != std::string::npos);
+    // An honest file reads; the absolute limit applies to it too.
+    write_exr(path, Image<Rgb<float>>(64, 64));
+    CHECK(read_exr_rgb(path).width == 64);
+    ExrLimits small;
+    small.max_pixels = 1000;
+    CHECK(message(small).find("max_pixels") != std::string::npos);
+    std::filesystem::remove(path);
 }
 
 TEST_CASE("io: OBJ loading, materials, and errors that name the file") {
