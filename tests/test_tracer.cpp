@@ -167,7 +167,9 @@ TEST_CASE("grey scenes: the spectral roulettes render classic's image, colour or
     RenderOptions o;
     o.settings.width = o.settings.height = 16;
     o.settings.spp = 8;
-    for (const auto& [spectral, classic] : {std::pair{"spectral", "classic"}, std::pair{"spectral+estimate", "estimate"}}) {
+    for (const auto& names : {std::pair{"spectral", "classic"}, std::pair{"spectral+estimate", "estimate"}}) {
+        const char* spectral = names.first;  // not a structured binding: clang 14 cannot capture one
+        const char* classic = names.second;
         o.roulette = spectral;
         const RenderResult a = render(s, accel, o);
         o.roulette = classic;
