@@ -30,6 +30,7 @@
 #include <glint/core/image.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/io/obj.hpp>
+#define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/occluders/delaunay.hpp>
 #include <glint/occluders/gssa.hpp>

@@ -8,15 +8,20 @@
 // of correlated sampling) and a tone-mapped PNG preview next to it, and prints the time and
 // the ray throughput. Policies are chosen by flags; see --help.
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 
 #include <unistd.h>
 
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
+#define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
@@ -31,9 +36,14 @@ void usage() {
         "  --scene NAME        cornell, cornell-glossy, furnace, arealight, envmap\n"
         "  --mesh FILE         an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky\n"
         "  --env FILE.exr      lat-long environment map (envmap scene or --mesh)\n"
-        "  --size N            image width and height (default 256)\n"
+        "  --size N            image width and height (default 256; at most 16384)\n"
+        "  --width N, --height N  image width, height (rectangular images)\n"
         "  --spp N             samples per pixel (default 16)\n"
-        "  --out FILE.exr      output (default out.exr; a .png preview is written beside it)\n"
+        "  --out FILE          FILE.exr or FILE.png: writes FILE.exr (RGB, variance and lambda layers)\n"
+        "                      and the tone-mapped preview FILE.png (default out.exr)\n"
+        "  --eye X,Y,Z --look-at X,Y,Z --up X,Y,Z --fov DEGREES\n"
+        "                      camera (default: the scene's; a mesh is framed by its bounding box)\n"
+        "  --max-depth N       path length cap (default: RenderSettings::max_depth)\n"
         "  --roulette NAME     classic, spectral, estimate, spectral+estimate (000's rules);\n"
         "                      throughput, throughput+spectral, throughput+estimate,\n"
         "                      throughput+spectral+estimate (the field's rule from --rr-depth);\n"
@@ -42,7 +52,7 @@ void usage() {
         "  --rr-depth N        throughput roulettes: vertices before the first decision (default 3)\n"
         "  --direct NAME       brdf, mis, importance, correlated, combined (default mis)\n"
         "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"
-        "  --light-samples N   light samples per vertex (default 1)\n"
+        "  --light-samples N   light samples per vertex (default 1; at most 1024)\n"
         "  --sampler NAME      random, halton (random digit permutations; also halton-perm), halton-owen\n"
         "                      (Owen-scrambled), halton-cp (Cranley-Patterson) (default random)\n"
         "  --threads N         worker threads (default: all cores)\n"
@@ -51,7 +61,7 @@ void usage() {
         "                      (000's closed-scene formula) (default pilot)\n"
         "  --reduce            estimate roulettes: shorten walks by the estimate's goodness\n"
         "  --pixel-centres     camera rays through pixel centres (default: jittered over the pixel)\n"
-        "  --exposure EV       PNG preview exposure (default 0)\n"
+        "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n"
         "  --tonemap NAME      PNG preview: clamp (exposure, clip at 1, sRGB) or reinhard\n"
         "                      (x / (1 + x) first) (default clamp)\n"
         "  --seed N            random seed (default 0)\n");
@@ -61,6 +71,7 @@ void usage() {
 /// emissive faces as area lights; a sky if nothing emits; camera framing the bounding box.
 Scene<float> scene_from_obj(const std::string& path, const std::string& env_path) {
     const ObjMesh mesh = load_obj(path);
+    for (const std::string& w : mesh.warnings) std::fprintf(stderr, "glint-render: warning: %s\n", w.c_str());
     Scene<float> s;
     s.name = path;
     for (const ObjMaterial& m : mesh.materials) {
@@ -87,58 +98,149 @@ Scene<float> scene_from_obj(const std::string& path, const std::string& env_path
     return s;
 }
 
-int to_int(const char* flag, const char* v) {
+/// An integer flag value in [lo, hi], or glint::Error naming the flag, the value and the range.
+long long to_int(const std::string& flag, const char* v, long long lo, long long hi) {
     char* end = nullptr;
-    const long x = std::strtol(v, &end, 10);
-    if (!end || *end || x <= 0 || x > 1 << 20) throw Error(std::string(flag) + " expects a positive integer, got '" + v + "'");
-    return int(x);
+    errno = 0;
+    const long long x = std::strtoll(v, &end, 10);
+    if (end == v || *end || errno == ERANGE || x < lo || x > hi)
+        throw Error(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+    return x;
+}
+
+std::uint64_t to_u64(const std::string& flag, const char* v) {
+    char* end = nullptr;
+    errno = 0;
+    const unsigned long long x = std::strtoull(v, &end, 10);
+    if (end == v || *end || errno == ERANGE || *v == '-')
+        throw Error(flag + " expects a non-negative integer below 2^64, got '" + v + "'");
+    return x;
+}
+
+/// A finite number in [lo, hi], or glint::Error naming the flag and the value.
+float to_float(const std::string& flag, const char* v, float lo, float hi) {
+    char* end = nullptr;
+    const float x = std::strtof(v, &end);
+    if (end == v || *end || !std::isfinite(x) || x < lo || x > hi)
+        throw Error(flag + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+    return x;
+}
+
+Vec3f to_vec3(const std::string& flag, const char* v) {
+    float c[3];
+    const char* p = v;
+    for (int k = 0; k < 3; ++k) {
+        char* end = nullptr;
+        c[k] = std::strtof(p, &end);
+        const char want = k < 2 ? ',' : '\0';
+        if (end == p || *end != want || !std::isfinite(c[k]))
+            throw Error(flag + " expects three finite numbers X,Y,Z, got '" + v + "'");
+        p = end + 1;
+    }
+    return Vec3f(c[0], c[1], c[2]);
+}
+
+bool ends_with(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+/// Throws unless `path` can be written: its folder exists and is writable, and the file, if
+/// it exists, is writable. Checked before rendering, so a long render is not lost.
+void check_writable(const std::string& path) {
+    const auto slash = path.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+    if (access(dir.c_str(), W_OK) != 0)
+        throw Error("cannot write '" + path + "': folder '" + dir + "' " + std::strerror(errno));
+    if (access(path.c_str(), F_OK) == 0 && access(path.c_str(), W_OK) != 0)
+        throw Error("cannot write '" + path + "': " + std::strerror(errno));
+}
+
+/// Everything the command line sets besides RenderOptions.
+struct Args {
+    std::string scene_name, mesh, env, out = "out.exr";
+    float exposure = 0;
+    bool reinhard = false;
+    std::optional<Vec3f> eye, look_at, up;
+    std::optional<float> fov_degrees;
+};
+
+/// Parses and validates every flag (nothing long runs before this returns). Returns false
+/// after --help.
+bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto value = [&]() -> const char* {
+            if (i + 1 >= argc) throw Error(a + " expects a value");
+            return argv[++i];
+        };
+        if (a == "--help" || a == "-h") { usage(); return false; }
+        else if (a == "--scene") g.scene_name = value();
+        else if (a == "--mesh") g.mesh = value();
+        else if (a == "--env") g.env = value();
+        else if (a == "--size") o.settings.width = o.settings.height = int(to_int(a, value(), 1, 16384));
+        else if (a == "--width") o.settings.width = int(to_int(a, value(), 1, 16384));
+        else if (a == "--height") o.settings.height = int(to_int(a, value(), 1, 16384));
+        else if (a == "--spp") o.settings.spp = int(to_int(a, value(), 1, 1 << 20));
+        else if (a == "--out") g.out = value();
+        else if (a == "--roulette") o.roulette = value();
+        else if (a == "--rr-depth") o.rr_depth = int(to_int(a, value(), 0, 1 << 20));
+        else if (a == "--direct") o.direct = value();
+        else if (a == "--selection") o.settings.selection = parse_selection(value());
+        else if (a == "--light-samples") o.settings.light_samples = int(to_int(a, value(), 1, 1024));
+        else if (a == "--sampler") o.sampler = value();
+        else if (a == "--threads") o.settings.threads = int(to_int(a, value(), 1, 4096));
+        else if (a == "--weights") o.roulette_weights = value();
+        else if (a == "--estimate") o.radiance_estimate = value();
+        else if (a == "--reduce") o.reduce_continuation = true;
+        else if (a == "--pixel-centres") o.settings.pixel_jitter = false;
+        else if (a == "--exposure") g.exposure = to_float(a, value(), -64.0f, 64.0f);
+        else if (a == "--max-depth") o.settings.max_depth = int(to_int(a, value(), 1, 1 << 24));
+        else if (a == "--eye") g.eye = to_vec3(a, value());
+        else if (a == "--look-at") g.look_at = to_vec3(a, value());
+        else if (a == "--up") g.up = to_vec3(a, value());
+        else if (a == "--fov") g.fov_degrees = to_float(a, value(), 0.01f, 179.0f);
+        else if (a == "--tonemap") {
+            const std::string t = value();
+            if (t != "clamp" && t != "reinhard") throw Error("--tonemap expects clamp or reinhard, not '" + t + "'");
+            g.reinhard = t == "reinhard";
+        }
+        else if (a == "--seed") o.seed = to_u64(a, value());
+        else throw Error("unknown option '" + a + "' (see --help)");
+    }
+    if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
+    if (std::uint64_t(o.settings.width) * std::uint64_t(o.settings.height) > (std::uint64_t(1) << 26))
+        throw Error("--width x --height = " + std::to_string(o.settings.width) + " x " + std::to_string(o.settings.height) +
+                    " is above the limit of 2^26 pixels");
+    if (!ends_with(g.out, ".exr") && !ends_with(g.out, ".png"))
+        throw Error("--out expects a file name ending in .exr or .png, got '" + g.out + "'");
+    for (const char* ext : {".exr", ".png"}) check_writable(g.out.substr(0, g.out.size() - 4) + ext);
+    for (const std::string& f : {g.mesh, g.env})
+        if (!f.empty() && access(f.c_str(), R_OK) != 0) throw Error("cannot read '" + f + "': " + std::strerror(errno));
+    return true;
+}
+
+/// The camera flags over the scene's camera; throws for a degenerate frame.
+void apply_camera(const Args& g, Camera<float>& c) {
+    if (g.eye) c.eye = *g.eye;
+    if (g.look_at) c.target = *g.look_at;
+    if (g.up) c.up = *g.up;
+    if (g.fov_degrees) c.fov_y = *g.fov_degrees * 3.14159265f / 180.0f;
+    const Vec3f w = c.target - c.eye;
+    if (!(glm::length(w) > 0.0f)) throw Error("--eye and --look-at must differ");
+    if (!(glm::length(glm::cross(w, c.up)) > 0.0f)) throw Error("--up must not be parallel to the view direction");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
-        std::string scene_name, mesh, env, out = "out.exr";
+        Args g;
         RenderOptions o;
         o.settings.progress = isatty(STDERR_FILENO) != 0;  // a progress bar only on a terminal
-        float exposure = 0;
-        bool reinhard = false;
-        for (int i = 1; i < argc; ++i) {
-            const std::string a = argv[i];
-            auto value = [&]() -> const char* {
-                if (i + 1 >= argc) throw Error(a + " expects a value");
-                return argv[++i];
-            };
-            if (a == "--help" || a == "-h") { usage(); return 0; }
-            else if (a == "--scene") scene_name = value();
-            else if (a == "--mesh") mesh = value();
-            else if (a == "--env") env = value();
-            else if (a == "--size") o.settings.width = o.settings.height = to_int("--size", value());
-            else if (a == "--spp") o.settings.spp = to_int("--spp", value());
-            else if (a == "--out") out = value();
-            else if (a == "--roulette") o.roulette = value();
-            else if (a == "--rr-depth") o.rr_depth = to_int("--rr-depth", value());
-            else if (a == "--direct") o.direct = value();
-            else if (a == "--selection") o.settings.selection = parse_selection(value());
-            else if (a == "--light-samples") o.settings.light_samples = to_int("--light-samples", value());
-            else if (a == "--sampler") o.sampler = value();
-            else if (a == "--threads") o.settings.threads = to_int("--threads", value());
-            else if (a == "--weights") o.roulette_weights = value();
-            else if (a == "--estimate") o.radiance_estimate = value();
-            else if (a == "--reduce") o.reduce_continuation = true;
-            else if (a == "--pixel-centres") o.settings.pixel_jitter = false;
-            else if (a == "--exposure") exposure = std::strtof(value(), nullptr);
-            else if (a == "--tonemap") {
-                const std::string t = value();
-                if (t != "clamp" && t != "reinhard") throw Error("--tonemap expects clamp or reinhard, not '" + t + "'");
-                reinhard = t == "reinhard";
-            }
-            else if (a == "--seed") o.seed = std::strtoull(value(), nullptr, 10);
-            else throw Error("unknown option '" + a + "' (see --help)");
-        }
-        if (scene_name.empty() == mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
-        Scene<float> scene = mesh.empty() ? builtin_scene<float>(scene_name) : scene_from_obj(mesh, env);
-        if (!env.empty() && mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(env));
+        if (!parse_args(argc, argv, g, o)) return 0;
+        Scene<float> scene = g.mesh.empty() ? builtin_scene<float>(g.scene_name) : scene_from_obj(g.mesh, g.env);
+        if (!g.env.empty() && g.mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
+        apply_camera(g, scene.camera);
 
         std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n",
                      scene.name.c_str(), scene.triangles.size(), scene.area_lights.size(),
@@ -153,16 +255,16 @@ int main(int argc, char** argv) {
         layers.push_back(std::move(var));
         if (o.direct == "importance" || o.direct == "correlated" || o.direct == "combined")
             layers.push_back(ExrLayer{"lambda", {"Y"}, r.lambda.pixels});
-        write_exr(out, r.image, layers);
-        const std::string png = (out.size() > 4 && out.substr(out.size() - 4) == ".exr" ? out.substr(0, out.size() - 4) : out) + ".png";
-        write_png(png, r.image, exposure, reinhard);
-        std::printf("rendered %s in %.2f s (build %.2f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
+        const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
+        write_exr(exr, r.image, layers);
+        write_png(png, r.image, g.exposure, g.reinhard);
+        std::printf("rendered %s in %.3f s (build %.3f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
                     scene.name.c_str(), r.seconds, accel.build_seconds(), double(r.rays) / r.seconds * 1e-6,
-                    (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), out.c_str(),
+                    (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), exr.c_str(),
                     png.c_str());
         if (r.capped_walks > 0)
             std::fprintf(stderr, "glint-render: warning: %llu walks reached the depth cap of %d vertices and were cut "
-                         "(biased); raise RenderSettings::max_depth\n", (unsigned long long)r.capped_walks, o.settings.max_depth);
+                         "(biased); raise --max-depth\n", (unsigned long long)r.capped_walks, o.settings.max_depth);
         return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "glint-render: %s\n", e.what());

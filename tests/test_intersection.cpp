@@ -166,9 +166,11 @@ TEST_CASE_TEMPLATE("stress: triangle planes through the origin", P, GLINT_ALL_PO
 TEST_CASE_TEMPLATE("stress: zero-area triangles, parallel rays, NaN and infinity all miss", P,
                    GLINT_ALL_POLICIES) {
     using T = typename P::scalar_type;
-    for (const auto& [what, cases] : {std::pair{"zero-area", zero_area_cases<T>(13, 30000)},
-                                      std::pair{"parallel", parallel_cases<T>(17, 10000)},
-                                      std::pair{"nonfinite", nonfinite_cases<T>()}}) {
+    for (const auto& entry : {std::pair{"zero-area", zero_area_cases<T>(13, 30000)},
+                              std::pair{"parallel", parallel_cases<T>(17, 10000)},
+                              std::pair{"nonfinite", nonfinite_cases<T>()}}) {
+        const char* what = entry.first;  // not a structured binding: clang 14 cannot capture one
+        const auto& cases = entry.second;
         CAPTURE(what);
         const Agreement a = measure_agreement<P>(cases, kBand);
         CHECK(a.reference_hits == 0);  // the reference agrees that none is a hit

@@ -200,6 +200,34 @@ TEST_CASE("delaunay: random, gridded, coplanar, cospherical and duplicate sets")
     }
 }
 
+TEST_CASE("delaunay: coordinates outside the exact predicates' range are a clear error; inside it, any scale works") {
+    Pcg32 rng(5);
+    std::vector<Vec3d> base(300);
+    for (auto& q : base) q = rand_point(rng);
+    for (const double scale : {1e-100, 1e100, 1e-60, 1e60}) {
+        CAPTURE(scale);
+        std::vector<Vec3d> pts;
+        for (const auto& q : base) pts.push_back(q * scale);
+        try {
+            Delaunay<double> d(pts);
+            FAIL("no error for points scaled by " << scale);
+        } catch (const glint::Error& e) {
+            const std::string msg = e.what();
+            CAPTURE(msg);
+            CHECK(msg.find("range of the exact predicates") != std::string::npos);
+            CHECK(msg.find("point ") != std::string::npos);
+        }
+    }
+    for (const double scale : {1e-40, 1e40}) {
+        CAPTURE(scale);
+        std::vector<Vec3d> pts;
+        for (const auto& q : base) pts.push_back(q * scale);
+        Delaunay<double> d(pts);
+        check_delaunay(d, pts.size());
+        check_empty_brute(d);
+    }
+}
+
 TEST_CASE("delaunay: stress - far from the origin, tiny extent, bad input") {
     Pcg32 rng(4);
     std::vector<Vec3d> pts(2000);

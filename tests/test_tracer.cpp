@@ -6,8 +6,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #define STB_IMAGE_STATIC
@@ -16,6 +18,7 @@
 
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
+#define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
@@ -164,7 +167,9 @@ TEST_CASE("grey scenes: the spectral roulettes render classic's image, colour or
     RenderOptions o;
     o.settings.width = o.settings.height = 16;
     o.settings.spp = 8;
-    for (const auto& [spectral, classic] : {std::pair{"spectral", "classic"}, std::pair{"spectral+estimate", "estimate"}}) {
+    for (const auto& names : {std::pair{"spectral", "classic"}, std::pair{"spectral+estimate", "estimate"}}) {
+        const char* spectral = names.first;  // not a structured binding: clang 14 cannot capture one
+        const char* classic = names.second;
         o.roulette = spectral;
         const RenderResult a = render(s, accel, o);
         o.roulette = classic;
@@ -396,6 +401,51 @@ TEST_CASE("io: EXR round trip with layers, PNG preview, and clear errors") {
     std::filesystem::remove(png);
 }
 
+TEST_CASE("io: an EXR header declaring a huge image is rejected before allocation") {
+    // A valid 2x2 file whose data window is patched to declare a huge image, padded so that
+    // OpenEXR's offset table reads (2.7 kB), as a crafted file would be.
+    const std::string path = temp_path("huge.exr");
+    auto craft = [&](std::int32_t w, std::int32_t h) {
+        write_exr(path, Image<Rgb<float>>(2, 2));
+        std::string bytes;
+        {
+            std::ifstream in(path, std::ios::binary);
+            bytes.assign(std::istreambuf_iterator<char>(in), {});
+        }
+        const std::string key("dataWindow\0box2i\0", 17);
+        const auto at = bytes.find(key);
+        REQUIRE(at != std::string::npos);
+        const std::int32_t box[4] = {0, 0, w - 1, h - 1};
+        std::memcpy(bytes.data() + at + key.size() + 4, box, sizeof box);  // after the 4-byte size
+        bytes.append(2400, '\0');
+        std::ofstream(path, std::ios::binary) << bytes;
+    };
+    auto message = [&](const ExrLimits& limits) -> std::string {
+        try {
+            read_exr_rgb(path, limits);
+        } catch (const Error& e) {
+            return e.what();
+        }
+        return "no error";
+    };
+    craft(1966088, 769);  // 1.5e9 pixels, 18 GB as RGB float: above max_pixels
+    std::string msg = message({});
+    CAPTURE(msg);
+    CHECK(msg.find("declares 1966088 x 769 pixels") != std::string::npos);
+    CHECK(msg.find("max_pixels") != std::string::npos);
+    craft(4000, 4000);  // below max_pixels, but 192 MB of samples in a 2.7 kB file
+    msg = message({});
+    CHECK(msg.find("declares 4000 x 4000 pixels") != std::string::npos);
+    CHECK(msg.find("can hold") != std::string::npos);
+    // An honest file reads; the absolute limit applies to it too.
+    write_exr(path, Image<Rgb<float>>(64, 64));
+    CHECK(read_exr_rgb(path).width == 64);
+    ExrLimits small;
+    small.max_pixels = 1000;
+    CHECK(message(small).find("max_pixels") != std::string::npos);
+    std::filesystem::remove(path);
+}
+
 TEST_CASE("io: OBJ loading, materials, and errors that name the file") {
     const std::string dir = temp_path("obj");
     std::filesystem::create_directories(dir);
@@ -422,6 +472,119 @@ TEST_CASE("io: OBJ loading, materials, and errors that name the file") {
         CHECK(std::string(e.what()).find("bad.obj") != std::string::npos);
     }
     std::filesystem::remove_all(dir);
+}
+
+namespace {
+
+/// Loads `obj` (and `mtl` as scene.mtl beside it) from a scratch folder; returns the error
+/// message, or "" when it loads.
+std::string obj_error(const std::string& obj, const std::string& mtl = "", ObjMesh* out = nullptr) {
+    const std::string dir = temp_path("objv");
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/scene.obj") << obj;
+    if (!mtl.empty()) std::ofstream(dir + "/scene.mtl") << mtl;
+    std::string msg;
+    try {
+        ObjMesh m = load_obj(dir + "/scene.obj");
+        if (out) *out = std::move(m);
+    } catch (const Error& e) {
+        msg = e.what();
+    }
+    std::filesystem::remove_all(dir);
+    return msg;
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+}  // namespace
+
+TEST_CASE("io: OBJ validation: non-finite vertices are errors naming file, line and value") {
+    const std::string quad = "f 1 2 3\n";
+    for (const char* bad : {"nan", "inf", "-inf", "1e39", "abc"}) {
+        CAPTURE(bad);
+        const std::string e = obj_error(std::string("v 0 0 0\nv ") + bad + " 1 0\nv 0 1 0\n" + quad);
+        CHECK(contains(e, "scene.obj:2"));
+        CHECK(contains(e, bad));
+    }
+    CHECK(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + quad).empty());
+}
+
+TEST_CASE("io: OBJ validation: Kd/Ks negative or non-finite, Ke negative or non-finite are errors; Kd > 1 clamps with a warning") {
+    const std::string obj = "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n";
+    for (const char* line : {"Kd nan 0.5 0.5", "Kd -0.5 0.5 0.5", "Ks 0.1 inf 0.1", "Ke inf 1 1", "Ke -5 -5 -5", "Ke nan 0 0"}) {
+        CAPTURE(line);
+        const std::string e = obj_error(obj, std::string("newmtl m\n") + line + "\n");
+        CHECK(contains(e, "scene.mtl:2"));
+        CHECK(contains(e, "material 'm'"));
+        CHECK(contains(e, std::string(line).substr(0, 2)));
+    }
+    ObjMesh m;
+    CHECK(obj_error(obj, "newmtl m\nKd 1.5 0.5 0.25\nKe 2 3 4\n", &m).empty());
+    REQUIRE(m.triangles.size() == 1);
+    CHECK(m.materials[m.material[0]].kd == Rgb<float>(1.0f, 0.5f, 0.25f));
+    CHECK(m.materials[m.material[0]].ke == Rgb<float>(2.0f, 3.0f, 4.0f));
+    REQUIRE(m.warnings.size() == 1);
+    CHECK(contains(m.warnings[0], "Kd"));
+    CHECK(contains(m.warnings[0], "clamped"));
+}
+
+TEST_CASE("io: OBJ validation: a missing MTL is a warning, the faces get the default material") {
+    ObjMesh m;
+    CHECK(obj_error("mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n", "", &m).empty());
+    REQUIRE(m.triangles.size() == 1);
+    CHECK(m.materials[m.material[0]].name == "default");
+    REQUIRE(!m.warnings.empty());
+    CHECK(contains(m.warnings[0], "nowhere.mtl"));
+    ObjMesh clean;
+    CHECK(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "", &clean).empty());
+    CHECK(clean.warnings.empty());
+}
+
+TEST_CASE("io: OBJ validation: a 300-gon is fan-triangulated, and the faces after it keep their vertices") {
+    // tinyobjloader stores a face's vertex count in an unsigned char: 300 would read as 44.
+    std::ostringstream obj;
+    const int n = 300;
+    const double pi = 3.14159265358979323846;
+    for (int k = 0; k < n; ++k) obj << "v " << std::cos(2 * pi * k / n) << " " << std::sin(2 * pi * k / n) << " 0\n";
+    obj << "v 0 0 5\nv 1 0 5\nv 0 1 5\nf";
+    for (int k = 1; k <= n; ++k) obj << " " << k;
+    obj << "\nf " << n + 1 << " " << n + 2 << " " << n + 3 << "\n";
+    ObjMesh m;
+    CHECK(obj_error(obj.str(), "", &m).empty());
+    REQUIRE(m.triangles.size() == std::size_t(n - 2 + 1));
+    double area = 0;
+    for (std::size_t i = 0; i + 1 < m.triangles.size(); ++i) {
+        const auto& t = m.triangles[i];
+        area += 0.5 * double(glm::length(glm::cross(t[1] - t[0], t[2] - t[0])));
+        CHECK(m.line[i] == std::uint32_t(n + 4));
+    }
+    CHECK(area == doctest::Approx(0.5 * n * std::sin(2 * pi / n)).epsilon(1e-5));  // the regular 300-gon's area
+    const auto& last = m.triangles.back();
+    CHECK(last[0] == Vec3f(0, 0, 5));
+    CHECK(last[1] == Vec3f(1, 0, 5));
+    CHECK(last[2] == Vec3f(0, 1, 5));
+    CHECK(m.line.back() == std::uint32_t(n + 5));
+}
+
+TEST_CASE("io: OBJ validation: out-of-range face indices name the line and the index as written") {
+    const std::string e = obj_error("v 0 0 0\nv 1 0 0\nf 1 2 -9\n");
+    CHECK(contains(e, "scene.obj:3"));
+    CHECK(contains(e, "-9"));
+    CHECK(contains(e, "2 vertices"));
+    const std::string e2 = obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 7\n");
+    CHECK(contains(e2, "scene.obj:5"));
+    CHECK(contains(e2, "vertex 7"));
+    CHECK(contains(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n"), "scene.obj:4"));
+    CHECK(contains(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 0 2\n"), "index 0"));
+    CHECK(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n").empty());
+}
+
+TEST_CASE("io: OBJ validation: a zero-area emissive face names the file, line and material") {
+    const std::string e = obj_error("mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nusemtl lamp\nf 1 2 4\nf 1 2 3\n",
+                                    "newmtl lamp\nKd 0 0 0\nKe 5 5 5\n");
+    CHECK(contains(e, "scene.obj:8"));
+    CHECK(contains(e, "lamp"));
+    CHECK(contains(e, "zero area"));
 }
 
 TEST_CASE("ReducedContinuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 1") {

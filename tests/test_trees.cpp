@@ -487,6 +487,44 @@ TEST_CASE("stress: degenerate triangles, NaN and zero rays, far coordinates, emp
 
 namespace {
 
+/// Rays aimed at triangle centroids, with tmax (or tmin) NaN: the trees must report what brute
+/// force reports (no hit), for every intersector (IVM leaves turned NaN into +inf).
+template <class P>
+void check_nan_interval() {
+    const Mesh<float> m = make_torus_knot<float>(40, 6);
+    const BruteForce<P> bf(m);
+    const KdTree<float, P, CompactSubtrees<7>> kd(m);
+    const Bih<float, P, PointerLayout> bih(m);
+    int trees_hit = 0, brute_hit = 0, aimed = 0;
+    for (std::size_t i = 0; i < m.size(); i += 7) {
+        for (const bool nan_tmax : {true, false}) {
+            Ray<float> r;
+            r.origin = Vec3f(0.1f, 0.2f, 9.0f);
+            r.direction = (m[i][0] + m[i][1] + m[i][2]) / 3.f - r.origin;
+            (nan_tmax ? r.tmax : r.tmin) = std::numeric_limits<float>::quiet_NaN();
+            StoreHit<float> a, b, c;
+            brute_hit += bf.closest_hit(r, a);
+            trees_hit += kd.closest_hit(r, b) + bih.closest_hit(r, c) + kd.any_hit(r) + bih.any_hit(r);
+            ++aimed;
+        }
+    }
+    INFO(std::string(P::name));
+    CHECK(aimed > 100);
+    CHECK(brute_hit == 0);
+    CHECK(trees_hit == 0);
+}
+
+}  // namespace
+
+TEST_CASE("stress: rays with tmax or tmin NaN hit nothing in the trees, as in brute force") {
+    check_nan_interval<Ivm<float>>();
+    check_nan_interval<MollerTrumbore<float>>();
+    check_nan_interval<Wald<float>>();
+    check_nan_interval<Watertight<float>>();
+}
+
+namespace {
+
 template <class L>
 LayoutStats encode_stats(const BuiltTree<float>& t) {
     std::vector<std::array<std::uint32_t, 2>> groups(t.nodes.size(), {0u, 1u});

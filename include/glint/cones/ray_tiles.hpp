@@ -56,8 +56,8 @@ struct TileGrid {
     }
     int tiles_x() const { return (width + tile - 1) / tile; }
     int tiles_y() const { return (height + tile - 1) / tile; }
-    std::size_t tile_count() const { return std::size_t(tiles_x()) * tiles_y(); }
-    std::size_t ray_count() const { return std::size_t(width) * height; }
+    std::size_t tile_count() const { return std::size_t(tiles_x()) * std::size_t(tiles_y()); }
+    std::size_t ray_count() const { return std::size_t(width) * std::size_t(height); }
 };
 
 /// Options of the ray-tile engine.

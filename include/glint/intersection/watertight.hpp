@@ -18,6 +18,14 @@
 // The shear of each vertex is computed the same way in every triangle that shares it, so
 // shared edges agree. Edges and vertices are inclusive (a ray through a shared edge hits
 // both triangles).
+//
+// Rays in (or parallel to) the triangle's plane. The edge functions are exact for the sheared
+// vertices, but the shear itself rounds: each sheared coordinate is off by up to
+// 2 eps (|p_k| + |s p_z|) (eps of T; the shear factors sx, sy are rounded too), which moves
+// the determinant U + V + W by up to 12 eps M S (M: largest such magnitude, S: largest sheared
+// coordinate). A determinant inside that bound is rounding noise: the ray is parallel to the
+// plane within what T resolves, the exact answer is undefined (a miss), and which way the
+// rounding went depends on the compiler (fused multiply-add or not). Such rays miss.
 #pragma once
 
 #include <algorithm>
@@ -93,15 +101,16 @@ struct Watertight {
     }
 
     bool intersect(const RayData& r, TriangleHit<T>& hit) const {
-        T x[3], y[3], z[3];
+        T x[3], y[3], z[3], m = 0;
         for (int i = 0; i < 3; ++i) {
             const Vec3<T> p = v[i] - r.o;
             x[i] = p[r.kx] - r.sx * p[r.kz];
             y[i] = p[r.ky] - r.sy * p[r.kz];
             z[i] = r.sz * p[r.kz];
+            m = std::max(m, shear_magnitude(p[r.kx], p[r.ky], p[r.kz], r));
         }
         T t, u, w;
-        if (!solve(x, y, z, r, t, u, w)) return false;
+        if (!solve(x, y, z, r, noise(x, y, m), t, u, w)) return false;
         hit.t = t;
         hit.u = u;
         hit.v = w;
@@ -136,13 +145,18 @@ struct Watertight {
             const double e0 = detail::edge_function(cx, by, cy, bx);
             const double e1 = detail::edge_function(ax, cy, ay, cx);
             const double e2 = detail::edge_function(bx, ay, by, ax);
+            const T ms[3] = {shear_magnitude(fx[0][j] - ox, fy[0][j] - oy, az, r),
+                             shear_magnitude(fx[1][j] - ox, fy[1][j] - oy, bz, r),
+                             shear_magnitude(fx[2][j] - ox, fy[2][j] - oy, cz, r)};
+            const T xs[3] = {ax, bx, cx}, ys[3] = {ay, by, cy};
+            const double bound = noise(xs, ys, std::max({ms[0], ms[1], ms[2]}));
             // Bitwise (not short-circuit) logic keeps the loop branch-free.
             const bool has_neg = (e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0);
             const bool has_pos = (e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0);
             const double det = e0 + e1 + e2;
             const double inv = 1.0 / det;
             const T t = T((e0 * double(r.sz * az) + e1 * double(r.sz * bz) + e2 * double(r.sz * cz)) * inv);
-            const bool ok = !(has_neg & has_pos) & (det != 0.0) & (t > r.tmin) & (t < r.tmax);
+            const bool ok = !(has_neg & has_pos) & (std::abs(det) > bound) & (t > r.tmin) & (t < r.tmax);
             ts[j] = ok ? t : infinity<T>;
             us[j] = T(e1 * inv);
             vs[j] = T(e2 * inv);
@@ -151,7 +165,7 @@ struct Watertight {
 
 private:
     /// Edge functions, sign test, determinant and distance from sheared vertices.
-    static bool solve(const T* x, const T* y, const T* z, const RayData& r, T& t, T& u, T& w) {
+    static bool solve(const T* x, const T* y, const T* z, const RayData& r, double bound, T& t, T& u, T& w) {
         const double e0 = detail::edge_function(x[2], y[1], y[2], x[1]);  // U: weight of v0
         const double e1 = detail::edge_function(x[0], y[2], y[0], x[2]);  // V: weight of v1
         const double e2 = detail::edge_function(x[1], y[0], y[1], x[0]);  // W: weight of v2
@@ -162,7 +176,20 @@ private:
         t = T(tt);
         u = T(e1 / det);
         w = T(e2 / det);
-        return !(has_neg && has_pos) && det != 0.0 && t > r.tmin && t < r.tmax;
+        return !(has_neg && has_pos) && std::abs(det) > bound && t > r.tmin && t < r.tmax;
+    }
+
+    /// |p_k| + |s p_z| for the two sheared coordinates of a vertex p (translated by the origin).
+    static T shear_magnitude(T px, T py, T pz, const RayData& r) {
+        const T az = std::abs(pz);
+        return std::max(std::abs(px) + std::abs(r.sx) * az, std::abs(py) + std::abs(r.sy) * az);
+    }
+
+    /// The determinant's rounding bound 12 eps M S of the header comment.
+    static double noise(const T* x, const T* y, T m) {
+        T s = 0;
+        for (int i = 0; i < 3; ++i) s = std::max({s, std::abs(x[i]), std::abs(y[i])});
+        return 12.0 * double(std::numeric_limits<T>::epsilon()) * double(m) * double(s);
     }
 };
 

@@ -3,12 +3,31 @@
 // Needs tinyobjloader 2 (Debian libtinyobjloader-dev): link tinyobjloader::tinyobjloader.
 // Polygons are triangulated as fans; every face gets the index of its material (faces
 // without one get a default grey Lambertian material). From the MTL: Kd, Ks, Ns, Ke
-// (emission), Ni (index of refraction) and illum. A missing or malformed file throws
-// glint::Error naming the file and what is wrong.
+// (emission), Ni (index of refraction) and illum.
+//
+// Validation (tinyobjloader reads what it cannot parse as 0 and stores a face's vertex count
+// in an unsigned char, so glint scans the text itself before handing it over):
+//  - every `v` needs three finite coordinates (finite as float), every face at least three
+//    vertices, every face index must name an existing vertex (positive: 1..number of `v`
+//    lines; negative: relative to the vertices defined before the face's line);
+//  - polygons with more than 255 vertices are fan-triangulated in the text before parsing;
+//  - Kd, Ks and Ke must be finite numbers; Kd and Ks must not be negative, Ke must not be
+//    negative; Kd or Ks above 1 (not energy conserving) are clamped to 1 with a warning;
+//  - an emissive face (a triangle of its fan) of zero area is an error;
+//  - a missing MTL file, or a material name no MTL defines, is a warning (ObjMesh::warnings):
+//    its faces get the default material.
+// Every error is a glint::Error naming the file, the line and the value.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <tiny_obj_loader.h>
@@ -31,64 +50,231 @@ struct ObjMaterial {
 struct ObjMesh {
     std::vector<TriangleVertices<float>> triangles;
     std::vector<std::uint32_t> material;  // per triangle, index into materials
+    std::vector<std::uint32_t> line;      // per triangle, the OBJ line of its face (1-based)
     std::vector<ObjMaterial> materials;
+    std::vector<std::string> warnings;    // missing MTL files, clamped reflectances, ...
 };
 
-/// Loads `path` (and the MTL files it names, looked up next to it).
-inline ObjMesh load_obj(const std::string& path) {
-    tinyobj::ObjReaderConfig config;
-    config.triangulate = false;  // we fan-triangulate ourselves, keeping material per face
-    const auto slash = path.find_last_of('/');
-    config.mtl_search_path = slash == std::string::npos ? "./" : path.substr(0, slash + 1);
-    tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(path, config))
-        throw Error("load_obj(" + path + "): " + (reader.Error().empty() ? "cannot read the file" : reader.Error()));
-    const auto& attrib = reader.GetAttrib();
-    ObjMesh mesh;
-    for (const auto& m : reader.GetMaterials()) {
-        ObjMaterial om;
-        om.name = m.name;
-        om.kd = Rgb<float>(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
-        om.ks = Rgb<float>(m.specular[0], m.specular[1], m.specular[2]);
-        om.ke = Rgb<float>(m.emission[0], m.emission[1], m.emission[2]);
-        om.ns = m.shininess;
-        om.ni = m.ior;
-        om.illum = m.illum;
-        mesh.materials.push_back(om);
+namespace detail {
+
+inline std::vector<std::string_view> obj_tokens(std::string_view line) {
+    std::vector<std::string_view> out;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+        const std::size_t b = i;
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+        if (i > b) out.push_back(line.substr(b, i - b));
     }
+    return out;
+}
+
+/// A number that is finite as a float, or glint::Error naming `where` and the token.
+inline float obj_number(std::string_view tok, const std::string& where) {
+    const std::string s(tok);
+    char* end = nullptr;
+    const double x = std::strtod(s.c_str(), &end);
+    if (end == s.c_str() || *end) throw Error(where + ": '" + s + "' is not a number");
+    if (!std::isfinite(x) || !std::isfinite(static_cast<float>(x)))
+        throw Error(where + ": '" + s + "' is not a finite number");
+    return static_cast<float>(x);
+}
+
+/// The OBJ text with every polygon of more than 255 vertices written as a fan of triangles,
+/// the source line of each face in file order, and the checks of the header comment.
+struct ObjScan {
+    std::string text;
+    std::vector<std::uint32_t> face_line;
+};
+
+struct ObjFaceIndex {
+    std::uint32_t line;
+    long index;  // as written (1-based, or negative = relative)
+};
+
+inline void obj_check_indices(const std::string& file, const std::vector<ObjFaceIndex>& positive, long nv) {
+    for (const ObjFaceIndex& f : positive)
+        if (f.index > nv)
+            throw Error(file + ":" + std::to_string(f.line) + ": face refers to vertex " + std::to_string(f.index) +
+                        ", but the file defines " + std::to_string(nv) + " vertices");
+}
+
+/// Checks one `f` line's vertex tokens; returns the positive indices for the end-of-file check.
+inline void obj_scan_face(const std::vector<std::string_view>& tok, const std::string& where, std::uint32_t line,
+                          long nv, std::vector<ObjFaceIndex>& positive) {
+    if (tok.size() < 4)
+        throw Error(where + ": a face needs at least 3 vertices, this one has " + std::to_string(tok.size() - 1));
+    for (std::size_t k = 1; k < tok.size(); ++k) {
+        const std::string s(tok[k].substr(0, tok[k].find('/')));
+        char* end = nullptr;
+        const long i = std::strtol(s.c_str(), &end, 10);
+        if (end == s.c_str() || *end) throw Error(where + ": face vertex '" + std::string(tok[k]) + "' is not an index");
+        if (i == 0) throw Error(where + ": face vertex index 0 (OBJ indices start at 1)");
+        if (i < 0 && nv + i < 0)
+            throw Error(where + ": face vertex " + s + " refers " + std::to_string(-i) + " vertices back, but only " +
+                        std::to_string(nv) + " vertices are defined before this line");
+        if (i > 0) positive.push_back({line, i});
+    }
+}
+
+inline ObjScan obj_scan(const std::string& file, std::istream& in) {
+    ObjScan scan;
+    std::vector<ObjFaceIndex> positive;
+    long nv = 0;
+    std::string raw;
+    std::uint32_t line = 0;
+    while (std::getline(in, raw)) {
+        ++line;
+        const std::vector<std::string_view> tok = obj_tokens(raw);
+        const std::string where = file + ":" + std::to_string(line);
+        if (!tok.empty() && tok[0] == "v") {
+            if (tok.size() < 4) throw Error(where + ": a vertex needs 3 coordinates");
+            for (std::size_t k = 1; k <= 3; ++k) obj_number(tok[k], where + ": vertex coordinate");
+            ++nv;
+        } else if (!tok.empty() && tok[0] == "f") {
+            obj_scan_face(tok, where, line, nv, positive);
+            if (tok.size() - 1 > 255) {  // tinyobjloader would wrap the count at 256
+                for (std::size_t k = 2; k + 1 < tok.size(); ++k) {
+                    scan.text.append("f ").append(tok[1]).append(" ").append(tok[k]).append(" ").append(tok[k + 1]);
+                    scan.text += '\n';
+                    scan.face_line.push_back(line);
+                }
+                continue;
+            }
+            scan.face_line.push_back(line);
+        }
+        scan.text.append(raw) += '\n';
+    }
+    obj_check_indices(file, positive, nv);
+    return scan;
+}
+
+/// Checks the Kd, Ks and Ke lines of an MTL text (see the header comment).
+inline void mtl_validate(const std::string& file, std::istream& in) {
+    std::string raw, material = "(before any newmtl)";
+    std::uint32_t line = 0;
+    while (std::getline(in, raw)) {
+        ++line;
+        const std::vector<std::string_view> tok = obj_tokens(raw);
+        if (tok.empty()) continue;
+        if (tok[0] == "newmtl" && tok.size() > 1) material = std::string(tok[1]);
+        if (tok[0] != "Kd" && tok[0] != "Ks" && tok[0] != "Ke") continue;
+        const std::string where = file + ":" + std::to_string(line) + ": material '" + material + "' " + std::string(tok[0]);
+        if (tok.size() < 2) throw Error(where + " has no value");
+        for (std::size_t k = 1; k < std::min<std::size_t>(tok.size(), 4); ++k)
+            if (obj_number(tok[k], where) < 0.0f)
+                throw Error(where + " = " + std::string(tok[k]) + " is negative");
+    }
+}
+
+/// tinyobjloader's MTL lookup next to the OBJ, with glint's checks and a warning for a
+/// missing file.
+class ObjMaterialReader : public tinyobj::MaterialReader {
+public:
+    explicit ObjMaterialReader(std::string dir) : dir_(std::move(dir)) {}
+    bool operator()(const std::string& id, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* names, std::string* warn, std::string* err) override {
+        const std::string file = dir_ + id;
+        std::ifstream f(file, std::ios::binary);
+        if (!f) {
+            warnings.push_back("material file '" + file + "' not found; its materials render as default grey");
+            return false;
+        }
+        std::stringstream text;
+        text << f.rdbuf();
+        mtl_validate(file, text);
+        text.clear();
+        text.seekg(0);
+        tinyobj::LoadMtl(names, materials, &text, warn, err);
+        return true;
+    }
+    std::vector<std::string> warnings;
+
+private:
+    std::string dir_;
+};
+
+inline Rgb<float> obj_reflectance(const float v[3], const std::string& what, std::vector<std::string>& warnings) {
+    Rgb<float> r(v[0], v[1], v[2]);
+    if (r.max() > 1.0f) {
+        warnings.push_back(what + " = (" + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +
+                           std::to_string(v[2]) + ") is above 1 (not energy conserving); clamped to 1");
+        for (std::size_t c = 0; c < 3; ++c) r[c] = std::min(r[c], 1.0f);
+    }
+    return r;
+}
+
+inline ObjMaterial obj_material(const tinyobj::material_t& m, const std::string& path, std::vector<std::string>& warn) {
+    ObjMaterial om;
+    om.name = m.name;
+    om.kd = obj_reflectance(m.diffuse, path + ": material '" + m.name + "' Kd", warn);
+    om.ks = obj_reflectance(m.specular, path + ": material '" + m.name + "' Ks", warn);
+    om.ke = Rgb<float>(m.emission[0], m.emission[1], m.emission[2]);
+    om.ns = m.shininess;
+    om.ni = m.ior;
+    om.illum = m.illum;
+    return om;
+}
+
+/// Appends the fan of one face; throws for an emissive fan triangle of zero area.
+inline void obj_add_face(ObjMesh& mesh, const std::vector<Vec3f>& poly, std::uint32_t mat, std::uint32_t line,
+                         const std::string& path) {
+    const bool emissive = mesh.materials[mat].ke.max() > 0.0f;
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
+        const TriangleVertices<float> t{poly[0], poly[k], poly[k + 1]};
+        if (emissive && !(glm::length(glm::cross(t[1] - t[0], t[2] - t[0])) * 0.5f > 0.0f))
+            throw Error(path + ":" + std::to_string(line) + ": emissive face (material '" + mesh.materials[mat].name +
+                        "') has a triangle of zero area");
+        mesh.triangles.push_back(t);
+        mesh.material.push_back(mat);
+        mesh.line.push_back(line);
+    }
+}
+
+}  // namespace detail
+
+/// Loads `path` (and the MTL files it names, looked up next to it). See the header comment
+/// for what is checked.
+inline ObjMesh load_obj(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw Error("load_obj(" + path + "): cannot read the file");
+    const detail::ObjScan scan = detail::obj_scan(path, file);
+    const auto slash = path.find_last_of('/');
+    detail::ObjMaterialReader mtl(slash == std::string::npos ? "" : path.substr(0, slash + 1));
+    tinyobj::attrib_t attrib;
+    std::vector<tinyobj::shape_t> shapes;
+    std::vector<tinyobj::material_t> materials;
+    std::string warn, err;
+    std::istringstream text(scan.text);
+    if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &text, &mtl, false, false))
+        throw Error("load_obj(" + path + "): " + (err.empty() ? "cannot parse the file" : err));
+    ObjMesh mesh;
+    mesh.warnings = mtl.warnings;
+    for (const auto& m : materials) mesh.materials.push_back(detail::obj_material(m, path, mesh.warnings));
+    if (warn.find("material [") != std::string::npos)
+        mesh.warnings.push_back(path + ": faces use a material no MTL file defines; they render as default grey");
     const auto default_material = static_cast<std::uint32_t>(mesh.materials.size());
     mesh.materials.push_back(ObjMaterial{});
-    const std::size_t nv = attrib.vertices.size() / 3;
-    for (const auto& shape : reader.GetShapes()) {
+    std::size_t face = 0;
+    std::vector<Vec3f> poly;
+    for (const auto& shape : shapes) {
         std::size_t offset = 0;
-        for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
+        for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face) {
             const std::size_t count = shape.mesh.num_face_vertices[f];
-            if (count < 3)
-                throw Error("load_obj(" + path + "): shape '" + shape.name + "' face " + std::to_string(f) +
-                            " has " + std::to_string(count) + " vertices, expected at least 3");
-            auto vertex = [&](std::size_t k) {
-                const int i = shape.mesh.indices[offset + k].vertex_index;
-                if (i < 0 || std::size_t(i) >= nv)
-                    throw Error("load_obj(" + path + "): shape '" + shape.name + "' face " + std::to_string(f) +
-                                " refers to vertex " + std::to_string(i + 1) + " of " + std::to_string(nv));
-                return Vec3f(attrib.vertices[3 * std::size_t(i)], attrib.vertices[3 * std::size_t(i) + 1],
-                             attrib.vertices[3 * std::size_t(i) + 2]);
-            };
-            const int mid = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
-            const std::uint32_t mat = mid >= 0 && std::size_t(mid) < default_material
-                                          ? static_cast<std::uint32_t>(mid) : default_material;
-            const Vec3f v0 = vertex(0);
-            for (std::size_t k = 1; k + 1 < count; ++k) {
-                mesh.triangles.push_back({v0, vertex(k), vertex(k + 1)});
-                mesh.material.push_back(mat);
+            poly.clear();
+            for (std::size_t k = 0; k < count; ++k) {
+                const auto i = std::size_t(shape.mesh.indices[offset + k].vertex_index);
+                poly.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
             }
+            const int mid = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
+            const std::uint32_t mat =
+                mid >= 0 && std::size_t(mid) < default_material ? static_cast<std::uint32_t>(mid) : default_material;
+            if (face >= scan.face_line.size()) throw Error("load_obj(" + path + "): more faces parsed than written");
+            detail::obj_add_face(mesh, poly, mat, scan.face_line[face], path);
             offset += count;
         }
     }
     if (mesh.triangles.empty()) throw Error("load_obj(" + path + "): no faces");
-    for (const auto& t : mesh.triangles)
-        for (const auto& p : t)
-            if (!all_finite(p)) throw Error("load_obj(" + path + "): a vertex is not finite");
     return mesh;
 }
 

@@ -1,9 +1,14 @@
 // glint/io/png.hpp: an 8-bit sRGB PNG preview of a linear RGB image.
 //
 // Tone mapping: multiply by 2^exposure, map each channel x to x / (1 + x) only where
-// `reinhard` is set (else clamp to [0, 1]), then the sRGB transfer curve. Uses stb_image_write
-// (Debian libstb-dev, header only) compiled with static linkage, so including this header in
-// several translation units is safe.
+// `reinhard` is set (else clamp to [0, 1]), then the sRGB transfer curve.
+//
+// Needs stb_image_write (Debian libstb-dev, header only), included as <stb_image_write.h>:
+// the glint::io target (and the glint-io pkg-config file) puts stb's folder on the include
+// path. stb's implementation is not compiled by this header: define GLINT_STB_IMPLEMENTATION
+// in exactly one translation unit of the program before including this header (it defines
+// STB_IMAGE_WRITE_IMPLEMENTATION there), or link the stb_image_write implementation the
+// program already has.
 #pragma once
 
 #include <algorithm>
@@ -16,24 +21,21 @@
 #include <glint/core/image.hpp>
 #include <glint/core/spectrum.hpp>
 
-#ifndef STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
+#if defined(GLINT_STB_IMPLEMENTATION) && !defined(STB_IMAGE_WRITE_IMPLEMENTATION)
 #define STB_IMAGE_WRITE_IMPLEMENTATION
-#define GLINT_DEFINED_STB_IMPLEMENTATION
 #endif
 #if defined(__GNUC__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 #pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
 #endif
-#include <stb/stb_image_write.h>
+#include <stb_image_write.h>
 #if defined(__GNUC__)
 #pragma GCC diagnostic pop
-#endif
-#ifdef GLINT_DEFINED_STB_IMPLEMENTATION
-#undef STB_IMAGE_WRITE_IMPLEMENTATION
-#undef GLINT_DEFINED_STB_IMPLEMENTATION
 #endif
 
 namespace glint {

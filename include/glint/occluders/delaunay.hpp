@@ -31,8 +31,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glint/core/error.hpp>
@@ -73,6 +75,7 @@ public:
             lo = glm::min(lo, Vec3d(pts[i]));
             hi = glm::max(hi, Vec3d(pts[i]));
         }
+        check_range(pts);
         if (pts.empty()) lo = hi = Vec3d(0);
         const Vec3d c = 0.5 * (lo + hi);
         const double r = std::max(0.5 * glm::length(hi - lo), 1e-30 + 1e-12 * glm::length(c));
@@ -295,6 +298,36 @@ private:
         std::int32_t tet;
         int face;
     };
+
+    /// The exact predicates (predicates.hpp) need products of five coordinates or coordinate
+    /// differences neither to overflow nor to underflow: every nonzero |coordinate| and every
+    /// nonzero difference between two coordinates on an axis must lie in [min_magnitude,
+    /// max_magnitude] (the super tetrahedron reaches 1e4 times the extent). Throws otherwise,
+    /// naming the point and the value: outside, the empty-sphere property is not guaranteed.
+    static constexpr double min_magnitude = 1e-50, max_magnitude = 1e50;
+    static void check_range(std::span<const Vec3<T>> pts) {
+        auto fail = [](std::size_t i, int axis, double value, const char* what) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "%.3g", value);
+            throw Error("glint::Delaunay: point " + std::to_string(i) + ", axis " + std::to_string(axis) + ": " + what +
+                        " " + buf + " is outside [1e-50, 1e50] (or 0), the range of the exact predicates; "
+                        "rescale the points");
+        };
+        std::vector<std::pair<double, std::size_t>> axis(pts.size());
+        for (int k = 0; k < 3; ++k) {
+            for (std::size_t i = 0; i < pts.size(); ++i) {
+                const double x = double(pts[i][k]);
+                if (x != 0.0 && !(std::abs(x) >= min_magnitude && std::abs(x) <= max_magnitude))
+                    fail(i, k, x, "coordinate");
+                axis[i] = {x, i};
+            }
+            std::sort(axis.begin(), axis.end());
+            for (std::size_t i = 1; i < axis.size(); ++i) {
+                const double gap = axis[i].first - axis[i - 1].first;
+                if (gap != 0.0 && !(gap >= min_magnitude)) fail(axis[i].second, k, gap, "gap to the nearest other coordinate");
+            }
+        }
+    }
 
     std::vector<Vec3d> points_;
     std::vector<Tetrahedron> tets_;

@@ -232,32 +232,41 @@ T point_to_polygon_form_factor(const Vec3<T>& x, const Vec3<T>& n, std::span<con
     return polygon_geometry_integral(x, n, vertices) / pi<T>;
 }
 
-/// A planar convex polygon emitting constant radiance Le from its front side (the side its
-/// vertex order is counter-clockwise from).
+/// Which sides of a polygon light emit. `front`: the side its vertex order is
+/// counter-clockwise from (the side PolygonSampler::normal points to), as the tracer's area
+/// lights; a receiver behind it gets nothing, so the winding decides what is lit. `both`: either
+/// side emits Le, so either winding gives the same light.
+enum class LightSides { front, both };
+
+/// A planar convex polygon emitting constant radiance Le from the sides `sides` names.
 template <Scalar T, std::size_t N>
 class PolygonLight {
 public:
-    PolygonLight(std::span<const Vec3<T>> vertices, const Spectrum<T, N>& radiance)
-        : sampler_(vertices), radiance_(radiance) {
+    PolygonLight(std::span<const Vec3<T>> vertices, const Spectrum<T, N>& radiance,
+                 LightSides sides = LightSides::front)
+        : sampler_(vertices), radiance_(radiance), sides_(sides) {
         if (vertices.size() > max_polygon_vertices)
             throw Error("glint::PolygonLight: at most " + std::to_string(max_polygon_vertices) +
                         " vertices, got " + std::to_string(vertices.size()));
     }
     const PolygonSampler<T>& sampler() const { return sampler_; }
     const Spectrum<T, N>& radiance() const { return radiance_; }
+    LightSides sides() const { return sides_; }
 
-    /// Integral of G over the light for a receiver at x with normal n (zero when x is behind it).
+    /// Integral of G over the light for a receiver at x with normal n (zero when x is behind a
+    /// front-only light).
     T geometry_integral(const Vec3<T>& x, const Vec3<T>& n) const {
-        if (glm::dot(x - sampler_.vertices()[0], sampler_.normal()) <= T(0)) return T(0);
+        if (sides_ == LightSides::front && glm::dot(x - sampler_.vertices()[0], sampler_.normal()) <= T(0)) return T(0);
         return polygon_geometry_integral(x, n, sampler_.vertices());
     }
 
-    /// G(x, y) with both cosines clamped at zero (emission from the front side only).
+    /// G(x, y) with both cosines clamped at zero (the light's cosine taken on its emitting side).
     T geometry(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& y) const {
         const Vec3<T> d = y - x;
         const T r2 = glm::dot(d, d);
         if (!(r2 > T(0))) return T(0);
-        const T cos_x = glm::dot(d, n), cos_y = -glm::dot(d, sampler_.normal());
+        const T cos_x = glm::dot(d, n), dn = -glm::dot(d, sampler_.normal());
+        const T cos_y = sides_ == LightSides::both ? std::abs(dn) : dn;
         if (cos_x <= T(0) || cos_y <= T(0)) return T(0);
         return cos_x * cos_y / (r2 * r2);
     }
@@ -265,6 +274,7 @@ public:
 private:
     PolygonSampler<T> sampler_;
     Spectrum<T, N> radiance_;
+    LightSides sides_;
 };
 
 /// The three estimates of one integral and the per-band statistics they came from.

@@ -84,13 +84,13 @@ T round_up(double x) {
 inline bool clipped_bounds(const Vec3d& a, const Vec3d& b, const Vec3d& c, const AABB<double>& box,
                            AABB<double>& out) {
     std::array<Vec3d, 9> poly{a, b, c}, next{};
-    int n = 3;
+    std::size_t n = 3;
     for (int axis = 0; axis < 3 && n > 0; ++axis) {
         for (int side = 0; side < 2 && n > 0; ++side) {
             const double plane = side ? box.hi[axis] : box.lo[axis];
             auto dist = [&](const Vec3d& p) { return side ? plane - p[axis] : p[axis] - plane; };
-            int m = 0;
-            for (int i = 0; i < n; ++i) {
+            std::size_t m = 0;
+            for (std::size_t i = 0; i < n; ++i) {
                 const Vec3d& p = poly[i];
                 const Vec3d& q = poly[(i + 1) % n];
                 const double dp = dist(p), dq = dist(q);
@@ -101,13 +101,13 @@ inline bool clipped_bounds(const Vec3d& a, const Vec3d& b, const Vec3d& c, const
                     next[m++] = x;
                 }
             }
-            n = std::min(m, 9);
+            n = std::min<std::size_t>(m, 9);
             poly = next;
         }
     }
     if (n == 0) return false;
     out = AABB<double>{};
-    for (int i = 0; i < n; ++i) out.extend(poly[i]);
+    for (std::size_t i = 0; i < n; ++i) out.extend(poly[i]);
     out.lo = glm::max(out.lo, box.lo);
     out.hi = glm::min(out.hi, box.hi);
     return !out.empty();

@@ -147,7 +147,8 @@ private:
             t0 = tn > t0 ? tn : t0;
             t1 = tf < t1 ? tf : t1;
         }
-        if constexpr (!Any) t1 = t1 < hit.t ? t1 : hit.t;
+        // min(t1, hit.t) that keeps a NaN t1 (a NaN tmax), so that such a ray hits nothing.
+        if constexpr (!Any) t1 = hit.t < t1 ? hit.t : t1;
         if (!(t0 <= t1)) return false;
         const Node* nodes = nodes_.data();
         const SoaView<T, P::field_count> view = store_.view();
@@ -215,7 +216,7 @@ private:
                 base = e.base;
                 t0 = e.t0;
                 t1 = e.t1;
-                if constexpr (!Any) t1 = t1 < hit.t ? t1 : hit.t;
+                if constexpr (!Any) t1 = hit.t < t1 ? hit.t : t1;
                 break;
             }
         }
@@ -234,7 +235,7 @@ private:
                 const auto& group = store_.group(first);
                 Ray<T> local = ray;
                 local.origin -= group.origin;
-                local.tmax = ray.tmax < hit.t ? ray.tmax : hit.t;
+                local.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax
                 if (test_records<Any>(group.begin, group.end, view, P::prepare(local), hit)) {
                     if constexpr (Any) return true;
                     found = true;
