@@ -18,6 +18,7 @@
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
 #include <glint/io/png.hpp>
+#include <glint/io/scene_json.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
 
@@ -53,7 +54,9 @@ void usage() {
         "  --exposure EV       PNG preview exposure (default 0)\n"
         "  --tonemap NAME      PNG preview: clamp (exposure, clip at 1, sRGB) or reinhard\n"
         "                      (x / (1 + x) first) (default clamp)\n"
-        "  --seed N            random seed (default 0)\n");
+        "  --seed N            random seed (default 0)\n"
+        "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
+        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n");
 }
 
 /// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
@@ -97,7 +100,7 @@ int to_int(const char* flag, const char* v) {
 
 int main(int argc, char** argv) {
     try {
-        std::string scene_name, mesh, env, out = "out.exr";
+        std::string scene_name, mesh, env, out = "out.exr", insert, export_json;
         RenderOptions o;
         o.settings.progress = isatty(STDERR_FILENO) != 0;  // a progress bar only on a terminal
         float exposure = 0;
@@ -133,11 +136,20 @@ int main(int argc, char** argv) {
                 reinhard = t == "reinhard";
             }
             else if (a == "--seed") o.seed = std::strtoull(value(), nullptr, 10);
+            else if (a == "--insert-mesh") insert = value();
+            else if (a == "--export-scene") export_json = value();
             else throw Error("unknown option '" + a + "' (see --help)");
         }
         if (scene_name.empty() == mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
         Scene<float> scene = mesh.empty() ? builtin_scene<float>(scene_name) : scene_from_obj(mesh, env);
         if (!env.empty() && mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(env));
+        if (!insert.empty())
+            insert_mesh<float>(scene, load_obj(insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
+                               cornell_mesh_placement<float>());
+        if (!export_json.empty()) {
+            write_scene_json(export_json, scene, SceneJsonView{o.settings.width, o.settings.height, o.settings.max_depth});
+            return 0;
+        }
 
         std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n",
                      scene.name.c_str(), scene.triangles.size(), scene.area_lights.size(),
