@@ -43,8 +43,7 @@ load are several times the CPU time. glint's is the glint-render process's user 
 time measured inside Blender around bpy.ops.render.render(): Cycles' scene sync, BVH build and
 render, not Blender's start-up, our scene building or the EXR write. Wall times (glint-render's
 printed render + build time, and Blender's around the same call) are kept too and their ratio
-printed beside. glint-render writes EXR (ZIP); this file reads EXR itself (uncompressed, ZIPS
-and ZIP; half and float), so no OpenEXR binding is needed.
+printed beside. EXR files (glint-render's and Cycles', both ZIP) are read by tools/exr.py.
 
 Run it with Debian's /usr/bin/python3 (where python3-numpy lives) if another python3 comes
 first on PATH.
@@ -65,14 +64,14 @@ import os
 import re
 import shlex
 import shutil
-import struct
 import subprocess
 import sys
 import time
-import zlib
 
 try:
     import numpy as np
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import exr  # tools/exr.py
 except ImportError:  # numpy is checked in main(), so that the message is clear
     np = None
 
@@ -86,86 +85,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
 
-# ---------------------------------------------------------------------------------------------
-# OpenEXR scanline reader ("OpenEXR File Layout", OpenEXR documentation).
-
-def _exr_header(data):
-    if data[:4] != b'\x76\x2f\x31\x01':
-        raise ValueError('not an OpenEXR file')
-    if struct.unpack_from('<I', data, 4)[0] & 0x200:
-        raise ValueError('tiled EXR files are not read')
-    pos, attrs = 8, {}
-    while data[pos] != 0:
-        end = data.index(b'\0', pos)
-        name = data[pos:end].decode()
-        tend = data.index(b'\0', end + 1)
-        kind = data[end + 1:tend].decode()
-        size = struct.unpack_from('<i', data, tend + 1)[0]
-        attrs[name] = (kind, data[tend + 5:tend + 5 + size])
-        pos = tend + 5 + size
-    return attrs, pos + 1
-
-
-def _exr_channels(raw):
-    out, pos = [], 0
-    while raw[pos] != 0:
-        end = raw.index(b'\0', pos)
-        ptype = struct.unpack_from('<i', raw, end + 1)[0]
-        out.append((raw[pos:end].decode(), ptype))
-        pos = end + 17
-    return out
-
-
-def _unzip(chunk, size):
-    t = np.frombuffer(zlib.decompress(chunk), dtype=np.uint8).astype(np.int64)
-    if t.size != size:
-        raise ValueError('EXR chunk decompresses to %d bytes, expected %d' % (t.size, size))
-    t[1:] -= 128  # undo the predictor: t[i] = t[i-1] + d[i] - 128 (mod 256)
-    t = (np.cumsum(t) & 0xff).astype(np.uint8)
-    out = np.empty_like(t)
-    half = (t.size + 1) // 2
-    out[0::2] = t[:half]  # undo the interleaving of the two halves
-    out[1::2] = t[half:]
-    return out.tobytes()
-
-
-def read_exr(path):
-    """{channel name: float32 array (height, width)} of a scanline EXR, first row at the top."""
-    with open(path, 'rb') as f:
-        data = f.read()
-    attrs, pos = _exr_header(data)
-    comp = attrs['compression'][1][0]
-    if comp not in (0, 2, 3):
-        raise ValueError('%s: EXR compression %d is not read (only none, ZIPS and ZIP)' % (path, comp))
-    x0, y0, x1, y1 = struct.unpack('<4i', attrs['dataWindow'][1])
-    w, h = x1 - x0 + 1, y1 - y0 + 1
-    chans = sorted(_exr_channels(attrs['channels'][1]))
-    nbytes = {1: 2, 2: 4}
-    if any(p not in nbytes for _, p in chans):
-        raise ValueError('%s: only half and float channels are read' % path)
-    lines = {0: 1, 2: 1, 3: 16}[comp]
-    nchunks = (h + lines - 1) // lines
-    offsets = struct.unpack_from('<%dQ' % nchunks, data, pos)
-    planes = {n: np.zeros((h, w), np.float32) for n, _ in chans}
-    for off in offsets:
-        y, size = struct.unpack_from('<2i', data, off)
-        rows = min(lines, y1 - y + 1)
-        expect = rows * w * sum(nbytes[p] for _, p in chans)
-        raw = data[off + 8:off + 8 + size]
-        if size < expect:
-            raw = _unzip(raw, expect)
-        k = 0
-        for r in range(rows):
-            for name, p in chans:
-                n = w * nbytes[p]
-                planes[name][y - y0 + r] = np.frombuffer(raw, '<f2' if p == 1 else '<f4', w, k)
-                k += n
-    return planes
-
-
 def read_rgb(path):
-    ch = read_exr(path)
-    return np.stack([ch['R'], ch['G'], ch['B']], axis=-1).astype(np.float64)
+    return exr.rgb_of(exr.read_exr(path)).astype(np.float64)
 
 
 # ---------------------------------------------------------------------------------------------
