@@ -38,12 +38,13 @@ What it does, per scene:
 
 Times: CPU seconds, because the 2-core machine this runs on is shared and wall times under
 load are several times the CPU time. glint's is the glint-render process's user + system time
-(os.wait4): its render, tree build, scene set-up and EXR write, which at these sizes adds
-0.01-0.03 s (a whole 1-spp run of glint-render takes 0.02-0.04 s CPU at 128^2). Cycles' is Blender's process
-time measured inside Blender around bpy.ops.render.render(): Cycles' scene sync, BVH build and
-render, not Blender's start-up, our scene building or the EXR write. Wall times (glint-render's
-printed render + build time, and Blender's around the same call) are kept too and their ratio
-printed beside. EXR files (glint-render's and Cycles', both ZIP) are read by tools/exr.py.
+(os.wait4): its render, tree build, scene set-up and EXR write (a whole 1-spp run takes
+0.02-0.04 s CPU at 128^2). Cycles' is Blender's process time measured inside Blender around
+bpy.ops.render.render(): Cycles' scene sync, BVH build and render, not Blender's start-up, our
+scene building or the EXR write. Wall times (glint-render's printed render + build time, and
+Blender's around the same call) are kept too and their ratio printed beside. "walls" MSE is
+over the region pixels other than the light: light transport without the light's edges.
+EXR files (glint-render's and Cycles', both ZIP) are read by tools/exr.py.
 
 Run it with Debian's /usr/bin/python3 (where python3-numpy lives) if another python3 comes
 first on PATH.

@@ -15,6 +15,10 @@
 //                   columns (000 section 3.2, Fig. 3.4);
 //   envmap          a sphere and a box on a ground plane under a procedural sky with a sun
 //                   (000 section 3.3, Fig. 3.7), or under a given lat-long EXR.
+//
+// insert_mesh() adds a mesh (an OBJ's triangles) to a scene, scaled to a footprint and standing
+// on a floor point: glint-render --insert-mesh puts one on the Cornell box's free floor
+// (cornell_mesh_placement), the mesh scene of the Cycles comparison (tools/peer_cycles.py).
 #pragma once
 
 #include <array>
