@@ -23,6 +23,7 @@
 #include <glint/io/obj.hpp>
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
+#include <glint/io/scene_json.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
 
@@ -64,7 +65,9 @@ void usage() {
         "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n"
         "  --tonemap NAME      PNG preview: clamp (exposure, clip at 1, sRGB) or reinhard\n"
         "                      (x / (1 + x) first) (default clamp)\n"
-        "  --seed N            random seed (default 0)\n");
+        "  --seed N            random seed (default 0)\n"
+        "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
+        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n");
 }
 
 /// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
@@ -158,6 +161,7 @@ void check_writable(const std::string& path) {
 /// Everything the command line sets besides RenderOptions.
 struct Args {
     std::string scene_name, mesh, env, out = "out.exr";
+    std::string insert, export_json;  // --insert-mesh, --export-scene
     float exposure = 0;
     bool reinhard = false;
     std::optional<Vec3f> eye, look_at, up;
@@ -205,6 +209,8 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
             g.reinhard = t == "reinhard";
         }
         else if (a == "--seed") o.seed = to_u64(a, value());
+        else if (a == "--insert-mesh") g.insert = value();
+        else if (a == "--export-scene") g.export_json = value();
         else throw Error("unknown option '" + a + "' (see --help)");
     }
     if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
@@ -241,6 +247,13 @@ int main(int argc, char** argv) {
         Scene<float> scene = g.mesh.empty() ? builtin_scene<float>(g.scene_name) : scene_from_obj(g.mesh, g.env);
         if (!g.env.empty() && g.mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
         apply_camera(g, scene.camera);
+        if (!g.insert.empty())
+            insert_mesh<float>(scene, load_obj(g.insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
+                               cornell_mesh_placement<float>());
+        if (!g.export_json.empty()) {
+            write_scene_json(g.export_json, scene, SceneJsonView{o.settings.width, o.settings.height, o.settings.max_depth});
+            return 0;
+        }
 
         std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n",
                      scene.name.c_str(), scene.triangles.size(), scene.area_lights.size(),

@@ -4,11 +4,13 @@
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -20,6 +22,7 @@
 #include <glint/io/obj.hpp>
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
+#include <glint/io/scene_json.hpp>
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/brute_force.hpp>
@@ -496,6 +499,26 @@ std::string obj_error(const std::string& obj, const std::string& mtl = "", ObjMe
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
+/// The numbers of the JSON array that follows `key` in `text` (nested brackets flattened).
+std::vector<double> json_array_numbers(const std::string& text, const std::string& key) {
+    std::size_t p = text.find("\"" + key + "\": [");
+    REQUIRE(p != std::string::npos);
+    p = text.find('[', p);
+    std::vector<double> out;
+    int depth = 0;
+    for (std::size_t i = p; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c == '[') ++depth;
+        else if (c == ']' && --depth == 0) break;
+        else if (c == '-' || (c >= '0' && c <= '9')) {
+            char* end = nullptr;
+            out.push_back(std::strtod(text.c_str() + i, &end));
+            i = std::size_t(end - text.c_str()) - 1;
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
 TEST_CASE("io: OBJ validation: non-finite vertices are errors naming file, line and value") {
@@ -585,6 +608,77 @@ TEST_CASE("io: OBJ validation: a zero-area emissive face names the file, line an
     CHECK(contains(e, "scene.obj:8"));
     CHECK(contains(e, "lamp"));
     CHECK(contains(e, "zero area"));
+}
+
+
+TEST_CASE("io: scene JSON export writes every triangle, material and the camera exactly") {
+    Scene<float> s = builtin_scene<float>("cornell-glossy");
+    // One triangle whose coordinates need all 9 digits (the scene's own are short decimals).
+    const std::array<Vec3f, 3> odd{Vec3f(1.0f / 3.0f, 2.0f / 7.0f, -5.0f / 11.0f), Vec3f(std::nextafter(1.0f, 2.0f), 0.1f, 1e-8f),
+                                   Vec3f(-1.0f / 9.0f, 3.0f / 13.0f, 7.0f / 17.0f)};
+    s.add_polygon(odd, 0);
+    std::ostringstream out;
+    write_scene_json(out, s, SceneJsonView{64, 32, 17});
+    const std::string text = out.str();
+    const std::vector<double> tris = json_array_numbers(text, "triangles");
+    REQUIRE(tris.size() == 9 * s.triangles.size());
+    int wrong = 0;  // 9 significant digits: every float comes back exactly
+    for (std::size_t i = 0; i < s.triangles.size(); ++i)
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) wrong += float(tris[9 * i + 3 * std::size_t(k) + std::size_t(c)]) != s.triangles[i][k][c];
+    CHECK(wrong == 0);
+    const std::vector<double> mat_of = json_array_numbers(text, "material_of");
+    REQUIRE(mat_of.size() == s.material_of.size());
+    for (std::size_t i = 0; i < mat_of.size(); ++i) wrong += std::uint32_t(mat_of[i]) != s.material_of[i];
+    CHECK(wrong == 0);
+    CHECK(text.find("\"kind\": \"glossy\"") != std::string::npos);
+    CHECK(text.find("\"exponent\": 40") != std::string::npos);
+    CHECK(text.find("\"emission\": [17, 12, 4]") != std::string::npos);
+    CHECK(text.find("\"fov_y\": 0.680000007") != std::string::npos);
+    CHECK(text.find("\"width\": 64,\n  \"height\": 32,\n  \"aspect\": 2,\n  \"max_depth\": 17") != std::string::npos);
+    CHECK(json_array_numbers(text, "area_lights").size() == 4 * 3 + 3 + 3 + 1);  // quad, emission, normal, area
+    CHECK_THROWS_AS(write_scene_json(out, builtin_scene<float>("envmap"), SceneJsonView{}), Error);
+    s.triangles[3][1].x = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_AS(write_scene_json(out, s, SceneJsonView{}), Error);
+    CHECK_THROWS_AS(write_scene_json(out, builtin_scene<float>("cornell"), SceneJsonView{0, 8, 64}), Error);
+}
+
+TEST_CASE("insert_mesh: a generated mesh scaled to its footprint, standing on the floor at its base") {
+    Scene<float> box;  // a 4 x 2 x 3 box, far from the origin: 12 triangles
+    box.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    detail::add_box(box, Vec3f(-3, 5, -1), Vec3f(1, 7, 2), 0.0f, 0);
+    Scene<float> s = builtin_scene<float>("cornell");
+    const std::size_t before = s.triangles.size(), lights = s.area_lights.size();
+    const MeshPlacement<float> p{Vec3f(0.5f, 0.0f, -0.2f), 0.8f};  // scale 0.8 / 4 = 0.2
+    const std::uint32_t m = insert_mesh<float>(s, box.triangles, Material<float>::lambertian(Rgb<float>(0.3f)), p);
+    REQUIRE(s.triangles.size() == before + 12);
+    CHECK(m == s.materials.size() - 1);
+    CHECK(s.area_lights.size() == lights);
+    AABB<float> placed;
+    for (std::size_t i = before; i < s.triangles.size(); ++i) {
+        CHECK(s.material_of[i] == m);
+        CHECK(s.light_of[i] == -1);
+        // Uniform positive scale and a translation keep each face's normal (its winding).
+        CHECK(glm::dot(s.normal(i), box.normal(i - before)) == doctest::Approx(1.0f).epsilon(1e-5));
+        for (const auto& v : s.triangles[i]) placed.extend(v);
+    }
+    const float e = 1e-5f;
+    CHECK(placed.lo.x == doctest::Approx(0.1f).epsilon(e));
+    CHECK(placed.hi.x == doctest::Approx(0.9f).epsilon(e));
+    CHECK(placed.lo.y == doctest::Approx(0.0f).epsilon(e));
+    CHECK(placed.hi.y == doctest::Approx(0.4f).epsilon(e));
+    CHECK(placed.lo.z == doctest::Approx(-0.5f).epsilon(e));
+    CHECK(placed.hi.z == doctest::Approx(0.1f).epsilon(e));
+    // The Cornell placement is clear of both boxes and the walls (what glint-render uses).
+    const MeshPlacement<float> c = cornell_mesh_placement<float>();
+    CHECK(c.base.x - c.size / 2 > -0.99f);
+    CHECK(c.base.z + c.size / 2 < 0.99f);
+    CHECK(c.base.x + c.size / 2 < -0.05f);  // the short box starts at x = -0.05
+    CHECK(c.base.z - c.size / 2 > 0.09f);   // the tall box ends at z = 0.09
+    CHECK_THROWS_AS(insert_mesh<float>(s, {}, Material<float>::lambertian(Rgb<float>(0.3f)), p), Error);
+    CHECK_THROWS_AS(insert_mesh<float>(s, box.triangles, Material<float>::lambertian(Rgb<float>(0.3f)),
+                                       MeshPlacement<float>{Vec3f(0.0f), 0.0f}),
+                    Error);
 }
 
 TEST_CASE("ReducedContinuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 1") {

@@ -19,7 +19,7 @@ _LINES = {0: 1, 2: 1, 3: 16}  # lines per chunk: NONE, ZIPS, ZIP
 def _header(data):
     if data[:4] != b"\x76\x2f\x31\x01":
         raise ValueError("not an OpenEXR file")
-    if data[4] != 2 or data[5] & 0x1e:
+    if data[4] != 2 or data[5] & 0x1a:  # tiled, deep or multi-part (0x04, long names, is fine: Blender sets it)
         raise ValueError("only single-part scanline OpenEXR files are supported")
     pos, attrs = 8, {}
     while data[pos] != 0:

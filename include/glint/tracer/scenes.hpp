@@ -15,14 +15,20 @@
 //                   columns (000 section 3.2, Fig. 3.4);
 //   envmap          a sphere and a box on a ground plane under a procedural sky with a sun
 //                   (000 section 3.3, Fig. 3.7), or under a given lat-long EXR.
+//
+// insert_mesh() adds a mesh (an OBJ's triangles) to a scene, scaled to a footprint and standing
+// on a floor point: glint-render --insert-mesh puts one on the Cornell box's free floor
+// (cornell_mesh_placement), the mesh scene of the Cycles comparison (tools/peer_cycles.py).
 #pragma once
 
 #include <array>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
+#include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/tracer/environment.hpp>
@@ -186,6 +192,52 @@ Scene<T> envmap(std::optional<EnvironmentMap<T>> map = std::nullopt) {
 }
 
 }  // namespace detail
+
+/// Where insert_mesh() puts a mesh: uniformly scaled so that the larger of its bounding
+/// box's horizontal (x, z) extents is `size`, and moved so that the box's bottom centre is at
+/// `base` (the mesh stands on a floor through `base`; y is up, as in every built-in scene).
+template <Scalar T>
+struct MeshPlacement {
+    Vec3<T> base{0};
+    T size = T(1);
+};
+
+/// Adds the triangles `mesh` (vertex order kept) to `s` with the material `m`, placed by `p`;
+/// returns the material's index. Throws glint::Error for an empty or flat-footprint mesh, a
+/// non-positive size or a non-finite vertex.
+template <Scalar T>
+std::uint32_t insert_mesh(Scene<T>& s, std::span<const TriangleVertices<T>> mesh, const Material<T>& m,
+                          const MeshPlacement<T>& p) {
+    if (mesh.empty()) throw Error("insert_mesh: the mesh has no triangles");
+    if (!(p.size > T(0)) || !std::isfinite(double(p.size)))
+        throw Error("insert_mesh: size " + std::to_string(double(p.size)) + " is not positive");
+    AABB<T> box;
+    for (const auto& t : mesh)
+        for (const auto& v : t) {
+            if (!std::isfinite(double(v.x)) || !std::isfinite(double(v.y)) || !std::isfinite(double(v.z)))
+                throw Error("insert_mesh: a vertex is not finite");
+            box.extend(v);
+        }
+    const Vec3<T> e = box.extent();
+    const T footprint = std::max(e.x, e.z);
+    if (!(footprint > T(0))) throw Error("insert_mesh: the mesh has no horizontal extent");
+    const T scale = p.size / footprint;
+    const Vec3<T> bottom((box.lo.x + box.hi.x) * T(0.5), box.lo.y, (box.lo.z + box.hi.z) * T(0.5));
+    const std::uint32_t mi = s.add_material(m);
+    for (const auto& t : mesh) {
+        const std::array<Vec3<T>, 3> q{p.base + (t[0] - bottom) * scale, p.base + (t[1] - bottom) * scale,
+                                       p.base + (t[2] - bottom) * scale};
+        s.add_polygon(q, mi);
+    }
+    return mi;
+}
+
+/// The Cornell box's free floor between the short box, the tall box and the red wall, where
+/// glint-render --insert-mesh puts a mesh (0.7 wide: at least 0.1 clear of the walls and boxes).
+template <Scalar T>
+MeshPlacement<T> cornell_mesh_placement() {
+    return MeshPlacement<T>{Vec3<T>(T(-0.5), T(0), T(0.45)), T(0.7)};
+}
 
 /// Names accepted by builtin_scene().
 inline const std::vector<std::string>& builtin_scene_names() {

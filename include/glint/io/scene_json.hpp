@@ -1,0 +1,189 @@
+// glint/io/scene_json.hpp: a built scene as JSON, for exporting it exactly to another
+// renderer (tools/peer_cycles.py builds the same scene in Blender's Cycles from it).
+//
+// Written: the triangles (three vertices each, in the tracer's order, whose vertex order
+// gives the geometric normal and so an emitter's front face), the material of each triangle,
+// the materials (kind, kd, ks, Phong exponent, emission, ior: the model of
+// glint/tracer/scene.hpp), the area lights (polygon, emission, unit normal, area), the
+// pinhole camera (eye, target, up, full vertical field of view fov_y in radians) with the
+// image size and aspect, and the tracer's path-length cap max_depth. Numbers are written with
+// 9 significant digits, which round-trips every float.
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <ostream>
+#include <string>
+
+#include <glint/core/error.hpp>
+#include <glint/tracer/scene.hpp>
+
+namespace glint {
+
+/// Image and tracer settings that the exported scene is rendered with.
+struct SceneJsonView {
+    int width = 256, height = 256;
+    int max_depth = 64;
+};
+
+namespace detail {
+
+inline const char* material_kind_name(MaterialKind k) {
+    switch (k) {
+        case MaterialKind::lambertian: return "lambertian";
+        case MaterialKind::glossy: return "glossy";
+        case MaterialKind::mirror: return "mirror";
+        default: return "dielectric";
+    }
+}
+
+/// Writes a finite number; a NaN or infinity throws (JSON has none).
+template <Scalar T>
+void json_number(std::ostream& out, T v, const char* what) {
+    if (!std::isfinite(double(v)))
+        throw Error(std::string("write_scene_json: ") + what + " has a non-finite value " + std::to_string(double(v)));
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%.9g", double(v));
+    out << buf;
+}
+
+/// Writes `v` as a JSON string (quotes and backslashes escaped, control characters dropped).
+inline void json_string(std::ostream& out, const std::string& v) {
+    out << '"';
+    for (const char c : v) {
+        if (c == '"' || c == '\\') out << '\\';
+        if (static_cast<unsigned char>(c) >= 0x20) out << c;
+    }
+    out << '"';
+}
+
+/// Writes "[a, b, ...]" of `n` finite numbers.
+template <Scalar T>
+void json_numbers(std::ostream& out, const T* v, std::size_t n, const char* what) {
+    out << '[';
+    for (std::size_t i = 0; i < n; ++i) {
+        out << (i ? ", " : "");
+        json_number(out, v[i], what);
+    }
+    out << ']';
+}
+
+template <Scalar T>
+void json_value(std::ostream& out, T v, const char* what) {
+    json_number(out, v, what);
+}
+
+template <Scalar T>
+void json_value(std::ostream& out, const Vec3<T>& v, const char* what) {
+    const T a[3] = {v.x, v.y, v.z};
+    json_numbers(out, a, 3, what);
+}
+
+template <Scalar T>
+void json_value(std::ostream& out, const Rgb<T>& c, const char* what) {
+    const T a[3] = {c[0], c[1], c[2]};
+    json_numbers(out, a, 3, what);
+}
+
+/// Writes `, "name": value`.
+template <class V>
+void json_field(std::ostream& out, const char* name, const V& v) {
+    out << ", \"" << name << "\": ";
+    json_value(out, v, name);
+}
+
+/// Writes `"key": [` one `{...}` per item of `items`, each written by `item`, `],`.
+template <class Items, class WriteItem>
+void json_objects(std::ostream& out, const char* key, const Items& items, WriteItem item) {
+    out << "  \"" << key << "\": [\n";
+    for (std::size_t i = 0; i < items.size(); ++i) {
+        out << "    {";
+        item(items[i]);
+        out << (i + 1 < items.size() ? "},\n" : "}\n");
+    }
+    out << "  ],\n";
+}
+
+template <Scalar T>
+void json_materials(std::ostream& out, const Scene<T>& s) {
+    json_objects(out, "materials", s.materials, [&](const Material<T>& m) {
+        out << "\"kind\": \"" << material_kind_name(m.kind) << '"';
+        json_field(out, "kd", m.kd);
+        json_field(out, "ks", m.ks);
+        json_field(out, "exponent", m.exponent);
+        json_field(out, "emission", m.emission);
+        json_field(out, "ior", m.ior);
+    });
+}
+
+template <Scalar T>
+void json_lights(std::ostream& out, const Scene<T>& s) {
+    json_objects(out, "area_lights", s.area_lights, [&](const AreaLight<T>& l) {
+        out << "\"vertices\": [";
+        for (std::size_t k = 0; k < l.vertices.size(); ++k) {
+            out << (k ? ", " : "");
+            json_value(out, l.vertices[k], "vertices");
+        }
+        out << ']';
+        json_field(out, "emission", l.emission);
+        json_field(out, "normal", l.normal);
+        json_field(out, "area", l.area);
+    });
+}
+
+template <Scalar T>
+void json_triangles(std::ostream& out, const Scene<T>& s) {
+    out << "  \"triangles\": [\n";
+    for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+        const auto& t = s.triangles[i];
+        const T a[9] = {t[0].x, t[0].y, t[0].z, t[1].x, t[1].y, t[1].z, t[2].x, t[2].y, t[2].z};
+        out << "    ";
+        json_numbers(out, a, 9, "triangles");
+        out << (i + 1 < s.triangles.size() ? ",\n" : "\n");
+    }
+    out << "  ],\n  \"material_of\": [";
+    for (std::size_t i = 0; i < s.material_of.size(); ++i) out << (i ? (i % 32 ? ", " : ",\n    ") : "") << s.material_of[i];
+    out << "]\n";
+}
+
+}  // namespace detail
+
+/// Writes `s` as JSON (see the file comment). Throws glint::Error for an inconsistent scene,
+/// an environment map or point lights (not exported), or a non-finite number.
+template <Scalar T>
+void write_scene_json(std::ostream& out, const Scene<T>& s, const SceneJsonView& view) {
+    s.validate();
+    if (s.environment || !s.point_lights.empty())
+        throw Error("write_scene_json: scene '" + s.name + "' has an environment map or point lights, which are not exported");
+    if (view.width <= 0 || view.height <= 0 || view.max_depth <= 0)
+        throw Error("write_scene_json: image " + std::to_string(view.width) + "x" + std::to_string(view.height) +
+                    " or max_depth " + std::to_string(view.max_depth) + " is not positive");
+    out << "{\n  \"name\": ";
+    detail::json_string(out, s.name);
+    out << ",\n  \"width\": " << view.width << ",\n  \"height\": " << view.height
+        << ",\n  \"aspect\": ";
+    detail::json_number(out, T(view.width) / T(view.height), "aspect");
+    out << ",\n  \"max_depth\": " << view.max_depth << ",\n  \"camera\": {\"eye\": ";
+    detail::json_value(out, s.camera.eye, "eye");
+    detail::json_field(out, "target", s.camera.target);
+    detail::json_field(out, "up", s.camera.up);
+    detail::json_field(out, "fov_y", s.camera.fov_y);
+    out << "},\n";
+    detail::json_materials(out, s);
+    detail::json_lights(out, s);
+    detail::json_triangles(out, s);
+    out << "}\n";
+}
+
+/// write_scene_json to the file `path`; throws glint::Error naming the file if it cannot be written.
+template <Scalar T>
+void write_scene_json(const std::string& path, const Scene<T>& s, const SceneJsonView& view) {
+    std::ofstream f(path);
+    if (!f) throw Error("write_scene_json: cannot open '" + path + "' for writing");
+    write_scene_json(f, s, view);
+    f.flush();
+    if (!f) throw Error("write_scene_json: writing '" + path + "' failed");
+}
+
+}  // namespace glint
