@@ -298,6 +298,63 @@ public:
         return traverse<true>(b, ray, hit);
     }
 
+    /// Records first .. end-1 of a padded group (`first` on a batch boundary, the last batch
+    /// filled with records that never hit), in whole batches, for a ray prepared in the
+    /// group's frame; updates `hit` when a hit nearer than hit.t is found. The leaf test of
+    /// every tree (kd-tree, BIH, wide BVH).
+    template <bool Any>
+    bool test_batches(std::uint32_t first, std::uint32_t end, const typename P::RayData& rd,
+                      StoreHit<T>& hit) const {
+        const SoaView<T, F> v = view();
+        T ts[W], us[W], vs[W];
+        bool found = false;
+        for (; first < end; first += std::uint32_t(W)) {
+            P::batch(v, first, W, rd, ts, us, vs);
+            // Most batches hit nothing nearer than the best hit: one vectorizable test
+            // over the lanes decides that; the nearest lane is searched only otherwise.
+            bool any = false;
+            for (std::size_t k = 0; k < W; ++k) any |= ts[k] < hit.t;
+            if (any) {
+                if constexpr (Any) return true;
+                std::size_t best = 0;
+                for (std::size_t k = 1; k < W; ++k) best = ts[k] < ts[best] ? k : best;
+                hit.t = ts[best];
+                hit.u = us[best];
+                hit.v = vs[best];
+                hit.id = ids_[first + best];
+                found = true;
+            }
+        }
+        return found;
+    }
+    /// Groups first .. first+count-1 of padded blocks, each tested in its own frame with
+    /// the interval (ray.tmin, min(ray.tmax, hit.t)).
+    template <bool Any>
+    bool test_groups(std::uint32_t first, std::uint32_t count, const Ray<T>& ray, StoreHit<T>& hit) const {
+        bool found = false;
+        for (const std::uint32_t end = first + count; first < end; ++first) {
+            const Group& g = groups_[first];
+            Ray<T> local = ray;
+            local.origin -= g.origin;
+            local.tmax = ray.tmax < hit.t ? ray.tmax : hit.t;
+            if (test_batches<Any>(g.begin, g.end, P::prepare(local), hit)) {
+                if constexpr (Any) return true;
+                found = true;
+            }
+        }
+        return found;
+    }
+
+    /// A tree leaf: `count` groups from `first` for intersectors with frames (IVM), else
+    /// `count` padded records from `first` in the world frame, tested with `world`, the ray
+    /// prepared once per query.
+    template <bool Any>
+    bool test_leaf(std::uint32_t first, std::uint32_t count, const Ray<T>& ray, const typename P::RayData& world,
+                   StoreHit<T>& hit) const {
+        if constexpr (P::uses_frame) return test_groups<Any>(first, count, ray, hit);
+        else return test_batches<Any>(first, first + count, world, hit);
+    }
+
 private:
     /// Appends one record (its scalars) with its id, opening a new block when needed.
     void push(const T* scalars, std::uint32_t id) {
