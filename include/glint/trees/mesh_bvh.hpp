@@ -97,8 +97,10 @@ public:
             r.tmax = h.t;
             return true;
         });
-        if (found) hit = h;
-        return found;
+        if (!found) return false;
+        hit = h;
+        hit.id = store_.id(h.id);  // the leaf test reports the record
+        return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {

@@ -104,6 +104,7 @@ public:
         StoreHit<T> h = hit;
         if (!trace<false>(ray, h)) return false;
         hit = h;
+        hit.id = store_.id(h.id);  // the leaf test reports the record
         return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).

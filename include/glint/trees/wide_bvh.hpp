@@ -272,6 +272,12 @@ public:
                     int j = sp++;
                     for (; j > first && stack[j - 1].t < tn[i]; --j) stack[j] = stack[j - 1];
                     stack[j] = Entry{n.child[i], tn[i]};
+#if defined(__SSE2__)
+                    if (!detail::wide_is_leaf(n.child[i])) {
+                        const char* p = reinterpret_cast<const char*>(&nodes_[n.child[i]]);
+                        for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+                    }
+#endif
                 }
                 assert(sp <= max_stack);
             } else if (leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
