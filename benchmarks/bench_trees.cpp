@@ -25,6 +25,7 @@
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63); --few: pointer and
 // compact-31 only (as --quick, with the full ray count).
+// --set primary|incoherent: run one ray set.
 // --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
 // --memory: print only the node-memory table (pointer, havran-K, compact-K for K = 3 ... 63,
 // kd-tree and BIH; 000 Fig. 4.6) and exit.
@@ -207,7 +208,7 @@ struct Peer {  // no peer: never constructed
 
 struct Options {
     std::vector<std::string> meshes;
-    std::string csv, only;
+    std::string csv, only, set;  // --set: run one ray set (primary or incoherent)
     bool quick = false, generated = true, all = false, memory = false, few = false, wide = false;
     BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
@@ -265,6 +266,13 @@ void time_sets(const Scene& sc, const Accel& acc, const Peer* peer, const Option
                 agree += (std::isinf(te) && std::isinf(h.t)) || std::abs(te - h.t) <= 1e-3f * std::max(1.f, te);
             }
         }
+        WideBvhCounters counted;
+        if constexpr (requires { acc.closest_hit(rays[0], std::declval<StoreHit<float>&>(), &counted); }) {
+            for (const auto& r : rays) {
+                StoreHit<float> h;
+                acc.closest_hit(r, h, &counted);
+            }
+        }
         Row row = base;
         row.rays = sc.sets[s].name;
         row.mrays = double(rays.size()) / best * 1e-6;
@@ -275,6 +283,9 @@ void time_sets(const Scene& sc, const Accel& acc, const Peer* peer, const Option
                     row.rays.c_str(), row.tree.c_str(), row.layout.c_str(), row.intersector.c_str(), row.mrays, row.build_s,
                     row.node_bytes, row.bytes_per_tri);
         if (row.embree > 0) std::printf("  x%.3f of Embree  agree %.4f", row.ratio, row.agree);
+        if (counted.nodes)
+            std::printf("  per ray: %.1f nodes %.1f leaves %.1f records", double(counted.nodes) / double(rays.size()),
+                        double(counted.leaves) / double(rays.size()), double(counted.records) / double(rays.size()));
         std::printf("\n");
         std::fflush(stdout);
         rows.push_back(row);
@@ -421,6 +432,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--memory") o.memory = true;
         else if (a == "--wide") o.wide = true;
         else if (a == "--cpu-time") use_cpu_time = true;
+        else if (a == "--set") o.set = value();
         else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
         else if (a == "--bvh-ci") o.bvh.intersection_cost = std::stof(value());
         else if (a == "--bvh-block") o.bvh.leaf_block = std::uint32_t(std::stoul(value()));
@@ -433,7 +445,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time]");
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -474,10 +486,14 @@ int main(int argc, char** argv) try {
     std::vector<Row> rows;
     for (Scene& sc : scenes) {
         const int width = 1024, height = std::max<int>(1, int(opt.rays / width));
-        sc.sets.push_back({"primary", make_primary_rays<float>(sc.mesh, width, height)});
-        sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
-        std::printf("# scene %s: %zu triangles, %zu primary and %zu incoherent rays\n", sc.name.c_str(), sc.mesh.size(),
-                    sc.sets[0].rays.size(), sc.sets[1].rays.size());
+        if (opt.set.empty() || opt.set == "primary")
+            sc.sets.push_back({"primary", make_primary_rays<float>(sc.mesh, width, height)});
+        if (opt.set.empty() || opt.set == "incoherent")
+            sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
+        if (sc.sets.empty()) throw Error("bench_trees: --set " + opt.set + ": no such ray set");
+        std::printf("# scene %s: %zu triangles, %zu %s rays%s\n", sc.name.c_str(), sc.mesh.size(), sc.sets[0].rays.size(),
+                    sc.sets[0].name.c_str(),
+                    sc.sets.size() > 1 ? (", " + std::to_string(sc.sets[1].rays.size()) + " incoherent rays").c_str() : "");
         std::unique_ptr<Peer> peer;
 #ifdef GLINT_HAVE_EMBREE
         peer = std::make_unique<Peer>(sc.mesh);

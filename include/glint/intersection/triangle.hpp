@@ -334,8 +334,8 @@ public:
     /// hit's id cost a cache miss each, 11% of the wide BVH's leaf time on incoherent rays).
     /// The leaf test of every tree (kd-tree, BIH, wide BVH).
     template <bool Any>
-    bool test_batches(std::uint32_t first, std::uint32_t end, const typename P::RayData& rd,
-                      StoreHit<T>& hit) const {
+    [[gnu::always_inline]] bool test_batches(std::uint32_t first, std::uint32_t end, const typename P::RayData& rd,
+                                             StoreHit<T>& hit) const {
         const SoaView<T, F> v = view();
         T ts[W], us[W], vs[W];
         bool found = false;

@@ -86,17 +86,22 @@ public:
     }
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
-    bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit) const {
+    /// With `counters`, counts nodes, leaves and records tested.
+    bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters = nullptr) const {
         StoreHit<float> h = hit;  // a local copy the compiler keeps in registers
         Ray<float> r = ray;
         r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
         typename P::RayData world{};
         if constexpr (!P::uses_frame) world = P::prepare(r);
-        const bool found = bvh_.template intersect<false>(r, [&](std::uint32_t first, std::uint32_t count) {
-            if (!store_.template test_leaf<false>(first, count, r, world, h)) return false;
-            r.tmax = h.t;
-            return true;
-        });
+        const bool found = bvh_.template intersect<false>(
+            r,
+            [&](std::uint32_t first, std::uint32_t count) {
+                if (counters) counters->records += records(first, count);
+                if (!store_.template test_leaf<false>(first, count, r, world, h)) return false;
+                r.tmax = h.t;
+                return true;
+            },
+            counters);
         if (!found) return false;
         hit = h;
         hit.id = store_.id(h.id);  // the leaf test reports the record
@@ -113,6 +118,14 @@ public:
     }
 
     const WideBvh<N>& bvh() const { return bvh_; }
+    /// Record slots (padded batches) of a leaf reference's range.
+    std::uint64_t records(std::uint32_t first, std::uint32_t count) const {
+        if constexpr (!P::uses_frame) return count;
+        std::uint64_t n = 0;
+        for (std::uint32_t g = first; g < first + count; ++g)
+            n += (store_.group(g).end - store_.group(g).begin + batch_width - 1) / batch_width * batch_width;
+        return n;
+    }
     const TriangleStore<P>& store() const { return store_; }
     /// Build time (boxes, tree, records), in seconds.
     double build_seconds() const { return build_seconds_; }

@@ -113,22 +113,23 @@ struct WideBoxTest {
 template <>
 struct WideBoxTest<8, false> {
     __m256 o[3], inv[3];
-    int near[3], far[3];
+    std::size_t near[3], far[3];  // byte offsets of the rows in a node
 
-    explicit WideBoxTest(const Ray<float>& r) {
+    [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
         const WideBoxTest<8, true> s(r);
         for (int a = 0; a < 3; ++a) {
             o[a] = _mm256_set1_ps(s.o[a]);
             inv[a] = _mm256_set1_ps(s.inv[a]);
-            near[a] = s.near[a];
-            far[a] = s.far[a];
+            near[a] = std::size_t(s.near[a]) * sizeof(__m256);
+            far[a] = std::size_t(s.far[a]) * sizeof(__m256);
         }
     }
-    unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
+    [[gnu::always_inline]] unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
         __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
+        const char* rows = reinterpret_cast<const char*>(n.bounds);
         for (int a = 0; a < 3; ++a) {
-            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n.bounds[near[a]]), o[a]), inv[a]);
-            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n.bounds[far[a]]), o[a]), inv[a]);
+            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(rows + near[a])), o[a]), inv[a]);
+            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(rows + far[a])), o[a]), inv[a]);
             t0 = _mm256_max_ps(tl, t0);  // tl > t0 ? tl : t0
             t1 = _mm256_min_ps(th, t1);  // th < t1 ? th : t1
         }
@@ -183,6 +184,12 @@ inline bool wide_ray_valid(const Ray<float>& r) {
 template <class F>
 concept WideLeafTest = requires(F f, std::uint32_t i) {
     { f(i, i) } -> std::convertible_to<bool>;
+};
+
+/// What one or more queries did (for measurements): nodes whose children were tested, and
+/// leaves and records (lanes of padded batches) tested.
+struct WideBvhCounters {
+    std::uint64_t nodes = 0, leaves = 0, records = 0;
 };
 
 /// Accounting of a wide BVH (node count and bytes, depth, leaves).
@@ -245,8 +252,9 @@ public:
     /// Closest (Any = false) or any hit: `leaf(first, count)` is called for the leaves the
     /// ray enters, nearest first; it lowers ray.tmax to each hit it finds (closest hit).
     /// Portable = true forces the portable box test (the same hits, for tests).
+    /// With `counters`, counts the nodes and leaves visited.
     template <bool Any, bool Portable = false, WideLeafTest Leaf>
-    bool intersect(Ray<float>& ray, Leaf&& leaf) const {
+    bool intersect(Ray<float>& ray, Leaf&& leaf, WideBvhCounters* counters = nullptr) const {
         if (nodes_.empty() || !detail::wide_ray_valid(ray)) return false;
         const detail::WideBoxTest<N, Portable> box(ray);
         struct Entry {
@@ -261,6 +269,7 @@ public:
             if (!detail::wide_is_leaf(ref)) {
                 alignas(32) float tn[N];
                 const Node& n = nodes_[ref];
+                if (counters) ++counters->nodes;
                 unsigned mask = box.test(n, ray.tmin, ray.tmax, tn);
                 if (mask != 0 && (mask & (mask - 1)) == 0) {  // one child: no stack
                     ref = n.child[std::countr_zero(mask)];
@@ -280,7 +289,8 @@ public:
 #endif
                 }
                 assert(sp <= max_stack);
-            } else if (leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
+            } else if (counters && ++counters->leaves,
+                       leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
                 found = true;
                 if constexpr (Any) return true;
             }
