@@ -89,8 +89,9 @@ struct SahSplit {
 /// node reads and permutes only its own range of `prims` and writes only its own slots.
 class BinnedSah {
 public:
-    BinnedSah(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt, BinaryBvh& out)
-        : boxes_(boxes), opt_(opt), out_(out), tokens_(int(opt.thread_count()) - 1) {}
+    BinnedSah(std::span<const AABB<float>> boxes, std::span<const Vec3f> centres, const BvhBuildOptions& opt,
+              BinaryBvh& out)
+        : boxes_(boxes), centres_(centres), opt_(opt), out_(out), tokens_(int(opt.thread_count()) - 1) {}
 
     void node(std::uint32_t slot, std::uint32_t b, std::uint32_t e, const AABB<float>& box) {
         BinaryBvhNode& nd = out_.nodes[slot];
@@ -101,13 +102,15 @@ public:
         if (n == 1) return;
         AABB<float> cbox;
         for (std::uint32_t i = b; i < e; ++i) cbox.extend(centre(prims()[i]));
-        const SahSplit s = find_split(b, e, cbox, box.surface_area());
+        const Vec3f k = scales(cbox);
+        const SahSplit s = find_split(b, e, cbox, k, box.surface_area());
         if (n <= opt_.max_leaf && !(s.cost < opt_.intersection_cost * float(blocks(n)))) return;
         std::uint32_t m = b + n / 2;
         AABB<float> lb, rb;
         if (s.axis >= 0) {
+            const float lo = cbox.lo[s.axis], ka = k[s.axis];
             const auto mid = std::partition(prims().begin() + b, prims().begin() + e, [&](std::uint32_t p) {
-                return bin_of(centre(p)[s.axis], cbox, s.axis) < s.bin;
+                return bin_of(centre(p)[s.axis], lo, ka) < s.bin;
             });
             m = std::uint32_t(mid - prims().begin());
             lb = s.left;
@@ -122,17 +125,21 @@ public:
 
 private:
     std::vector<std::uint32_t>& prims() { return out_.prims; }
-    Vec3f centre(std::uint32_t p) const { return boxes_[p].center(); }
+    Vec3f centre(std::uint32_t p) const { return centres_[p]; }
     std::uint32_t blocks(std::uint32_t n) const { return (n + opt_.leaf_block - 1) / opt_.leaf_block; }
-    float scale(const AABB<float>& cbox, int a) const {
-        const float ext = cbox.hi[a] - cbox.lo[a];
-        const float k = float(opt_.bins) * (1.0f - 0x1p-20f) / ext;
-        return ext > 0 && std::isfinite(k) ? k : 0.0f;
+    /// Bins per unit of centre coordinate on each axis (0 where all centres coincide).
+    Vec3f scales(const AABB<float>& cbox) const {
+        Vec3f k;
+        for (int a = 0; a < 3; ++a) {
+            const float ext = cbox.hi[a] - cbox.lo[a];
+            k[a] = float(opt_.bins) * (1.0f - 0x1p-20f) / ext;
+            if (!(ext > 0) || !std::isfinite(k[a])) k[a] = 0.0f;
+        }
+        return k;
     }
     /// The bin of a centre coordinate; the binning and the partition call this same code.
-    std::uint32_t bin_of(float c, const AABB<float>& cbox, int a) const {
-        const float x = (c - cbox.lo[a]) * scale(cbox, a);
-        return std::uint32_t(std::min(float(opt_.bins - 1), std::max(0.0f, x)));
+    std::uint32_t bin_of(float c, float lo, float k) const {
+        return std::uint32_t(std::min(float(opt_.bins - 1), std::max(0.0f, (c - lo) * k)));
     }
 
     /// Runs the two children, the left one on a thread of its own when the subtree is
@@ -152,46 +159,60 @@ private:
         node(rs, m, e, rb);
     }
 
-    SahSplit find_split(std::uint32_t b, std::uint32_t e, const AABB<float>& cbox, float area) const {
+    /// Bins every primitive of the range on the three axes in one pass, then sweeps each
+    /// axis for its cheapest boundary (Wald 2007).
+    SahSplit find_split(std::uint32_t b, std::uint32_t e, const AABB<float>& cbox, const Vec3f& k, float area) const {
         constexpr int max_bins = 64;
-        SahSplit best;
-        const float inv_area = 1.0f / std::max(area, std::numeric_limits<float>::min());
-        for (int a = 0; a < 3; ++a) {
-            if (scale(cbox, a) == 0.0f) continue;
-            AABB<float> bin_box[max_bins];
-            std::uint32_t bin_n[max_bins] = {};
-            for (std::uint32_t i = b; i < e; ++i) {
-                const std::uint32_t p = out_.prims[i], k = bin_of(centre(p)[a], cbox, a);
-                bin_box[k].extend(boxes_[p]);
-                ++bin_n[k];
-            }
-            // Right-to-left sweep: suffix areas and counts; then left to right.
-            float right_cost[max_bins];
-            AABB<float> acc;
-            std::uint32_t cnt = 0;
-            for (std::uint32_t k = opt_.bins - 1; k > 0; --k) {
-                acc.extend(bin_box[k]);
-                cnt += bin_n[k];
-                right_cost[k] = cnt ? acc.surface_area() * float(blocks(cnt)) : infinity<float>;
-            }
-            acc = AABB<float>{};
-            cnt = 0;
-            for (std::uint32_t k = 1; k < opt_.bins; ++k) {
-                acc.extend(bin_box[k - 1]);
-                cnt += bin_n[k - 1];
-                if (cnt == 0 || cnt == e - b) continue;
-                const float c = opt_.traversal_cost +
-                                opt_.intersection_cost * (acc.surface_area() * float(blocks(cnt)) + right_cost[k]) * inv_area;
-                if (c < best.cost) best = SahSplit{a, k, c, acc, {}};
-            }
-            if (best.axis == a) {
-                for (std::uint32_t k = best.bin; k < opt_.bins; ++k) best.right.extend(bin_box[k]);
+        AABB<float> bin_box[3][max_bins];
+        std::uint32_t bin_n[3][max_bins] = {};
+        for (std::uint32_t i = b; i < e; ++i) {
+            const std::uint32_t p = out_.prims[i];
+            const Vec3f c = centre(p);
+            for (int a = 0; a < 3; ++a) {
+                const std::uint32_t j = bin_of(c[a], cbox.lo[a], k[a]);
+                bin_box[a][j].extend(boxes_[p]);
+                ++bin_n[a][j];
             }
         }
+        SahSplit best;
+        const float inv_area = 1.0f / std::max(area, std::numeric_limits<float>::min());
+        for (int a = 0; a < 3; ++a)
+            if (k[a] != 0.0f) sweep(a, bin_box[a], bin_n[a], e - b, inv_area, best);
         return best;
     }
 
+    /// The cheapest boundary on axis a, if cheaper than `best`: suffix costs right to left,
+    /// then prefixes left to right.
+    void sweep(int a, const AABB<float>* bin_box, const std::uint32_t* bin_n, std::uint32_t n, float inv_area,
+               SahSplit& best) const {
+        float right_cost[64];
+        AABB<float> acc;
+        std::uint32_t cnt = 0;
+        for (std::uint32_t j = opt_.bins - 1; j > 0; --j) {
+            acc.extend(bin_box[j]);
+            cnt += bin_n[j];
+            right_cost[j] = cnt ? acc.surface_area() * float(blocks(cnt)) : infinity<float>;
+        }
+        acc = AABB<float>{};
+        cnt = 0;
+        bool improved = false;
+        for (std::uint32_t j = 1; j < opt_.bins; ++j) {
+            acc.extend(bin_box[j - 1]);
+            cnt += bin_n[j - 1];
+            if (cnt == 0 || cnt == n) continue;
+            const float c = opt_.traversal_cost +
+                            opt_.intersection_cost * (acc.surface_area() * float(blocks(cnt)) + right_cost[j]) * inv_area;
+            if (c < best.cost) {
+                best = SahSplit{a, j, c, acc, {}};
+                improved = true;
+            }
+        }
+        if (improved)
+            for (std::uint32_t j = best.bin; j < opt_.bins; ++j) best.right.extend(bin_box[j]);
+    }
+
     std::span<const AABB<float>> boxes_;
+    std::span<const Vec3f> centres_;
     const BvhBuildOptions& opt_;
     BinaryBvh& out_;
     std::atomic<int> tokens_;  // threads that may still be started
@@ -213,7 +234,9 @@ inline BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhB
     }
     if (out.prims.empty()) return out;
     out.nodes.resize(2 * out.prims.size() - 1);
-    detail::BinnedSah(boxes, opt, out).node(0, 0, std::uint32_t(out.prims.size()), root);
+    std::vector<Vec3f> centres(boxes.size());
+    for (std::uint32_t p : out.prims) centres[p] = boxes[p].center();
+    detail::BinnedSah(boxes, centres, opt, out).node(0, 0, std::uint32_t(out.prims.size()), root);
     return out;
 }
 
