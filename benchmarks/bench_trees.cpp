@@ -25,7 +25,7 @@
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63); --few: pointer and
 // compact-31 only (as --quick, with the full ray count).
-// --set primary|incoherent: run one ray set.
+// --set primary|incoherent: run one ray set. --big adds knot-2m, a 2,048,000-triangle torus knot.
 // --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
 // --memory: print only the node-memory table (pointer, havran-K, compact-K for K = 3 ... 63,
 // kd-tree and BIH; 000 Fig. 4.6) and exit.
@@ -209,7 +209,7 @@ struct Peer {  // no peer: never constructed
 struct Options {
     std::vector<std::string> meshes;
     std::string csv, only, set;  // --set: run one ray set (primary or incoherent)
-    bool quick = false, generated = true, all = false, memory = false, few = false, wide = false;
+    bool quick = false, generated = true, all = false, memory = false, few = false, wide = false, big = false;
     BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
     int reps = 3;
@@ -433,6 +433,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--wide") o.wide = true;
         else if (a == "--cpu-time") use_cpu_time = true;
         else if (a == "--set") o.set = value();
+        else if (a == "--big") o.big = true;
         else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
         else if (a == "--bvh-ci") o.bvh.intersection_cost = std::stof(value());
         else if (a == "--bvh-block") o.bvh.leaf_block = std::uint32_t(std::stoul(value()));
@@ -445,7 +446,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent]");
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -469,6 +470,7 @@ int main(int argc, char** argv) try {
             scenes.push_back({"stadium", make_teapot_in_stadium<float>(), {}});
             scenes.push_back({"knot-128k", make_torus_knot<float>(2000, 32), {}});
         }
+        if (opt.big) scenes.push_back({"knot-2m", make_torus_knot<float>(16000, 64), {}});
     }
     for (const auto& path : opt.meshes) {
         std::string name = path.substr(path.find_last_of('/') + 1);
@@ -502,7 +504,7 @@ int main(int argc, char** argv) try {
 #else
         std::puts("# Embree 3 not found: no peer comparison");
 #endif
-        if (!opt.few) wide_build_table(sc, peer.get(), opt);
+        wide_build_table(sc, peer.get(), opt);
         run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
         if (!opt.quick && !opt.few) {

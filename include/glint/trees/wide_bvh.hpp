@@ -5,8 +5,9 @@
 // node starts with the binary node's two children and repeatedly opens the inner child of
 // largest surface area (the one the SAH expects most rays to enter) until it has N
 // children or only leaves (as Embree's BVH-N builders do; Wald, Benthin, Boulos, "Getting
-// rid of packets", 2008, and Ernst and Greiner, "Multi bounding volume hierarchies", 2008,
-// introduced N-ary BVHs for single rays).
+// rid of packets", 2008, Dammertz, Hanika, Keller, "Shallow bounding volume hierarchies",
+// 2008, and Ernst and Greiner, "Multi bounding volume hierarchies", 2008, introduced N-ary
+// BVHs for single rays).
 //
 // Nodes: the N child boxes structure-of-arrays, one array of N floats per box plane, so that
 // one step tests every child with a few SIMD instructions (AVX for N = 8, SSE for N = 4, a
