@@ -117,12 +117,15 @@ struct WideBoxTest<8, false> {
     std::size_t near[3], far[3];  // byte offsets of the rows in a node
 
     [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
-        const WideBoxTest<8, true> s(r);
+        // 1 / d for the three axes with one division (the same correctly rounded quotients).
+        alignas(16) float q[4];
+        _mm_store_ps(q, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(r.direction.x, r.direction.y, r.direction.z, 1.0f)));
         for (int a = 0; a < 3; ++a) {
-            o[a] = _mm256_set1_ps(s.o[a]);
-            inv[a] = _mm256_set1_ps(s.inv[a]);
-            near[a] = std::size_t(s.near[a]) * sizeof(__m256);
-            far[a] = std::size_t(s.far[a]) * sizeof(__m256);
+            o[a] = _mm256_set1_ps(r.origin[a]);
+            inv[a] = _mm256_set1_ps(q[a]);
+            const std::size_t neg = std::signbit(r.direction[a]) ? 1 : 0;
+            near[a] = (2 * std::size_t(a) + neg) * sizeof(__m256);
+            far[a] = (2 * std::size_t(a) + 1 - neg) * sizeof(__m256);
         }
     }
     [[gnu::always_inline]] unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
@@ -172,9 +175,13 @@ struct WideBoxTest<4, false> {
 };
 #endif
 
-/// Whether traversal can give the ray any hit (see the file comment).
+/// Whether traversal can give the ray any hit (see the file comment): x * 0 is 0 for a
+/// finite x and NaN otherwise, so one comparison checks all six coordinates.
 inline bool wide_ray_valid(const Ray<float>& r) {
-    return all_finite(r.origin) && all_finite(r.direction) && r.direction != Vec3f(0) && r.tmin <= r.tmax;
+    const Vec3f& o = r.origin;
+    const Vec3f& d = r.direction;
+    const float z = (o.x * 0.0f + o.y * 0.0f) + (o.z * 0.0f + d.x * 0.0f) + (d.y * 0.0f + d.z * 0.0f);
+    return (z == 0.0f) & ((d.x != 0.0f) | (d.y != 0.0f) | (d.z != 0.0f)) & (r.tmin <= r.tmax);
 }
 
 }  // namespace detail
@@ -255,7 +262,7 @@ public:
     /// Portable = true forces the portable box test (the same hits, for tests).
     /// With `counters`, counts the nodes and leaves visited.
     template <bool Any, bool Portable = false, WideLeafTest Leaf>
-    bool intersect(Ray<float>& ray, Leaf&& leaf, WideBvhCounters* counters = nullptr) const {
+    [[gnu::always_inline]] bool intersect(Ray<float>& ray, Leaf&& leaf, WideBvhCounters* counters = nullptr) const {
         if (nodes_.empty() || !detail::wide_ray_valid(ray)) return false;
         const detail::WideBoxTest<N, Portable> box(ray);
         struct Entry {
