@@ -425,6 +425,24 @@ TEST_CASE("agreement: double precision kd-tree and BIH") {
     CHECK(errors == 0);
 }
 
+namespace {
+
+/// Ray i of the flat-grid stress tests (make_flat_grid: the unit square at z = 0): origins
+/// in and around the square, half of them in its plane, a quarter of the directions in the
+/// plane, some origins on grid lines, some rays along z.
+Ray<float> flat_grid_ray(Pcg32& rng, int i) {
+    Ray<float> r;
+    r.origin = Vec3f(rng.uniform<float>() * 1.2f - 0.1f, rng.uniform<float>() * 1.2f - 0.1f,
+                     i % 2 ? 0.f : rng.uniform<float>() - 0.5f);
+    const float phi = 2 * pi<float> * rng.uniform<float>();
+    r.direction = Vec3f(std::cos(phi), std::sin(phi), i % 4 == 1 ? 0.f : rng.uniform<float>() - 0.5f);
+    if (i % 8 == 3) r.origin.x = float(rng.bounded(33)) / 32.f;  // on grid lines
+    if (i % 8 == 5) r.direction = Vec3f(0, 0, rng.uniform<float>() < 0.5f ? 1.f : -1.f);
+    return r;
+}
+
+}  // namespace
+
 TEST_CASE("stress: flat geometry, rays in and along its plane") {
     const Mesh<float> m = make_flat_grid<float>(32);
     const KdTree<float, Watertight<float>, CompactSubtrees<31>> kd(m);
@@ -433,13 +451,7 @@ TEST_CASE("stress: flat geometry, rays in and along its plane") {
     Pcg32 rng(9);
     int errors = 0;
     for (int i = 0; i < 20000; ++i) {
-        Ray<float> r;
-        r.origin = Vec3f(rng.uniform<float>() * 1.2f - 0.1f, rng.uniform<float>() * 1.2f - 0.1f,
-                         i % 2 ? 0.f : rng.uniform<float>() - 0.5f);
-        const float phi = 2 * pi<float> * rng.uniform<float>();
-        r.direction = Vec3f(std::cos(phi), std::sin(phi), i % 4 == 1 ? 0.f : rng.uniform<float>() - 0.5f);
-        if (i % 8 == 3) r.origin.x = float(rng.bounded(33)) / 32.f;  // on grid lines
-        if (i % 8 == 5) r.direction = Vec3f(0, 0, rng.uniform<float>() < 0.5f ? 1.f : -1.f);
+        const Ray<float> r = flat_grid_ray(rng, i);
         StoreHit<float> a, b, c;
         const bool fa = kd.closest_hit(r, a), fb = bih.closest_hit(r, b), fc = bf.closest_hit(r, c);
         errors += fa != fc || fb != fc || (fc && (a.t != c.t || b.t != c.t));
@@ -592,7 +604,8 @@ void check_portable_and_user_leaf(const Scene& sc) {
         differ += fa != fb || a.t != b.t || a.id != b.id;  // SIMD and portable: the same floats
         // Against brute force (whose batch kernel may round differently from the scalar
         // test), by the agreement rules at the top of this file.
-        compare(sc, i, a, fa, ref, bf.closest_hit(r, ref), tally);
+        const bool fr = bf.closest_hit(r, ref);
+        compare(sc, i, a, fa, ref, fr, tally);
     }
     INFO(sc.name << " width " << N << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
                  << " (generic " << tally.generic_edges << ") errors " << tally.errors);
@@ -694,13 +707,7 @@ TEST_CASE("wide BVH: NaN tmax, empty interval, NaN and zero rays, degenerate and
     Pcg32 rng(11);
     int errors = 0;
     for (int i = 0; i < 20000; ++i) {
-        Ray<float> s;
-        s.origin = Vec3f(rng.uniform<float>() * 1.2f - 0.1f, rng.uniform<float>() * 1.2f - 0.1f,
-                         i % 2 ? 0.f : rng.uniform<float>() - 0.5f);
-        const float phi = 2 * pi<float> * rng.uniform<float>();
-        s.direction = Vec3f(std::cos(phi), std::sin(phi), i % 4 == 1 ? 0.f : rng.uniform<float>() - 0.5f);
-        if (i % 8 == 3) s.origin.x = float(rng.bounded(33)) / 32.f;
-        if (i % 8 == 5) s.direction = Vec3f(0, 0, rng.uniform<float>() < 0.5f ? 1.f : -1.f);
+        const Ray<float> s = flat_grid_ray(rng, i);
         StoreHit<float> a, c;
         const bool fa = fb.closest_hit(s, a), fc = bf.closest_hit(s, c);
         errors += fa != fc || (fc && a.t != c.t) || fb.any_hit(s) != fc;
