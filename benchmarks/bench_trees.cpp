@@ -14,10 +14,18 @@
 // each pair adjacent in time, so that both see the same machine load. (The CSV's
 // embree_mrays_per_s is Embree's best pass.)
 // --csv writes scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,
-// bytes_per_triangle,embree_mrays_per_s (embree_mrays_per_s is empty without Embree).
+// bytes_per_triangle,embree_mrays_per_s,build_threads (embree_mrays_per_s is empty without
+// Embree; build_threads is the wide BVH's build threads, 1 for the kd-tree and BIH).
+// The wide BVH (trees/mesh_bvh.hpp) runs as tree bvh8 / bvh4, layout soa, built on one
+// thread; --wide runs only it (every intersector, 8 and 4 wide) and prints its build time
+// on 1 and 2 threads next to Embree's (threads=1) and its bytes per triangle next to
+// Embree's (from Embree's memory monitor); --cpu-time times trace passes by the thread's
+// CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore. --bvh-ct / --bvh-ci / --bvh-block / --bvh-leaf / --bvh-bins
+// set its SAH constants (BvhBuildOptions).
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63); --few: pointer and
 // compact-31 only (as --quick, with the full ray count).
+// --set primary|incoherent: run one ray set. --big adds knot-2m, a 2,048,000-triangle torus knot.
 // --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
 // --memory: print only the node-memory table (pointer, havran-K, compact-K for K = 3 ... 63,
 // kd-tree and BIH; 000 Fig. 4.6) and exit.
@@ -25,6 +33,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -37,6 +46,7 @@
 #include <glint/intersection/wald.hpp>
 #include <glint/intersection/watertight.hpp>
 #include <glint/trees/layouts.hpp>
+#include <glint/trees/mesh_bvh.hpp>
 #include <glint/trees/scenes.hpp>
 #include <glint/trees/traversal.hpp>
 
@@ -50,6 +60,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// The time a trace pass is measured by: wall time, or with --cpu-time this thread's CPU
+/// time (on a shared machine the wall time counts the time slices other processes take).
+bool use_cpu_time = false;
+double pass_clock() {
+    if (!use_cpu_time) return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 /// Minimal OBJ reader: `v x y z` and `f i j k ...` (i, i/t, i//n, i/t/n, negative indices),
 /// polygons fan-triangulated; every other line is ignored.
@@ -111,6 +131,13 @@ public:
     explicit Embree(const Mesh<float>& m) {
         device_ = rtcNewDevice("threads=1");
         if (!device_) throw Error("bench_trees: rtcNewDevice failed");
+        rtcSetDeviceMemoryMonitorFunction(
+            device_,
+            [](void* user, ssize_t delta, bool) {
+                *static_cast<long long*>(user) += delta;
+                return true;
+            },
+            &bytes);
         const auto t0 = Clock::now();
         scene_ = rtcNewScene(device_);
         RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -163,6 +190,7 @@ public:
         }
     }
     double build_seconds = 0;
+    long long bytes = 0;  // held by the device after the build (its memory monitor)
 
 private:
     RTCDevice device_ = nullptr;
@@ -180,8 +208,9 @@ struct Peer {  // no peer: never constructed
 
 struct Options {
     std::vector<std::string> meshes;
-    std::string csv, only;
-    bool quick = false, generated = true, all = false, memory = false, few = false;
+    std::string csv, only, set;  // --set: run one ray set (primary or incoherent)
+    bool quick = false, generated = true, all = false, memory = false, few = false, wide = false, big = false;
+    BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
     int reps = 3;
     KdBuildOptions kd{};  // --ki, --empty-bonus: the kd-tree's SAH constants (K_T = 1)
@@ -194,17 +223,16 @@ struct Row {
     double bytes_per_tri = 0;
     double agree = 0;  // fraction of rays whose hit/miss and t agree with Embree
     double ratio = 0;  // median over passes of (Embree time / our time), passes adjacent in time
+    unsigned build_threads = 1;
 };
 
 /// Traces every ray set of the scene with one accelerator; returns one row per set. The
 /// peer (Embree), when there is one, is timed on the same rays alternately with ours, so
-/// that both see the same machine load; each keeps its best of --reps passes.
+/// that both see the same machine load; each keeps its best of --reps passes. `base` holds
+/// the row's names, build time and memory.
 template <class Accel>
-void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer* peer, const Options& opt,
-                     std::vector<Row>& rows) {
-    const auto t0 = Clock::now();
-    const Accel acc(sc.mesh, built);
-    const double encode_s = seconds_since(t0);
+void time_sets(const Scene& sc, const Accel& acc, const Peer* peer, const Options& opt, const Row& base,
+               std::vector<Row>& rows) {
     std::vector<float> peer_t;
     for (std::size_t s = 0; s < sc.sets.size(); ++s) {
         const auto& rays = sc.sets[s].rays;
@@ -213,18 +241,18 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer*
         std::size_t agree = 0;
         for (int rep = 0; rep < opt.reps; ++rep) {
             std::size_t hits = 0;
-            const auto t1 = Clock::now();
+            const double t1 = pass_clock();
             for (const auto& r : rays) {
                 StoreHit<float> h;
                 hits += acc.closest_hit(r, h);
             }
-            const double ours = seconds_since(t1);
+            const double ours = pass_clock() - t1;
             best = std::min(best, ours);
             if (hits == std::size_t(-1)) std::puts("");  // keep the loop
             if (peer) {
-                const auto t2 = Clock::now();
+                const double t2 = pass_clock();
                 peer->trace(rays, peer_t);
-                const double theirs = seconds_since(t2);
+                const double theirs = pass_clock() - t2;
                 peer_best = std::min(peer_best, theirs);
                 ratios.push_back(theirs / ours);
             }
@@ -238,16 +266,16 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer*
                 agree += (std::isinf(te) && std::isinf(h.t)) || std::abs(te - h.t) <= 1e-3f * std::max(1.f, te);
             }
         }
-        Row row;
-        row.scene = sc.name;
+        WideBvhCounters counted;
+        if constexpr (requires { acc.closest_hit(rays[0], std::declval<StoreHit<float>&>(), &counted); }) {
+            for (const auto& r : rays) {
+                StoreHit<float> h;
+                acc.closest_hit(r, h, &counted);
+            }
+        }
+        Row row = base;
         row.rays = sc.sets[s].name;
-        row.tree = Accel::builder_type::name;
-        row.layout = Accel::layout_type::label();
-        row.intersector = Accel::intersector_type::name;
         row.mrays = double(rays.size()) / best * 1e-6;
-        row.build_s = built.build_seconds + encode_s;
-        row.node_bytes = acc.stats().node_bytes();
-        row.bytes_per_tri = acc.stats().bytes_per_triangle();
         row.embree = peer ? double(rays.size()) / peer_best * 1e-6 : 0.0;
         row.agree = peer ? double(agree) / double(rays.size()) : -1.0;
         row.ratio = ratios.empty() ? 0.0 : ratios[ratios.size() / 2];
@@ -255,10 +283,78 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer*
                     row.rays.c_str(), row.tree.c_str(), row.layout.c_str(), row.intersector.c_str(), row.mrays, row.build_s,
                     row.node_bytes, row.bytes_per_tri);
         if (row.embree > 0) std::printf("  x%.3f of Embree  agree %.4f", row.ratio, row.agree);
+        if (counted.nodes)
+            std::printf("  per ray: %.1f nodes %.1f leaves %.1f records", double(counted.nodes) / double(rays.size()),
+                        double(counted.leaves) / double(rays.size()), double(counted.records) / double(rays.size()));
         std::printf("\n");
         std::fflush(stdout);
         rows.push_back(row);
     }
+}
+
+/// One kd-tree or BIH combination, encoded from the scene's built tree.
+template <class Accel>
+void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer* peer, const Options& opt,
+                     std::vector<Row>& rows) {
+    const auto t0 = Clock::now();
+    const Accel acc(sc.mesh, built);
+    Row base;
+    base.scene = sc.name;
+    base.tree = Accel::builder_type::name;
+    base.layout = Accel::layout_type::label();
+    base.intersector = Accel::intersector_type::name;
+    base.build_s = built.build_seconds + seconds_since(t0);
+    base.node_bytes = acc.stats().node_bytes();
+    base.bytes_per_tri = acc.stats().bytes_per_triangle();
+    time_sets(sc, acc, peer, opt, base, rows);
+}
+
+/// The wide BVH over intersector P, N wide, built on one thread.
+template <class P, int N>
+void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector<Row>& rows) {
+    BvhBuildOptions bo = opt.bvh;
+    bo.threads = 1;
+    const MeshBvh<P, N> acc(sc.mesh, bo);
+    Row base;
+    base.scene = sc.name;
+    base.tree = MeshBvh<P, N>::name;
+    base.layout = "soa";
+    base.intersector = P::name;
+    base.build_s = acc.build_seconds();
+    base.node_bytes = acc.bvh().stats().node_bytes;
+    base.bytes_per_tri = double(base.node_bytes) / double(sc.mesh.size());
+    base.build_threads = 1;
+    time_sets(sc, acc, peer, opt, base, rows);
+}
+
+/// Build time of the 8-wide BVH (Moller-Trumbore records) on 1 and 2 threads, median of 5
+/// alternating builds each, and its memory next to Embree's.
+void wide_build_table(const Scene& sc, const Peer* peer, const Options& opt) {
+    std::vector<double> t1, t2;
+    std::size_t total = 0, nodes = 0;
+    for (int rep = 0; rep < 5; ++rep)
+        for (unsigned threads : {1u, 2u}) {
+            BvhBuildOptions bo = opt.bvh;
+            bo.threads = threads;
+            const MeshBvh<MollerTrumbore<float>, 8> acc(sc.mesh, bo);
+            (threads == 1 ? t1 : t2).push_back(acc.build_seconds());
+            total = acc.total_bytes();
+            nodes = acc.bvh().stats().node_bytes;
+        }
+    std::sort(t1.begin(), t1.end());
+    std::sort(t2.begin(), t2.end());
+    const double n = double(sc.mesh.size());
+    std::printf("# %s bvh8 build: 1 thread %.4f s, 2 threads %.4f s (x%.2f); %.1f B/tri (nodes %.1f, records %.1f)",
+                sc.name.c_str(), t1[2], t2[2], t1[2] / t2[2], double(total) / n, double(nodes) / n,
+                double(total - nodes) / n);
+#ifdef GLINT_HAVE_EMBREE
+    if (peer)
+        std::printf("; Embree threads=1 build %.4f s (bvh8 1 thread / Embree x%.2f), %.1f B/tri", peer->build_seconds,
+                    t1[2] / peer->build_seconds, double(peer->bytes) / n);
+#else
+    (void)peer;
+#endif
+    std::printf("\n");
 }
 
 template <class P, class... Layouts>
@@ -334,13 +430,23 @@ Options parse(int argc, char** argv) {
         else if (a == "--no-generated") o.generated = false;
         else if (a == "--only") o.only = value();
         else if (a == "--memory") o.memory = true;
+        else if (a == "--wide") o.wide = true;
+        else if (a == "--cpu-time") use_cpu_time = true;
+        else if (a == "--set") o.set = value();
+        else if (a == "--big") o.big = true;
+        else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
+        else if (a == "--bvh-ci") o.bvh.intersection_cost = std::stof(value());
+        else if (a == "--bvh-block") o.bvh.leaf_block = std::uint32_t(std::stoul(value()));
+        else if (a == "--bvh-leaf") o.bvh.max_leaf = std::uint32_t(std::stoul(value()));
+        else if (a == "--bvh-bins") o.bvh.bins = std::uint32_t(std::stoul(value()));
         else if (a == "--rays") o.rays = std::stoul(value());
         else if (a == "--reps") o.reps = std::max(1, std::stoi(value()));
         else if (a == "--ki") o.kd.intersection_cost = std::stod(value());
         else if (a == "--empty-bonus") o.kd.empty_bonus = std::stod(value());
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
-                      "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B]");
+                      "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -364,6 +470,7 @@ int main(int argc, char** argv) try {
             scenes.push_back({"stadium", make_teapot_in_stadium<float>(), {}});
             scenes.push_back({"knot-128k", make_torus_knot<float>(2000, 32), {}});
         }
+        if (opt.big) scenes.push_back({"knot-2m", make_torus_knot<float>(16000, 64), {}});
     }
     for (const auto& path : opt.meshes) {
         std::string name = path.substr(path.find_last_of('/') + 1);
@@ -381,10 +488,14 @@ int main(int argc, char** argv) try {
     std::vector<Row> rows;
     for (Scene& sc : scenes) {
         const int width = 1024, height = std::max<int>(1, int(opt.rays / width));
-        sc.sets.push_back({"primary", make_primary_rays<float>(sc.mesh, width, height)});
-        sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
-        std::printf("# scene %s: %zu triangles, %zu primary and %zu incoherent rays\n", sc.name.c_str(), sc.mesh.size(),
-                    sc.sets[0].rays.size(), sc.sets[1].rays.size());
+        if (opt.set.empty() || opt.set == "primary")
+            sc.sets.push_back({"primary", make_primary_rays<float>(sc.mesh, width, height)});
+        if (opt.set.empty() || opt.set == "incoherent")
+            sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
+        if (sc.sets.empty()) throw Error("bench_trees: --set " + opt.set + ": no such ray set");
+        std::printf("# scene %s: %zu triangles, %zu %s rays%s\n", sc.name.c_str(), sc.mesh.size(), sc.sets[0].rays.size(),
+                    sc.sets[0].name.c_str(),
+                    sc.sets.size() > 1 ? (", " + std::to_string(sc.sets[1].rays.size()) + " incoherent rays").c_str() : "");
         std::unique_ptr<Peer> peer;
 #ifdef GLINT_HAVE_EMBREE
         peer = std::make_unique<Peer>(sc.mesh);
@@ -393,12 +504,22 @@ int main(int argc, char** argv) try {
 #else
         std::puts("# Embree 3 not found: no peer comparison");
 #endif
-        const BuiltTree<float> kd = KdTreeBuilder<float>{opt.kd}.build(sc.mesh);
-        const BuiltTree<float> bih = BihBuilder<float>{}.build(sc.mesh);
-        run_intersector<Ivm<float>>(sc, kd, bih, peer.get(), opt, rows);
-        run_intersector<MollerTrumbore<float>>(sc, kd, bih, peer.get(), opt, rows);
-        run_intersector<Wald<float>>(sc, kd, bih, peer.get(), opt, rows);
-        run_intersector<Watertight<float>>(sc, kd, bih, peer.get(), opt, rows);
+        wide_build_table(sc, peer.get(), opt);
+        run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
+        if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
+        if (!opt.quick && !opt.few) {
+            run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);
+            run_wide<Watertight<float>, 8>(sc, peer.get(), opt, rows);
+            run_wide<Ivm<float>, 8>(sc, peer.get(), opt, rows);
+        }
+        if (!opt.wide) {
+            const BuiltTree<float> kd = KdTreeBuilder<float>{opt.kd}.build(sc.mesh);
+            const BuiltTree<float> bih = BihBuilder<float>{}.build(sc.mesh);
+            run_intersector<Ivm<float>>(sc, kd, bih, peer.get(), opt, rows);
+            run_intersector<MollerTrumbore<float>>(sc, kd, bih, peer.get(), opt, rows);
+            run_intersector<Wald<float>>(sc, kd, bih, peer.get(), opt, rows);
+            run_intersector<Watertight<float>>(sc, kd, bih, peer.get(), opt, rows);
+        }
         for (std::size_t s = 0; s < sc.sets.size(); ++s) {
             const Row* best = nullptr;
             for (const Row& r : rows)
@@ -414,12 +535,12 @@ int main(int argc, char** argv) try {
     if (!opt.csv.empty()) {
         std::ofstream out(opt.csv);
         if (!out) throw Error("bench_trees: cannot write '" + opt.csv + "'");
-        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s\n";
+        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,build_threads\n";
         for (const Row& r : rows) {
             out << r.scene << ',' << r.rays << ',' << r.tree << ',' << r.layout << ',' << r.intersector << ',' << r.mrays
                 << ',' << r.build_s << ',' << r.node_bytes << ',' << r.bytes_per_tri << ',';
             if (r.embree > 0) out << r.embree;
-            out << '\n';
+            out << ',' << r.build_threads << '\n';
         }
         std::printf("# wrote %s (%zu rows)\n", opt.csv.c_str(), rows.size());
     }

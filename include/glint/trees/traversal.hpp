@@ -104,6 +104,7 @@ public:
         StoreHit<T> h = hit;
         if (!trace<false>(ray, h)) return false;
         hit = h;
+        hit.id = store_.id(h.id);  // the leaf test reports the record
         return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
@@ -151,7 +152,6 @@ private:
         if constexpr (!Any) t1 = hit.t < t1 ? hit.t : t1;
         if (!(t0 <= t1)) return false;
         const Node* nodes = nodes_.data();
-        const SoaView<T, P::field_count> view = store_.view();
         // Frame-free intersectors prepare the ray once, not once per leaf.
         typename P::RayData world{};
         if constexpr (!P::uses_frame) world = P::prepare(ray);
@@ -200,7 +200,7 @@ private:
                 n = nodes + index;
             }
             if (const std::uint32_t count = n->group_count()) {
-                if (test_leaf<Any>(n->group_begin(), count, view, ray, world, hit)) {
+                if (store_.template test_leaf<Any>(n->group_begin(), count, ray, world, hit)) {
                     if constexpr (Any) return true;
                     found = true;
                 }
@@ -220,59 +220,6 @@ private:
                 break;
             }
         }
-    }
-
-    /// The leaf's records, `count` groups from `g`, with the batch kernel (the same test as
-    /// TriangleStore::closest_hit, with the ray prepared once per trace for intersectors
-    /// without frames). Updates `hit` when a hit nearer than hit.t is found.
-    template <bool Any>
-    bool test_leaf(std::uint32_t first, std::uint32_t count, const SoaView<T, P::field_count>& view,
-                   const Ray<T>& ray, const typename P::RayData& world, StoreHit<T>& hit) const {
-        if constexpr (P::uses_frame) {
-            // `first`, `count`: a range of groups, each with its own frame.
-            bool found = false;
-            for (const std::uint32_t end = first + count; first < end; ++first) {
-                const auto& group = store_.group(first);
-                Ray<T> local = ray;
-                local.origin -= group.origin;
-                local.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax
-                if (test_records<Any>(group.begin, group.end, view, P::prepare(local), hit)) {
-                    if constexpr (Any) return true;
-                    found = true;
-                }
-            }
-            return found;
-        } else {
-            // `first`, `count`: a range of records in the world frame.
-            return test_records<Any>(first, first + count, view, world, hit);
-        }
-    }
-
-    /// Records first .. end-1 (a padded group: `first` on a batch boundary, the last batch
-    /// filled with records that never hit), in whole batches.
-    template <bool Any>
-    bool test_records(std::uint32_t first, std::uint32_t end, const SoaView<T, P::field_count>& view,
-                      const typename P::RayData& rd, StoreHit<T>& hit) const {
-        T ts[batch_width], us[batch_width], vs[batch_width];
-        bool found = false;
-        for (; first < end; first += std::uint32_t(batch_width)) {
-            P::batch(view, first, batch_width, rd, ts, us, vs);
-            // Most batches hit nothing nearer than the best hit: one vectorizable test
-            // over the lanes decides that; the nearest lane is searched only otherwise.
-            bool any = false;
-            for (std::size_t k = 0; k < batch_width; ++k) any |= ts[k] < hit.t;
-            if (any) {
-                if constexpr (Any) return true;
-                std::size_t best = 0;
-                for (std::size_t k = 1; k < batch_width; ++k) best = ts[k] < ts[best] ? k : best;
-                hit.t = ts[best];
-                hit.u = us[best];
-                hit.v = vs[best];
-                hit.id = store_.id(first + best);
-                found = true;
-            }
-        }
-        return found;
     }
 
     std::vector<Node> nodes_;

@@ -1,0 +1,166 @@
+// glint/trees/mesh_bvh.hpp: glint's fast ray accelerator, a wide BVH (wide_bvh.hpp) over a
+// triangle mesh, read from the user's own arrays.
+//
+//   const glint::IndexedMesh<float> mesh{positions, vertex_count, stride_bytes, indices, triangle_count};
+//   const glint::MeshBvh<glint::MollerTrumbore<float>> bvh(mesh, {.threads = 2});
+//   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
+//   if (bvh.closest_hit(ray, hit)) ...
+//
+// Leaves are blocks of a TriangleStore<P> (padded to whole batches of 8 records, tested
+// with the intersector's batch kernel), laid out in the order traversal meets the nodes.
+// The mesh is read only while building; the accelerator keeps its own records.
+// Queries are const and keep no shared mutable state: they are thread-safe.
+#pragma once
+
+#include <chrono>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/trees/bvh_builder.hpp>
+#include <glint/trees/tree.hpp>
+#include <glint/trees/wide_bvh.hpp>
+
+namespace glint {
+
+/// A triangle mesh in the user's arrays: vertex i's x, y, z are the three T at byte offset
+/// i * stride_bytes of `positions`; triangle j is vertices indices[3j], [3j+1], [3j+2].
+template <Scalar T>
+struct IndexedMesh {
+    const void* positions = nullptr;
+    std::size_t vertex_count = 0;
+    std::size_t stride_bytes = 3 * sizeof(T);
+    const std::uint32_t* indices = nullptr;
+    std::size_t triangle_count = 0;
+
+    Vec3<T> vertex(std::uint32_t i) const {
+        T p[3];
+        std::memcpy(p, static_cast<const char*>(positions) + std::size_t(i) * stride_bytes, sizeof p);
+        return {p[0], p[1], p[2]};
+    }
+    TriangleVertices<T> triangle(std::size_t j) const {
+        return {vertex(indices[3 * j]), vertex(indices[3 * j + 1]), vertex(indices[3 * j + 2])};
+    }
+    /// Throws glint::Error naming the first bad field, triangle or index.
+    void check() const {
+        if (triangle_count > 0 && (!positions || !indices))
+            throw Error("IndexedMesh: " + std::to_string(triangle_count) + " triangles but no " +
+                        (positions ? "indices" : "positions"));
+        if (stride_bytes < 3 * sizeof(T))
+            throw Error("IndexedMesh: stride_bytes " + std::to_string(stride_bytes) + " is less than one vertex (" +
+                        std::to_string(3 * sizeof(T)) + ")");
+        for (std::size_t k = 0; k < 3 * triangle_count; ++k)
+            if (indices[k] >= vertex_count)
+                throw Error("IndexedMesh: triangle " + std::to_string(k / 3) + " has vertex index " +
+                            std::to_string(indices[k]) + " but there are " + std::to_string(vertex_count) + " vertices");
+    }
+};
+
+/// Wide BVH (N = 8 or 4 children per node) over triangles tested with intersector P.
+template <TriangleIntersector P, int N = 8>
+    requires std::same_as<typename P::scalar_type, float>
+class MeshBvh {
+public:
+    using scalar_type = float;
+    using T = float;
+    using intersector_type = P;
+    static constexpr const char* name = N == 8 ? "bvh8" : "bvh4";
+
+    /// From the user's indexed mesh (hits report the index of the user's triangle).
+    explicit MeshBvh(const IndexedMesh<float>& mesh, const BvhBuildOptions& opt = {}) {
+        mesh.check();
+        build(mesh.triangle_count, [&](std::size_t j) { return mesh.triangle(j); }, opt);
+    }
+    /// From a triangle soup (hits report the position in `tris`).
+    explicit MeshBvh(std::span<const TriangleVertices<float>> tris, const BvhBuildOptions& opt = {}) {
+        build(tris.size(), [&](std::size_t j) { return tris[j]; }, opt);
+    }
+
+    /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
+    /// With `counters`, counts nodes, leaves and records tested.
+    bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters = nullptr) const {
+        StoreHit<float> h = hit;  // a local copy the compiler keeps in registers
+        Ray<float> r = ray;
+        r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+        typename P::RayData world{};
+        if constexpr (!P::uses_frame) world = P::prepare(r);
+        const bool found = bvh_.template intersect<false>(
+            r,
+            [&](std::uint32_t first, std::uint32_t count) {
+                if (counters) counters->records += records(first, count);
+                if (!store_.template test_leaf<false>(first, count, r, world, h)) return false;
+                r.tmax = h.t;
+                return true;
+            },
+            counters);
+        if (!found) return false;
+        hit = h;
+        hit.id = store_.id(h.id);  // the leaf test reports the record
+        return true;
+    }
+    /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
+    bool any_hit(const Ray<float>& ray) const {
+        StoreHit<float> h;
+        Ray<float> r = ray;
+        typename P::RayData world{};
+        if constexpr (!P::uses_frame) world = P::prepare(r);
+        return bvh_.template intersect<true>(
+            r, [&](std::uint32_t first, std::uint32_t count) { return store_.template test_leaf<true>(first, count, r, world, h); });
+    }
+
+    const WideBvh<N>& bvh() const { return bvh_; }
+    /// Record slots (padded batches) of a leaf reference's range.
+    std::uint64_t records(std::uint32_t first, std::uint32_t count) const {
+        if constexpr (!P::uses_frame) return count;
+        std::uint64_t n = 0;
+        for (std::uint32_t g = first; g < first + count; ++g)
+            n += (store_.group(g).end - store_.group(g).begin + batch_width - 1) / batch_width * batch_width;
+        return n;
+    }
+    const TriangleStore<P>& store() const { return store_; }
+    /// Build time (boxes, tree, records), in seconds.
+    double build_seconds() const { return build_seconds_; }
+    /// Node bytes plus triangle-record bytes.
+    std::size_t total_bytes() const { return bvh_.stats().node_bytes + store_.bytes(); }
+
+private:
+    template <class Get>
+    void build(std::size_t n, Get&& tri, const BvhBuildOptions& opt) {
+        const auto t0 = std::chrono::steady_clock::now();
+        if (n > std::size_t(detail::wide_max_first))
+            throw Error("MeshBvh: " + std::to_string(n) + " triangles, at most 2^27 - 2");
+        std::vector<AABB<float>> boxes(n);
+        for (std::size_t j = 0; j < n; ++j) {
+            const TriangleVertices<float> t = tri(j);
+            if (!detail::can_be_hit(t)) continue;  // an empty box: left out
+            for (const auto& p : t) boxes[j].extend(p);
+        }
+        bvh_ = WideBvh<N>(boxes, opt);
+        std::vector<TriangleVertices<float>> leaf_tris;
+        bvh_.remap_leaves([&](std::uint32_t first, std::uint32_t count) {
+            const std::span<const std::uint32_t> ids(bvh_.prims().data() + first, count);
+            leaf_tris.clear();
+            for (std::uint32_t id : ids) leaf_tris.push_back(tri(id));
+            const auto ref = store_.add_block(leaf_tris, ids, TriangleStore<P>::Padding::batches);
+            if constexpr (P::uses_frame) return std::pair(ref.group_begin, ref.group_end - ref.group_begin);
+            const auto& g = store_.group(ref.group_begin);  // one group in the world frame
+            return std::pair(g.begin, (g.end - g.begin + std::uint32_t(batch_width) - 1) & ~std::uint32_t(batch_width - 1));
+        });
+        build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+
+    WideBvh<N> bvh_;
+    TriangleStore<P> store_;
+    double build_seconds_ = 0;
+};
+
+}  // namespace glint

@@ -1,0 +1,374 @@
+// glint/trees/wide_bvh.hpp: the wide (4- or 8-ary) BVH, its nodes and its traversal, for
+// any primitives: the leaf test is the caller's callable.
+//
+// Collapse: the binned SAH binary tree (bvh_builder.hpp) becomes N-wide top-down; a wide
+// node starts with the binary node's two children and repeatedly opens the inner child of
+// largest surface area (the one the SAH expects most rays to enter) until it has N
+// children or only leaves (as Embree's BVH-N builders do; Wald, Benthin, Boulos, "Getting
+// rid of packets", 2008, Dammertz, Hanika, Keller, "Shallow bounding volume hierarchies",
+// 2008, and Ernst and Greiner, "Multi bounding volume hierarchies", 2008, introduced N-ary
+// BVHs for single rays).
+//
+// Nodes: the N child boxes structure-of-arrays, one array of N floats per box plane, so that
+// one step tests every child with a few SIMD instructions (AVX for N = 8, SSE for N = 4, a
+// portable loop otherwise and on request; all three compute the same floats).
+//
+// Traversal: children whose box the ray enters are visited nearest first; the others go on
+// a stack with their entry distance and are dropped when popped beyond the closest hit.
+// The slab test is conservative (Ize, "Robust BVH Ray Traversal", JCGT 2013): the exit
+// distance is enlarged by 1 + 2 gamma_3 (the bound on the rounding of (plane - o) / d), so
+// a box the ray meets is never rejected by rounding; a NaN slab distance (a ray lying in a
+// box face) constrains nothing. Rays with NaN or infinite coordinates, a zero direction or
+// an interval that is not ordered (tmin <= tmax, false for a NaN) hit nothing.
+//
+// Thread safety: traversal is const and keeps its state on the caller's stack; any number
+// of threads may query one tree at once.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#if defined(__SSE2__) || defined(__AVX__)
+#include <immintrin.h>
+#endif
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/trees/bvh_builder.hpp>
+
+namespace glint {
+
+/// One N-wide node: bounds[2a][i] and bounds[2a + 1][i] are the low and high planes of child
+/// i on axis a (an unused child: low +inf, high -inf, which no ray enters); child[i] is an
+/// inner node's index or a leaf reference (wide_leaf_*).
+template <int N>
+struct alignas(N * 4) WideBvhNode {
+    float bounds[6][N];
+    std::uint32_t child[N];
+};
+
+namespace detail {
+
+/// Leaf references: bit 31 set, 4 bits of count - 1 (1 ... 16), 27 bits of first index
+/// (all ones is no leaf: an unused child).
+inline constexpr std::uint32_t wide_leaf_bit = 0x80000000u;
+inline constexpr std::uint32_t wide_max_first = (1u << 27) - 2u;
+inline bool wide_is_leaf(std::uint32_t ref) { return (ref & wide_leaf_bit) != 0; }
+inline std::uint32_t wide_leaf_first(std::uint32_t ref) { return ref & ((1u << 27) - 1u); }
+inline std::uint32_t wide_leaf_count(std::uint32_t ref) { return ((ref >> 27) & 15u) + 1u; }
+inline std::uint32_t wide_leaf(std::uint32_t first, std::uint32_t count) {
+    if (first > wide_max_first || count < 1 || count > 16)
+        throw Error("WideBvh: leaf (first " + std::to_string(first) + ", count " + std::to_string(count) +
+                    ") does not fit a reference (first < 2^27, count 1 ... 16)");
+    return wide_leaf_bit | ((count - 1) << 27) | first;
+}
+
+/// 1 + 2 gamma_3 rounded up, gamma_n = n u / (1 - n u), u = 2^-24 (Ize 2013; pbrt-v3 3.9).
+inline constexpr float wide_exit_scale = 1.0f + 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f)) + 0x1p-23f;
+
+/// The per-ray data of the slab test, and the test of one node's N boxes: a bit mask of the
+/// children entered within (tmin, tmax), their entry distances in tn.
+template <int N, bool Portable>
+struct WideBoxTest {
+    float o[3], inv[3];
+    int near[3], far[3];  // bounds rows of the entry and exit planes per axis
+
+    explicit WideBoxTest(const Ray<float>& r) {
+        for (int a = 0; a < 3; ++a) {
+            o[a] = r.origin[a];
+            inv[a] = 1.0f / r.direction[a];
+            const int neg = std::signbit(r.direction[a]) ? 1 : 0;
+            near[a] = 2 * a + neg;
+            far[a] = 2 * a + 1 - neg;
+        }
+    }
+    unsigned test(const WideBvhNode<N>& n, float tmin, float tmax, float* tn) const {
+        unsigned mask = 0;
+        for (int i = 0; i < N; ++i) {
+            float t0 = tmin, t1 = tmax;
+            for (int a = 0; a < 3; ++a) {
+                const float tl = (n.bounds[near[a]][i] - o[a]) * inv[a];
+                const float th = (n.bounds[far[a]][i] - o[a]) * inv[a];
+                t0 = tl > t0 ? tl : t0;  // max, keeping t0 for a NaN slab (as maxps)
+                t1 = th < t1 ? th : t1;
+            }
+            tn[i] = t0;
+            mask |= unsigned(t0 <= t1 * wide_exit_scale) << i;
+        }
+        return mask;
+    }
+};
+
+#if defined(__AVX__)
+/// 8-wide nodes with AVX: the same operations as the portable loop, in the same order.
+template <>
+struct WideBoxTest<8, false> {
+    __m256 o[3], inv[3];
+    std::size_t near[3], far[3];  // byte offsets of the rows in a node
+
+    [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
+        // 1 / d for the three axes with one division (the same correctly rounded quotients).
+        alignas(16) float q[4];
+        _mm_store_ps(q, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(r.direction.x, r.direction.y, r.direction.z, 1.0f)));
+        for (int a = 0; a < 3; ++a) {
+            o[a] = _mm256_set1_ps(r.origin[a]);
+            inv[a] = _mm256_set1_ps(q[a]);
+            const std::size_t neg = std::signbit(r.direction[a]) ? 1 : 0;
+            near[a] = (2 * std::size_t(a) + neg) * sizeof(__m256);
+            far[a] = (2 * std::size_t(a) + 1 - neg) * sizeof(__m256);
+        }
+    }
+    [[gnu::always_inline]] unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
+        __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
+        const char* rows = reinterpret_cast<const char*>(n.bounds);
+        for (int a = 0; a < 3; ++a) {
+            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(rows + near[a])), o[a]), inv[a]);
+            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(reinterpret_cast<const float*>(rows + far[a])), o[a]), inv[a]);
+            t0 = _mm256_max_ps(tl, t0);  // tl > t0 ? tl : t0
+            t1 = _mm256_min_ps(th, t1);  // th < t1 ? th : t1
+        }
+        _mm256_storeu_ps(tn, t0);
+        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+    }
+};
+#endif
+
+#if defined(__SSE2__)
+/// 4-wide nodes with SSE.
+template <>
+struct WideBoxTest<4, false> {
+    __m128 o[3], inv[3];
+    int near[3], far[3];
+
+    explicit WideBoxTest(const Ray<float>& r) {
+        const WideBoxTest<4, true> s(r);
+        for (int a = 0; a < 3; ++a) {
+            o[a] = _mm_set1_ps(s.o[a]);
+            inv[a] = _mm_set1_ps(s.inv[a]);
+            near[a] = s.near[a];
+            far[a] = s.far[a];
+        }
+    }
+    unsigned test(const WideBvhNode<4>& n, float tmin, float tmax, float* tn) const {
+        __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
+        for (int a = 0; a < 3; ++a) {
+            const __m128 tl = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[near[a]]), o[a]), inv[a]);
+            const __m128 th = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[far[a]]), o[a]), inv[a]);
+            t0 = _mm_max_ps(tl, t0);
+            t1 = _mm_min_ps(th, t1);
+        }
+        _mm_storeu_ps(tn, t0);
+        t1 = _mm_mul_ps(t1, _mm_set1_ps(wide_exit_scale));
+        return unsigned(_mm_movemask_ps(_mm_cmple_ps(t0, t1)));
+    }
+};
+#endif
+
+/// Whether traversal can give the ray any hit (see the file comment): x * 0 is 0 for a
+/// finite x and NaN otherwise, so one comparison checks all six coordinates.
+inline bool wide_ray_valid(const Ray<float>& r) {
+    const Vec3f& o = r.origin;
+    const Vec3f& d = r.direction;
+    const float z = (o.x * 0.0f + o.y * 0.0f) + (o.z * 0.0f + d.x * 0.0f) + (d.y * 0.0f + d.z * 0.0f);
+    return (z == 0.0f) & ((d.x != 0.0f) | (d.y != 0.0f) | (d.z != 0.0f)) & (r.tmin <= r.tmax);
+}
+
+}  // namespace detail
+
+/// A leaf callable for WideBvh::intersect: `leaf(first, count)` tests the leaf's items and
+/// returns whether it found a hit (closest-hit queries: a hit nearer than the ray's tmax,
+/// to which it must lower the ray's tmax).
+template <class F>
+concept WideLeafTest = requires(F f, std::uint32_t i) {
+    { f(i, i) } -> std::convertible_to<bool>;
+};
+
+/// What one or more queries did (for measurements): nodes whose children were tested, and
+/// leaves and records (lanes of padded batches) tested.
+struct WideBvhCounters {
+    std::uint64_t nodes = 0, leaves = 0, records = 0;
+};
+
+/// Accounting of a wide BVH (node count and bytes, depth, leaves).
+struct WideBvhStats {
+    std::size_t nodes = 0, leaves = 0, node_bytes = 0;
+    std::uint32_t depth = 0;  // wide levels on the longest path, leaves included
+};
+
+/// N-wide BVH (N = 4 or 8) over primitive boxes; leaves are ranges of prims(), or of
+/// whatever remap_leaves() made them.
+template <int N>
+class WideBvh {
+    static_assert(N == 4 || N == 8, "WideBvh: 4- or 8-wide nodes");
+
+public:
+    using Node = WideBvhNode<N>;
+    static constexpr int width = N;
+    /// Stack entries: a step pushes at most N - 1 more than it pops, so a tree of depth D
+    /// needs (N - 1) D + 1; build() refuses deeper trees.
+    static constexpr int max_stack = 512;
+
+    WideBvh() = default;
+    /// Over boxes[i] for every i whose box is not empty and finite.
+    explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}) {
+        const BinaryBvh bin = build_binary_bvh(boxes, opt);
+        prims_ = bin.prims;
+        if (bin.empty()) return;
+        nodes_.emplace_back(empty_node());
+        stats_.depth = 1;
+        if (bin.nodes[0].leaf()) {  // a one-leaf tree: a root with one child
+            set_child(0, 0, bin.nodes[0], detail::wide_leaf(bin.nodes[0].begin, bin.nodes[0].count));
+            stats_.leaves = 1;
+        } else {
+            fill(bin, 0, 0, 1);
+        }
+        stats_.nodes = nodes_.size();
+        stats_.node_bytes = nodes_.size() * sizeof(Node);
+        if ((N - 1) * stats_.depth + 1 > std::uint32_t(max_stack))
+            throw Error("WideBvh: depth " + std::to_string(stats_.depth) + " needs more than " +
+                        std::to_string(max_stack) + " stack entries");
+    }
+
+    /// Primitive order: leaf (first, count) covers prims()[first ... first + count - 1].
+    const std::vector<std::uint32_t>& prims() const { return prims_; }
+    const std::vector<Node, detail::CacheLineAllocator<Node>>& nodes() const { return nodes_; }
+    const WideBvhStats& stats() const { return stats_; }
+
+    /// Replaces every leaf's (first, count) by f(first, count) (a pair), e.g. to point
+    /// leaves at records laid out in leaf order. Leaves are visited in node order.
+    template <class F>
+    void remap_leaves(F&& f) {
+        for (Node& n : nodes_)
+            for (int i = 0; i < N; ++i)
+                if (n.child[i] != empty_ref && detail::wide_is_leaf(n.child[i])) {
+                    const auto [first, count] = f(detail::wide_leaf_first(n.child[i]), detail::wide_leaf_count(n.child[i]));
+                    n.child[i] = detail::wide_leaf(first, count);
+                }
+    }
+
+    /// Closest (Any = false) or any hit: `leaf(first, count)` is called for the leaves the
+    /// ray enters, nearest first; it lowers ray.tmax to each hit it finds (closest hit).
+    /// Portable = true forces the portable box test (the same hits, for tests).
+    /// With `counters`, counts the nodes and leaves visited.
+    template <bool Any, bool Portable = false, WideLeafTest Leaf>
+    [[gnu::always_inline]] bool intersect(Ray<float>& ray, Leaf&& leaf, WideBvhCounters* counters = nullptr) const {
+        if (nodes_.empty() || !detail::wide_ray_valid(ray)) return false;
+        const detail::WideBoxTest<N, Portable> box(ray);
+        struct Entry {
+            std::uint32_t ref;
+            float t;
+        };
+        Entry stack[max_stack];
+        int sp = 0;
+        bool found = false;
+        std::uint32_t ref = 0;
+        for (;;) {
+            if (!detail::wide_is_leaf(ref)) {
+                alignas(32) float tn[N];
+                const Node& n = nodes_[ref];
+                if (counters) ++counters->nodes;
+                unsigned mask = box.test(n, ray.tmin, ray.tmax, tn);
+                if (mask != 0 && (mask & (mask - 1)) == 0) {  // one child: no stack
+                    ref = n.child[std::countr_zero(mask)];
+                    continue;
+                }
+                const int first = sp;
+                for (; mask; mask &= mask - 1) {  // insertion by distance, nearest on top
+                    const int i = std::countr_zero(mask);
+                    int j = sp++;
+                    for (; j > first && stack[j - 1].t < tn[i]; --j) stack[j] = stack[j - 1];
+                    stack[j] = Entry{n.child[i], tn[i]};
+#if defined(__SSE2__)
+                    if (!detail::wide_is_leaf(n.child[i])) {
+                        const char* p = reinterpret_cast<const char*>(&nodes_[n.child[i]]);
+                        for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+                    }
+#endif
+                }
+                assert(sp <= max_stack);
+            } else if (counters && ++counters->leaves,
+                       leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
+                found = true;
+                if constexpr (Any) return true;
+            }
+            do {
+                if (sp == 0) return found;
+                --sp;
+            } while (!Any && !(stack[sp].t <= ray.tmax * detail::wide_exit_scale));
+            ref = stack[sp].ref;
+        }
+    }
+
+private:
+    static constexpr std::uint32_t empty_ref = 0xffffffffu;
+
+    static Node empty_node() {
+        Node n;
+        for (int i = 0; i < N; ++i) {
+            for (int a = 0; a < 3; ++a) {
+                n.bounds[2 * a][i] = infinity<float>;
+                n.bounds[2 * a + 1][i] = -infinity<float>;
+            }
+            n.child[i] = empty_ref;
+        }
+        return n;
+    }
+    void set_child(std::uint32_t node, int i, const BinaryBvhNode& b, std::uint32_t ref) {
+        for (int a = 0; a < 3; ++a) {
+            nodes_[node].bounds[2 * a][i] = b.box.lo[a];
+            nodes_[node].bounds[2 * a + 1][i] = b.box.hi[a];
+        }
+        nodes_[node].child[i] = ref;
+    }
+
+    /// Fills wide node `node` from binary inner node `slot` (depth: of this wide node).
+    void fill(const BinaryBvh& bin, std::uint32_t slot, std::uint32_t node, std::uint32_t depth) {
+        std::uint32_t kids[N] = {slot + 1, bin.nodes[slot].right};
+        int k = 2;
+        while (k < N) {  // open the inner child of largest area
+            int best = -1;
+            float area = -1;
+            for (int i = 0; i < k; ++i) {
+                const BinaryBvhNode& c = bin.nodes[kids[i]];
+                if (!c.leaf() && c.box.surface_area() > area) {
+                    area = c.box.surface_area();
+                    best = i;
+                }
+            }
+            if (best < 0) break;
+            const std::uint32_t s = kids[best];
+            kids[best] = s + 1;
+            kids[k++] = bin.nodes[s].right;
+        }
+        stats_.depth = std::max(stats_.depth, depth + 1);  // its leaves, at least
+        for (int i = 0; i < k; ++i) {
+            const BinaryBvhNode& c = bin.nodes[kids[i]];
+            if (c.leaf()) {
+                set_child(node, i, c, detail::wide_leaf(c.begin, c.count));
+                ++stats_.leaves;
+                continue;
+            }
+            const std::uint32_t child = std::uint32_t(nodes_.size());
+            nodes_.emplace_back(empty_node());
+            set_child(node, i, c, child);
+            fill(bin, kids[i], child, depth + 1);
+        }
+    }
+
+    std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
+    std::vector<std::uint32_t> prims_;
+    WideBvhStats stats_;
+};
+
+}  // namespace glint
