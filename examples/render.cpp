@@ -49,7 +49,7 @@ void usage() {
         "                      throughput, throughput+spectral, throughput+estimate,\n"
         "                      throughput+spectral+estimate (the field's rule from --rr-depth);\n"
         "                      none (no roulette, throughput cut-off 1e-3)\n"
-        "                      (default throughput+estimate)\n"
+        "                      (default throughput)\n"
         "  --rr-depth N        throughput roulettes: vertices before the first decision (default 3)\n"
         "  --direct NAME       brdf, mis, importance, correlated, combined (default mis)\n"
         "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"

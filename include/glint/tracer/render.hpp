@@ -42,9 +42,11 @@ using RenderAccel = MeshBvh<MollerTrumbore<float>, 8>;
 
 struct RenderOptions {
     RenderSettings settings{};
-    /// The default is the most efficient roulette across bench_convergence's scenes
-    /// (docs/tracer.md): the field's throughput rule with 000 section 2.3's radiance estimate.
-    std::string roulette = "throughput+estimate";
+    /// The default is the field's throughput rule: bench_convergence finds it as efficient
+    /// as any roulette on the Cornell scenes (docs/tracer.md); the radiance estimate on top
+    /// of it is within the noise there and can make pixels negative (its continued walks
+    /// subtract (1 - s)/s a L~).
+    std::string roulette = "throughput";
     /// Throughput roulettes: vertices before the first roulette decision (ThroughputRoulette's
     /// min_depth).
     int rr_depth = 3;
