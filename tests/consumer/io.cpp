@@ -7,6 +7,7 @@
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
 #include <glint/io/png.hpp>
+#include <glint/io/scene_json.hpp>
 
 int main() {
     glint::Image<glint::Rgb<float>> img(4, 2);
