@@ -55,7 +55,7 @@ void usage() {
         "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"
         "  --light-samples N   light samples per vertex (default 1; at most 1024)\n"
         "  --sampler NAME      random, halton (random digit permutations; also halton-perm), halton-owen\n"
-        "                      (Owen-scrambled), halton-cp (Cranley-Patterson) (default random)\n"
+        "                      (Owen-scrambled), halton-cp (Cranley-Patterson) (default halton)\n"
         "  --threads N         worker threads (default: all cores)\n"
         "  --weights NAME      roulette band weights H: luminance or mean (default luminance)\n"
         "  --estimate NAME     L~ of the estimate roulettes: pilot (fitted on pilot paths) or scene\n"
