@@ -16,7 +16,7 @@
 // silhouettes and at the light's edges, which no method here changes: on the 96x96 Cornell box
 // 1% of the pixels (the light's edges) then hold 92% of the image's variance, and termination
 // adds 7% of classic roulette's MSE instead of 76%, so every roulette ratio is pulled to 1.
-// --sampler halton runs every method on Owen-scrambled Halton walks instead of PCG random
+// --sampler halton runs every method on Halton walks (random digit permutations; halton-owen: Owen scrambling) instead of PCG random
 // numbers (spectral roulette gains more there: the first bounce's termination is stratified
 // for both methods, and what is left is the deeper termination the spectral rule improves).
 //
@@ -81,7 +81,7 @@ struct Config {
     std::string radiance_estimate = "pilot";  // L~ of the estimate roulettes: pilot | scene
     bool reduce = false;                      // shorten walks by the estimate's goodness
     std::string weights = "mean";             // roulette band weights H: mean | luminance
-    std::string sampler = "random";           // random | halton | halton-cp | halton-perm (render()'s names)
+    std::string sampler = "random";           // random | halton | halton-owen | halton-cp (render()'s names)
     int size = 96, max_spp = 64, threads = 0;
     bool jitter = false;  // --jitter: camera rays jittered over each pixel (default: through its centre)
     int light_samples = 0;   // --light-samples N: light samples per vertex (0: 1; 10 on arealight)
@@ -407,7 +407,7 @@ int main(int argc, char** argv) {
             else if (a == "--rr-depth") cfg.rr_depth = std::max(0, std::atoi(value().c_str()));
             else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
                              "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce "
-                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-cp|halton-perm --seed N --compare roulette --rr-depth N)");
+                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-owen|halton-cp --seed N --compare roulette --rr-depth N)");
         }
         if (!cfg.compare.empty() && cfg.compare != "roulette")
             throw Error("--compare expects roulette, not '" + cfg.compare + "'");

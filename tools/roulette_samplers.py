@@ -27,7 +27,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--bench', default='./build/benchmarks/bench_convergence')
     ap.add_argument('--seeds', type=int, nargs='+', default=[0, 1, 2, 3])
-    ap.add_argument('--samplers', nargs='+', default=['random', 'halton', 'halton-cp', 'halton-perm'])
+    ap.add_argument('--samplers', nargs='+', default=['random', 'halton', 'halton-owen', 'halton-cp'])
     ap.add_argument('--scenes', nargs='+', default=['furnace', 'cornell'])
     ap.add_argument('--from', dest='from_dir', help='print the table from the CSVs of an earlier run in DIR')
     args = ap.parse_args()
