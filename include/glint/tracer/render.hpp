@@ -3,7 +3,7 @@
 // The command line and the benchmarks name policies as strings; render() checks the scene's
 // features once (environment map? point lights?) and instantiates the PathTracer variant with
 // exactly those, for the named sampler, roulette and direct-lighting policies. The
-// accelerator is the kd-tree with IVM leaves and the compact-subtree layout (trees/).
+// accelerator is the 8-wide BVH with Moller-Trumbore leaves (trees/mesh_bvh.hpp).
 //
 // Names: roulette  classic | spectral | estimate | spectral+estimate (000's rules, from the
 //                  first vertex); throughput | throughput+spectral | throughput+estimate |
