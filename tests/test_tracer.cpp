@@ -742,7 +742,8 @@ TEST_CASE("scale and translation: the Cornell box renders the same image whereve
     halves(render_scene(base, o), m0, v0);
     const std::vector<std::pair<double, double>> moves = {{1e3, 1}, {1e4, 1}, {3e4, 1}, {1e5, 1}, {0, 1e-4},
                                                           {0, 1e-2}, {0, 1e2}, {0, 1e4}, {1, 1e-4}};
-    for (const auto& [translation, scale] : moves) {
+    for (const auto& move_by : moves) {
+        const double translation = move_by.first, scale = move_by.second;  // not a structured binding: clang 14 cannot capture one
         Scene<float> s = base;
         const auto move = [&](Vec3<float>& p) { p = Vec3<float>(Vec3<double>(p) * scale + Vec3<double>(translation)); };
         for (auto& t : s.triangles)
