@@ -601,6 +601,23 @@ TEST_CASE("io: OBJ validation: out-of-range face indices name the line and the i
     CHECK(contains(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n"), "scene.obj:4"));
     CHECK(contains(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 0 2\n"), "index 0"));
     CHECK(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n").empty());
+    CHECK(contains(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -99999999999999999999999\n"), "out of range"));
+    CHECK(contains(obj_error("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3000000000\n"), "out of range"));
+}
+
+TEST_CASE("io: OBJ validation: lines end at \\n, \\r\\n or a lone \\r, as tinyobjloader splits them") {
+    // A lone \r ends a line for tinyobjloader, so the checks must split there too: otherwise
+    // "usemtl m\rf 1 2 9" hides an out-of-range face from the index check (a fuzz finding).
+    CHECK(contains(obj_error("v 0 0 0\rv 1 0 0\rv 0 1 0\rusemtl m\rf 1 2 9\r"), "scene.obj:5"));
+    CHECK(contains(obj_error("v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\n\r\nf 1 2 7\r\n"), "scene.obj:5"));
+    const std::string mtl_e = obj_error("mtllib scene.mtl\rv 0 0 0\rv 1 0 0\rv 0 1 0\rusemtl m\rf 1 2 3\r",
+                                        "newmtl m\rKd -1 0 0\r");
+    CHECK(contains(mtl_e, "scene.mtl:2"));
+    ObjMesh m;
+    CHECK(obj_error("v 0 0 0\rv 1 0 0\r\nv 0 1 0\nf 1 2 3", "", &m).empty());
+    REQUIRE(m.triangles.size() == 1);
+    CHECK(m.triangles[0][1] == Vec3f(1, 0, 0));
+    CHECK(m.line[0] == 4u);
 }
 
 TEST_CASE("io: OBJ validation: a zero-area emissive face names the file, line and material") {

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string>
@@ -69,6 +70,26 @@ inline std::vector<std::string_view> obj_tokens(std::string_view line) {
     return out;
 }
 
+/// Reads one line ending in "\n", "\r\n" or a lone "\r" (tinyobjloader splits lines at
+/// all three, so the checks must see the same lines it parses). False at end of input.
+inline bool obj_getline(std::istream& in, std::string& line) {
+    line.clear();
+    std::streambuf* buf = in.rdbuf();
+    for (;;) {
+        const int c = buf->sbumpc();
+        if (c == std::char_traits<char>::eof()) {
+            if (line.empty()) in.setstate(std::ios::eofbit);
+            return !line.empty();
+        }
+        if (c == '\n') return true;
+        if (c == '\r') {
+            if (buf->sgetc() == '\n') buf->sbumpc();
+            return true;
+        }
+        line += static_cast<char>(c);
+    }
+}
+
 /// A number that is finite as a float, or glint::Error naming `where` and the token.
 inline float obj_number(std::string_view tok, const std::string& where) {
     const std::string s(tok);
@@ -109,6 +130,8 @@ inline void obj_scan_face(const std::vector<std::string_view>& tok, const std::s
         char* end = nullptr;
         const long i = std::strtol(s.c_str(), &end, 10);
         if (end == s.c_str() || *end) throw Error(where + ": face vertex '" + std::string(tok[k]) + "' is not an index");
+        if (i < -std::numeric_limits<int>::max() || i > std::numeric_limits<int>::max())  // tinyobjloader reads an int
+            throw Error(where + ": face vertex index " + s + " is out of range");
         if (i == 0) throw Error(where + ": face vertex index 0 (OBJ indices start at 1)");
         if (i < 0 && nv + i < 0)
             throw Error(where + ": face vertex " + s + " refers " + std::to_string(-i) + " vertices back, but only " +
@@ -123,7 +146,7 @@ inline ObjScan obj_scan(const std::string& file, std::istream& in) {
     long nv = 0;
     std::string raw;
     std::uint32_t line = 0;
-    while (std::getline(in, raw)) {
+    while (obj_getline(in, raw)) {
         ++line;
         const std::vector<std::string_view> tok = obj_tokens(raw);
         const std::string where = file + ":" + std::to_string(line);
@@ -153,7 +176,7 @@ inline ObjScan obj_scan(const std::string& file, std::istream& in) {
 inline void mtl_validate(const std::string& file, std::istream& in) {
     std::string raw, material = "(before any newmtl)";
     std::uint32_t line = 0;
-    while (std::getline(in, raw)) {
+    while (obj_getline(in, raw)) {
         ++line;
         const std::vector<std::string_view> tok = obj_tokens(raw);
         if (tok.empty()) continue;
@@ -264,6 +287,9 @@ inline ObjMesh load_obj(const std::string& path) {
             poly.clear();
             for (std::size_t k = 0; k < count; ++k) {
                 const auto i = std::size_t(shape.mesh.indices[offset + k].vertex_index);
+                if (3 * i + 2 >= attrib.vertices.size())  // the scan rules this out; never index past it
+                    throw Error("load_obj(" + path + "): a face parsed with vertex " + std::to_string(i + 1) +
+                                " of " + std::to_string(attrib.vertices.size() / 3));
                 poly.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
             }
             const int mid = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
