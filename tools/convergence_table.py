@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Prints the README's table of 000's claims from one or more CSVs of bench_convergence.
+"""Prints docs/claims.md's table of 000's claims from one or more CSVs of bench_convergence.
 
     ./build/benchmarks/bench_convergence --scene all --threads 1 --csv docs/convergence.csv
     ./build/benchmarks/bench_convergence --scene all --threads 1 --sampler halton --csv docs/convergence_halton.csv

@@ -20,7 +20,7 @@ import sys
 import tempfile
 from collections import defaultdict
 
-from convergence_table import fmt, load, ratio  # the same CSV reading and ratio as the README table
+from convergence_table import fmt, load, ratio  # the same CSV reading and ratio as docs/claims.md's table
 
 
 def main():

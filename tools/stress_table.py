@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Turns the CSV of stress_intersection into the Markdown table of the README.
+"""Turns the CSV of stress_intersection into the Markdown table of docs/intersection.md.
 
     ./build/benchmarks/stress_intersection --csv stress.csv && python3 tools/stress_table.py stress.csv
 """
