@@ -1,0 +1,238 @@
+// glint/vpl/shooting.hpp: the shooting phase of the virtual light sources method over the
+// ordinary Scene (area and point lights, the path tracer's materials).
+//
+// 000 section 1.4 (lines 736-945). A shooting walk starts at a light sample z_0 with
+// direction omega_0 and leaves at every non-specular hit y a virtual point light (VPL) of
+// incoming power dPhi = Le(z_0, omega_0) / p_light(z_0, omega_0) * prod w / (p s) (the
+// formula's fraction bars and product limits were lost in the extraction; repaired from
+// Fig. 1.5 as in tracer/vpl.hpp). Emitters are chosen by power: an area-light triangle
+// (uniform point, cosine direction: dPhi = pi Le A_k / P_k) or a point light (uniform
+// direction: dPhi = 4 pi I / P_k), P_k the emitter's selection probability. The walk goes
+// on through scatter() with the hit material's own BRDF (SurfaceBrdf: diffuse and Phong
+// lobes) under a roulette policy; mirrors and dielectrics are followed deterministically
+// (Fresnel choice for dielectrics) and leave no VPL. A VPL reflects diffusely towards the
+// gathering point (f_r(y) = kd / pi: 000's diffuse estimator, lines 876-880; its general
+// form, lines 850-870, would evaluate f_r(y) with the stored incoming direction, which
+// glint does not), so glossy light transport through a VPL is the method's approximation;
+// for Lambertian scenes the method is unbiased.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/random.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/sampling/warps.hpp>
+#include <glint/tracer/brdf.hpp>
+#include <glint/tracer/scene.hpp>
+#include <glint/tracer/vpl.hpp>
+#include <glint/trees/tree.hpp>
+
+namespace glint {
+
+/// A ray accelerator over a Scene's triangles (hit.id: the scene's triangle index).
+template <class A>
+concept SceneAccelerator = RayAccelerator<A> && Scalar<typename A::scalar_type>;
+
+/// A roulette policy that a shooting walk can use: one without a radiance estimate (the
+/// estimate's offset is reflected radiance, which a walk carrying power has no use for).
+template <class R, class T>
+concept ShootingRoulette = RoulettePolicy<R, T, 3> && (!R::has_radiance_estimate);
+
+/// Where a light sample leaves from: position, direction, and power / density.
+template <Scalar T>
+struct LightSample {
+    Vec3<T> position{0};
+    Vec3<T> normal{0};  // zero for a point light
+    Vec3<T> direction{0, 0, 1};
+    Rgb<T> power{};
+};
+
+/// The scene's emitters (area-light triangles and point lights), chosen by luminance power.
+template <Scalar T>
+class EmitterSet {
+public:
+    explicit EmitterSet(const Scene<T>& s) {
+        s.validate();
+        for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+            const Material<T>& m = s.materials[s.material_of[i]];
+            if (!m.emissive()) continue;
+            const auto& t = s.triangles[i];
+            const T area = triangle_area(t[0], t[1], t[2]);
+            if (area > T(0)) add({t[0], t[1], t[2]}, s.normal(i), m.emission, area, pi<T> * area);
+        }
+        for (const auto& p : s.point_lights) {
+            if (!all_finite(p.position) || !p.intensity.is_finite() || p.intensity.min() < T(0))
+                throw Error("glint::EmitterSet: point light with non-finite position or negative intensity");
+            if (p.intensity.max() > T(0)) add({p.position, p.position, p.position}, Vec3<T>(0), p.intensity, T(0), T(4) * pi<T>);
+        }
+        if (!(total_ > T(0))) throw Error("glint::EmitterSet: scene '" + s.name + "' has no light that emits");
+    }
+
+    /// One light sample from three independent uniforms (emitter, position, direction).
+    LightSample<T> sample(T u, const Vec2<T>& u_pos, const Vec2<T>& u_dir) const {
+        const std::size_t k = pick(u);
+        const Emitter& e = emitters_[k];
+        const T prob = probability(k);
+        LightSample<T> out;
+        if (e.area > T(0)) {
+            out.position = sample_triangle(e.v[0], e.v[1], e.v[2], u_pos);
+            out.normal = e.normal;
+            out.direction = Frame<T>::from_normal(e.normal).to_world(square_to_cosine_hemisphere(u_dir));
+        } else {
+            out.position = e.v[0];
+            out.direction = square_to_uniform_sphere(u_dir);
+        }
+        out.power = e.radiance * (e.measure / prob);
+        return out;
+    }
+
+    /// A point of an emitter for direct illumination (emitter by power, uniform on an area
+    /// light): radiance Le (or intensity I), normal (zero for a point light) and the density
+    /// (area density P_k / A_k on an area light, the probability P_k for a point light).
+    LightSample<T> sample_point(T u, const Vec2<T>& u_pos, T& pdf) const {
+        const std::size_t k = pick(u);
+        const Emitter& e = emitters_[k];
+        LightSample<T> out;
+        out.position = e.area > T(0) ? sample_triangle(e.v[0], e.v[1], e.v[2], u_pos) : e.v[0];
+        out.normal = e.area > T(0) ? e.normal : Vec3<T>(0);
+        out.power = e.radiance;
+        pdf = e.area > T(0) ? probability(k) / e.area : probability(k);
+        return out;
+    }
+
+    /// Total luminance power of the emitters (pi Le A for area, 4 pi I for point lights).
+    T total_power() const { return total_; }
+
+private:
+    struct Emitter {
+        std::array<Vec3<T>, 3> v;
+        Vec3<T> normal;
+        Rgb<T> radiance;  // Le, or I for a point light
+        T area;           // 0: point light
+        T measure;        // pi A or 4 pi: power = radiance * measure
+    };
+    void add(const std::array<Vec3<T>, 3>& v, const Vec3<T>& n, const Rgb<T>& le, T area, T measure) {
+        emitters_.push_back({v, n, le, area, measure});
+        total_ += le.luminance() * measure;
+        cdf_.push_back(total_);
+    }
+    std::size_t pick(T u) const {
+        const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u * total_);
+        return std::min<std::size_t>(std::size_t(it - cdf_.begin()), cdf_.size() - 1);
+    }
+    T probability(std::size_t k) const { return (cdf_[k] - (k ? cdf_[k - 1] : T(0))) / total_; }
+
+    std::vector<Emitter> emitters_;
+    std::vector<T> cdf_;
+    T total_ = 0;
+};
+
+/// Options of the shooting phase.
+struct ShootingOptions {
+    int max_depth = 1024;  // cap on a walk's vertices, far beyond where roulette stops walks
+    int branches = 1;      // continuations from the first hit (000 section 7.2.1's path splitting)
+};
+
+namespace detail {
+
+/// Ray origin offset off a surface of normal n towards dir, scaled to the coordinates.
+template <Scalar T>
+Ray<T> vpl_spawn(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& dir) {
+    const T m = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), T(1)});
+    const T eps = m * T(sizeof(T) == 4 ? 2e-5 : 1e-9);
+    return Ray<T>{x + (glm::dot(dir, n) >= T(0) ? n : -n) * eps, dir, T(0), infinity<T>};
+}
+
+/// Direction leaving a mirror (reflection) or a dielectric (Fresnel choice by u between
+/// reflection and refraction; ior relative to the side ng points away from).
+template <Scalar T>
+Vec3<T> specular_direction(const Material<T>& m, const Vec3<T>& d, const Vec3<T>& ng, T u) {
+    const T c = glm::dot(d, ng);
+    const Vec3<T> reflected = d - ng * (T(2) * c);
+    if (m.kind == MaterialKind::mirror) return reflected;
+    const bool entering = c < T(0);
+    const T eta = entering ? T(1) / m.ior : m.ior, ci = std::abs(c);
+    const T k = T(1) - eta * eta * (T(1) - ci * ci);
+    if (k <= T(0)) return reflected;  // total internal reflection
+    const T ct = std::sqrt(k);
+    const T rs = (eta * ci - ct) / (eta * ci + ct), rp = (ci - eta * ct) / (ci + eta * ct);
+    if (u < T(0.5) * (rs * rs + rp * rp)) return reflected;
+    const Vec3<T> nf = entering ? ng : -ng;  // facing the incoming ray
+    return d * eta + nf * (eta * ci - ct);
+}
+
+}  // namespace detail
+
+/// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
+/// appending a VPL at each non-specular hit; roulette decides on the normalized throughput.
+template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+    requires ShootingRoulette<R, T>
+void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, Ray<T> ray, const Rgb<T>& power,
+                         Pcg32& rng, int max_depth, std::vector<Vpl<T>>& out) {
+    const T scale = power.max();
+    if (!(scale > T(0)) || !power.is_finite()) return;
+    Rgb<T> beta = power / scale;  // colour of the power, max 1: what the roulette sees
+    for (int depth = 0; depth < max_depth; ++depth) {
+        StoreHit<T> hit;
+        if (!accel.closest_hit(ray, hit)) return;
+        const Material<T>& m = s.materials[s.material_of[hit.id]];
+        const Vec3<T> ng = s.normal(hit.id);
+        const Vec3<T> n = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
+        const Vec3<T> x = ray.at(hit.t);
+        if (m.specular()) {
+            const Rgb<T> a = m.kind == MaterialKind::mirror ? m.ks : Rgb<T>(T(1));
+            const std::array<Rgb<T>, 1> lobes{a};
+            const auto sel = select_lobe(roulette, beta, std::span<const Rgb<T>>(lobes), rng.uniform<T>(), depth);
+            if (sel.terminated()) return;
+            beta *= a / sel.probability[0];
+            const Vec3<T> d = detail::specular_direction(m, safe_normalize(ray.direction), ng, rng.uniform<T>());
+            ray = detail::vpl_spawn(x, n, d);
+            continue;
+        }
+        if (m.kd.max() > T(0)) out.push_back({x, n, beta * scale, m.kd});
+        const Frame<T> frame = Frame<T>::from_normal(n);
+        const SurfaceBrdf<T> brdf(m, frame.to_local(-safe_normalize(ray.direction)));
+        const T u_sel = rng.uniform<T>();
+        const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
+        const ScatterSample<T, 3> step = scatter<BrdfSelection::mis>(brdf, roulette, beta, u_sel, u_dir, depth);
+        if (step.terminated()) return;
+        beta *= step.weight;
+        if (!(beta.max() > T(0)) || !beta.is_finite()) return;
+        ray = detail::vpl_spawn(x, n, frame.to_world(step.direction));
+    }
+}
+
+/// Shooting phase: `walks` walks from the scene's emitters (chosen by power), stream `seed`.
+/// Each VPL's power already carries the 1 / walks of the estimator.
+template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+    requires ShootingRoulette<R, T>
+std::vector<Vpl<T>> shoot_scene_vpls(const Scene<T>& s, const A& accel, const R& roulette, std::size_t walks,
+                                     std::uint64_t seed, const ShootingOptions& opt = {}) {
+    if (walks == 0) throw Error("glint::shoot_scene_vpls: walks must be positive (got 0)");
+    if (opt.max_depth < 1) throw Error("glint::shoot_scene_vpls: max_depth " + std::to_string(opt.max_depth) + " < 1");
+    const EmitterSet<T> emitters(s);
+    std::vector<Vpl<T>> out;
+    Pcg32 rng(seed, 0x5eed);
+    for (std::size_t w = 0; w < walks; ++w) {
+        const T u = rng.uniform<T>();
+        const Vec2<T> up(rng.uniform<T>(), rng.uniform<T>()), ud(rng.uniform<T>(), rng.uniform<T>());
+        const LightSample<T> ls = emitters.sample(u, up, ud);
+        const Ray<T> ray = ls.normal == Vec3<T>(0) ? Ray<T>{ls.position, ls.direction, T(0), infinity<T>}
+                                                   : detail::vpl_spawn(ls.position, ls.normal, ls.direction);
+        trace_shooting_walk(s, accel, roulette, ray, ls.power / T(walks), rng, opt.max_depth, out);
+    }
+    return out;
+}
+
+}  // namespace glint

