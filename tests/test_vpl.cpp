@@ -17,6 +17,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
+#include <glint/vpl/light_animation.hpp>
 
 using namespace glint;
 
@@ -212,4 +213,119 @@ TEST_CASE("exact: the VPL image does not depend on the thread count") {
     const VplResult b = render_vpl(s, accel, Roulette{}, vis, st);
     CHECK(a.image.pixels == b.image.pixels);
     CHECK(a.vpls > 16);
+}
+
+TEST_CASE("exact: balance weights sum to 1, keep zeros, and reject bad densities") {
+    Pcg32 rng(3, 4);
+    for (int t = 0; t < 100; ++t) {
+        std::vector<double> q(1 + t % 7), a(q.size());
+        for (auto& v : q) v = rng.uniform<double>() < 0.3 ? 0.0 : std::exp(8 * rng.uniform<double>() - 4);
+        q[0] = 0.5;  // the own frame always sees its own first hit
+        balance_weights(std::span<const double>(q), std::span<double>(a));
+        double sum = 0;
+        for (std::size_t j = 0; j < q.size(); ++j) {
+            sum += a[j];
+            CHECK((q[j] == 0) == (a[j] == 0));
+        }
+        CHECK(sum == doctest::Approx(1.0).epsilon(1e-12));
+    }
+    std::vector<double> q{1.0, -1.0}, a(2), b(3);
+    CHECK_THROWS_WITH_AS(balance_weights(std::span<const double>(q), std::span<double>(a)), doctest::Contains("density 1 is -1"), Error);
+    CHECK_THROWS_WITH_AS(balance_weights(std::span<const double>(q), std::span<double>(b)), doctest::Contains("2 densities but 3"), Error);
+}
+
+namespace {
+
+std::vector<Vec3<float>> light_track(std::size_t frames) {
+    std::vector<Vec3<float>> p;
+    for (std::size_t f = 0; f < frames; ++f) p.emplace_back(-0.7f + 1.4f * float(f) / float(frames - 1), 1.7f, 0.2f);
+    return p;
+}
+
+double image_mean(const std::vector<Rgb<float>>& img, std::size_t c) {
+    double m = 0;
+    for (const auto& p : img) m += p[c] / double(img.size());
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("exact: every path's frame weights sum to 1; paths are reused across frames") {
+    const Scene<float> s = point_box();
+    const Accel accel(s.triangles);
+    const auto track = light_track(6);
+    AnimationOptions opt;
+    opt.paths_per_frame = 8;
+    const LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(track),
+                                                          Rgb<float>(1), opt);
+    std::size_t reused = 0, occluded = 0;
+    for (std::size_t p = 0; p < a.paths.size(); ++p) {
+        double sum = 0;
+        for (std::size_t i = 0; i < a.frames(); ++i) {
+            const float w = a.weight(p, i, 0, a.frames() - 1);
+            sum += w;
+            reused += w > 0 && i != a.paths[p].frame;
+            occluded += a.paths[p].reusable && w == 0;
+        }
+        CAPTURE(p);
+        CHECK(sum == doctest::Approx(1.0).epsilon(1e-6));
+    }
+    CHECK(reused > a.paths.size());  // most paths serve several frames
+    CHECK(occluded > 0);             // and the boxes hide some first hits from some frames
+}
+
+TEST_CASE("agreement: each frame of the path-reuse animation equals independent VPL renders within standard errors") {
+    const Scene<float> s = point_box();
+    const Accel accel(s.triangles);
+    const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
+    const std::size_t F = 4, runs = 48;
+    const auto track = light_track(F);
+    VplSettings st = small_settings(8, 32, 2);  // independent renders: 32 walks per frame
+    st.direct = false;
+    // Both sides clamp the geometry term alike: the clamped sum is still linear in the VPLs'
+    // powers, so both estimate the same quantity, with far less variance than unclamped.
+    st.min_distance = 0.25;
+    const auto points = primary_points(s, accel, st);
+    // Per frame and band: sums over runs of the image mean, for reuse (off-line, on-line with
+    // a window of 2 frames) and for independent VPL renders.
+    std::vector<double> sum(3 * F * 3, 0.0), sum2(3 * F * 3, 0.0);
+    for (std::size_t r = 0; r < runs; ++r) {
+        AnimationOptions opt;
+        opt.paths_per_frame = 8;
+        opt.seed = 100 + r;
+        LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(track),
+                                                        Rgb<float>(4.0f, 3.5f, 3.0f), opt);
+        render_path_images(a, s, std::span<const PixelPoint<float>>(points), vis, st);
+        for (std::size_t f = 0; f < F; ++f) {
+            Scene<float> sf = s;
+            sf.point_lights[0].position = track[f];
+            st.seed = 1000 + r * F + f;
+            const VplResult v = render_vpl(sf, accel, Roulette{}, vis, st);
+            std::vector<Rgb<float>> indep(v.indirect.pixels.begin(), v.indirect.pixels.end());
+            const std::vector<Rgb<float>> img[3] = {a.frame_image(f), a.frame_image(f, 2), indep};
+            for (std::size_t m = 0; m < 3; ++m)
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const double x = image_mean(img[m], c);
+                    sum[(m * F + f) * 3 + c] += x;
+                    sum2[(m * F + f) * 3 + c] += x * x;
+                }
+        }
+    }
+    auto stat = [&](std::size_t k, double& mean, double& var_of_mean) {
+        mean = sum[k] / double(runs);
+        var_of_mean = std::max(0.0, sum2[k] / double(runs) - mean * mean) / double(runs - 1);
+    };
+    for (std::size_t k = 0; k < F * 3; ++k) {
+        double mi, vi;
+        stat(2 * F * 3 + k, mi, vi);
+        for (std::size_t m = 0; m < 2; ++m) {
+            double mr, vr;
+            stat(m * F * 3 + k, mr, vr);
+            CAPTURE(m);
+            CAPTURE(k);
+            CAPTURE(mr);
+            CAPTURE(mi);
+            CHECK(std::abs(mr - mi) < 4 * std::sqrt(vr + vi));
+        }
+    }
 }

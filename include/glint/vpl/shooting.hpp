@@ -176,14 +176,15 @@ Vec3<T> specular_direction(const Material<T>& m, const Vec3<T>& d, const Vec3<T>
 
 /// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
 /// appending a VPL at each non-specular hit; roulette decides on the normalized throughput.
+/// `first_depth` counts the scattering vertices before the ray (for the roulette).
 template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, Ray<T> ray, const Rgb<T>& power,
-                         Pcg32& rng, int max_depth, std::vector<Vpl<T>>& out) {
+                         Pcg32& rng, int max_depth, std::vector<Vpl<T>>& out, int first_depth = 0) {
     const T scale = power.max();
     if (!(scale > T(0)) || !power.is_finite()) return;
     Rgb<T> beta = power / scale;  // colour of the power, max 1: what the roulette sees
-    for (int depth = 0; depth < max_depth; ++depth) {
+    for (int depth = first_depth; depth < max_depth; ++depth) {
         StoreHit<T> hit;
         if (!accel.closest_hit(ray, hit)) return;
         const Material<T>& m = s.materials[s.material_of[hit.id]];
