@@ -18,6 +18,7 @@
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
 #include <glint/vpl/light_animation.hpp>
+#include <glint/vpl/scenes.hpp>
 
 using namespace glint;
 
@@ -27,20 +28,8 @@ using Accel = MeshBvh<MollerTrumbore<float>, 8>;
 using Roulette = ClassicRoulette<float, 3>;
 
 /// The Cornell box with its area light replaced by a point light below the ceiling.
-Scene<float> point_box(const Vec3<float>& light = Vec3<float>(0.1f, 1.7f, 0.2f)) {
-    const Scene<float> c = builtin_scene<float>("cornell");
-    Scene<float> s;
-    s.name = "cornell-point";
-    s.materials = c.materials;
-    s.camera = c.camera;
-    for (std::size_t i = 0; i < c.triangles.size(); ++i)
-        if (c.light_of[i] < 0) {
-            s.triangles.push_back(c.triangles[i]);
-            s.material_of.push_back(c.material_of[i]);
-            s.light_of.push_back(-1);
-        }
-    s.point_lights.push_back({light, Rgb<float>(4.0f, 3.5f, 3.0f)});
-    return s;
+Scene<float> point_box() {
+    return with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0.1f, 1.7f, 0.2f), Rgb<float>(4.0f, 3.5f, 3.0f));
 }
 
 /// Means of the four image quadrants, per band (12 numbers).
@@ -236,10 +225,8 @@ TEST_CASE("exact: balance weights sum to 1, keep zeros, and reject bad densities
 
 namespace {
 
-std::vector<Vec3<float>> light_track(std::size_t frames) {
-    std::vector<Vec3<float>> p;
-    for (std::size_t f = 0; f < frames; ++f) p.emplace_back(-0.7f + 1.4f * float(f) / float(frames - 1), 1.7f, 0.2f);
-    return p;
+std::vector<Vec3<float>> track(std::size_t frames) {
+    return light_track(Vec3<float>(-0.7f, 1.7f, 0.2f), Vec3<float>(0.7f, 1.7f, 0.2f), frames);
 }
 
 double image_mean(const std::vector<Rgb<float>>& img, std::size_t c) {
@@ -253,10 +240,10 @@ double image_mean(const std::vector<Rgb<float>>& img, std::size_t c) {
 TEST_CASE("exact: every path's frame weights sum to 1; paths are reused across frames") {
     const Scene<float> s = point_box();
     const Accel accel(s.triangles);
-    const auto track = light_track(6);
+    const auto path = track(6);
     AnimationOptions opt;
     opt.paths_per_frame = 8;
-    const LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(track),
+    const LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(path),
                                                           Rgb<float>(1), opt);
     std::size_t reused = 0, occluded = 0;
     for (std::size_t p = 0; p < a.paths.size(); ++p) {
@@ -279,7 +266,7 @@ TEST_CASE("agreement: each frame of the path-reuse animation equals independent 
     const Accel accel(s.triangles);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
     const std::size_t F = 4, runs = 48;
-    const auto track = light_track(F);
+    const auto path = track(F);
     VplSettings st = small_settings(8, 32, 2);  // independent renders: 32 walks per frame
     st.direct = false;
     // Both sides clamp the geometry term alike: the clamped sum is still linear in the VPLs'
@@ -293,12 +280,12 @@ TEST_CASE("agreement: each frame of the path-reuse animation equals independent 
         AnimationOptions opt;
         opt.paths_per_frame = 8;
         opt.seed = 100 + r;
-        LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(track),
+        LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(path),
                                                         Rgb<float>(4.0f, 3.5f, 3.0f), opt);
         render_path_images(a, s, std::span<const PixelPoint<float>>(points), vis, st);
         for (std::size_t f = 0; f < F; ++f) {
             Scene<float> sf = s;
-            sf.point_lights[0].position = track[f];
+            sf.point_lights[0].position = path[f];
             st.seed = 1000 + r * F + f;
             const VplResult v = render_vpl(sf, accel, Roulette{}, vis, st);
             std::vector<Rgb<float>> indep(v.indirect.pixels.begin(), v.indirect.pixels.end());
