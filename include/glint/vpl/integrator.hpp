@@ -66,6 +66,8 @@ struct PixelPoint {
     Rgb<T> weight{};            // product of the specular reflectances before x
     Rgb<T> emitted{};           // emission seen along the camera path (weighted)
     std::uint32_t material = 0;
+    std::uint32_t triangle = 0;  // the scene triangle at x, and x's barycentrics (u, v) on it
+    T u = 0, v = 0;
     bool hit = false;
 };
 
@@ -110,6 +112,7 @@ PixelPoint<T> primary_point(const Scene<T>& s, const A& accel, int px, int py, c
         if (front && m.emissive()) p.emitted += p.weight * m.emission;
         if (!m.specular()) {
             p.x = x, p.n = n, p.wo = -d, p.material = s.material_of[hit.id], p.hit = true;
+            p.triangle = hit.id, p.u = hit.u, p.v = hit.v;
             return p;
         }
         if (m.kind == MaterialKind::mirror) p.weight *= m.ks;
@@ -146,6 +149,26 @@ Rgb<T> direct_light(const Scene<T>& s, const A& accel, const EmitterSet<T>& ligh
     return sum * (p.weight / T(samples));
 }
 
+/// Sum over the VPLs of dPhi (kd_y / pi) w(wi) cos(theta_x) cos(theta_y) / max(r^2, d2min)
+/// V(x, y) at point x (normal n), w(wi) = brdf(wi) (f_r for radiance, 1 for irradiance).
+template <Scalar T, class V, class Brdf>
+    requires VisibilityPolicy<V, T>
+Rgb<T> vpl_sum(const Vec3<T>& x, const Vec3<T>& n, std::span<const Vpl<T>> vpls, V& vis, T d2min, const Brdf& brdf) {
+    Rgb<T> sum(T(0));
+    for (const Vpl<T>& v : vpls) {
+        const Vec3<T> d = v.position - x;
+        const T r2 = glm::dot(d, d);
+        if (!(r2 > T(0))) continue;
+        const Vec3<T> wi = d / std::sqrt(r2);
+        const T cx = glm::dot(n, wi), cy = -glm::dot(v.normal, wi);
+        if (cx <= T(0) || cy <= T(0)) continue;  // facing away: no contribution, no test
+        const Rgb<T> f = brdf(wi);
+        if (f.max() <= T(0) || !vis.visible(v.position)) continue;
+        sum += v.power * v.albedo * f * (cx * cy / (std::max(r2, d2min) * pi<T>));
+    }
+    return sum;
+}
+
 /// Sum of the VPLs' illumination reflected at p towards the viewer (without p.weight),
 /// visibility by policy `vis`; d2min is the squared clamp distance (0: unclamped).
 template <Scalar T, class V>
@@ -154,19 +177,7 @@ Rgb<T> gather_point(const Scene<T>& s, const PixelPoint<T>& p, std::span<const V
     const Frame<T> frame = Frame<T>::from_normal(p.n);
     const SurfaceBrdf<T> brdf(s.materials[p.material], frame.to_local(p.wo));
     vis.set_point(p.x, p.n);
-    Rgb<T> sum(T(0));
-    for (const Vpl<T>& v : vpls) {
-        const Vec3<T> d = v.position - p.x;
-        const T r2 = glm::dot(d, d);
-        if (!(r2 > T(0))) continue;
-        const Vec3<T> wi = d / std::sqrt(r2);
-        const T cx = glm::dot(p.n, wi), cy = -glm::dot(v.normal, wi);
-        if (cx <= T(0) || cy <= T(0)) continue;  // facing away: no contribution, no test
-        const Rgb<T> f = brdf.f(frame.to_local(wi));
-        if (f.max() <= T(0) || !vis.visible(v.position)) continue;
-        sum += v.power * v.albedo * f * (cx * cy / (std::max(r2, d2min) * pi<T>));
-    }
-    return sum;
+    return vpl_sum(p.x, p.n, vpls, vis, d2min, [&](const Vec3<T>& wi) { return brdf.f(frame.to_local(wi)); });
 }
 
 /// The camera's pixel points, row-major (one ray per pixel centre).

@@ -108,18 +108,7 @@ AnimationPath<T> shoot_animation_path(const Scene<T>& s, const A& accel, const R
         return p;
     }
     p.reusable = true;
-    if (m.kd.max() > T(0)) p.vpls.push_back({p.z1, p.n1, power, m.kd});
-    const Frame<T> frame = Frame<T>::from_normal(p.n1);
-    const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
-    const Rgb<T> beta = power / power.max();
-    for (int b = 0; b < opt.branches; ++b) {
-        const T u_sel = rng.uniform<T>();
-        const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
-        const ScatterSample<T, 3> step = scatter<BrdfSelection::mis>(brdf, roulette, beta, u_sel, u_dir, 0);
-        if (step.terminated()) continue;
-        trace_shooting_walk(s, accel, roulette, detail::vpl_spawn(p.z1, p.n1, frame.to_world(step.direction)),
-                            power * step.weight / T(opt.branches), rng, opt.shooting.max_depth, p.vpls, 1);
-    }
+    shoot_path_tree(s, accel, roulette, p.z1, p.n1, m, power, opt.branches, rng, opt.shooting.max_depth, p.vpls);
     return p;
 }
 

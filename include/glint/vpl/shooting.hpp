@@ -214,6 +214,29 @@ void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, R
     }
 }
 
+/// A path tree from a Lambertian point z1 (normal n1 on the lit side, material m) that
+/// received `power`: the VPL at z1, then `branches` walks leaving z1, each with 1 / branches
+/// of the power (000 section 7.2.1's splitting; 000 section 8.1.4's N_s paths per entry point).
+template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+    requires ShootingRoulette<R, T>
+void shoot_path_tree(const Scene<T>& s, const A& accel, const R& roulette, const Vec3<T>& z1, const Vec3<T>& n1,
+                     const Material<T>& m, const Rgb<T>& power, int branches, Pcg32& rng, int max_depth,
+                     std::vector<Vpl<T>>& out) {
+    if (!(power.max() > T(0))) return;
+    if (m.kd.max() > T(0)) out.push_back({z1, n1, power, m.kd});
+    const Frame<T> frame = Frame<T>::from_normal(n1);
+    const SurfaceBrdf<T> brdf(m, Vec3<T>(0, 0, 1));  // Lambertian: the incoming direction does not matter
+    const Rgb<T> beta = power / power.max();
+    for (int b = 0; b < branches; ++b) {
+        const T u_sel = rng.uniform<T>();
+        const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
+        const ScatterSample<T, 3> step = scatter<BrdfSelection::mis>(brdf, roulette, beta, u_sel, u_dir, 0);
+        if (step.terminated()) continue;
+        trace_shooting_walk(s, accel, roulette, detail::vpl_spawn(z1, n1, frame.to_world(step.direction)),
+                            power * step.weight / T(branches), rng, max_depth, out, 1);
+    }
+}
+
 /// Shooting phase: `walks` walks from the scene's emitters (chosen by power), stream `seed`.
 /// Each VPL's power already carries the 1 / walks of the estimator.
 template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
