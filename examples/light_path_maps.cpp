@@ -37,16 +37,6 @@ using Accel = MeshBvh<MollerTrumbore<float>, 8>;
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
-double relative_rmse(const std::vector<Rgb<float>>& a, const std::vector<Rgb<float>>& ref) {
-    double num = 0, den = 0;
-    for (std::size_t i = 0; i < a.size(); ++i)
-        for (std::size_t c = 0; c < 3; ++c) {
-            num += std::pow(double(a[i][c]) - ref[i][c], 2);
-            den += std::pow(double(ref[i][c]), 2);
-        }
-    return std::sqrt(num / den);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -114,19 +104,19 @@ int main(int argc, char** argv) try {
         t0 = now();
         const auto v = vpl_indirect(walks, 5 + f);
         const double vt = now() - t0;
-        const double e_lpm = relative_rmse(indirect, r);
+        const double e_lpm = relative_rmse(std::span<const Rgb<float>>(indirect), std::span<const Rgb<float>>(r));
         // Equal error: the fewest walks (powers of 2, up to R / 2) whose render is as close.
         std::size_t eq = 1;
         double eq_t = 0, eq_e = 0;
         for (; eq <= ref_walks / 2; eq *= 2) {
             const double t1 = now();
-            eq_e = relative_rmse(vpl_indirect(eq, 300 + f), r);
+            eq_e = relative_rmse(std::span<const Rgb<float>>(vpl_indirect(eq, 300 + f)), std::span<const Rgb<float>>(r));
             eq_t = now() - t1;
             if (eq_e <= e_lpm) break;
         }
         std::printf("frame %zu: LPM %.4f s, rel. RMSE %.3f | VPL at equal time: %zu walks %.4f s, rel. RMSE %.3f | "
                     "VPL at equal RMSE: %zu walks %.4f s, rel. RMSE %.3f\n",
-                    f, dt, e_lpm, walks, vt, relative_rmse(v, r), eq, eq_t, eq_e);
+                    f, dt, e_lpm, walks, vt, relative_rmse(std::span<const Rgb<float>>(v), std::span<const Rgb<float>>(r)), eq, eq_t, eq_e);
         Image<Rgb<float>> img(size, size);
         const auto direct = direct_image(scene, accel, pts, st);
         for (std::size_t i = 0; i < img.size(); ++i) img.pixels[i] = direct[i] + indirect[i];

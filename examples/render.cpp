@@ -27,6 +27,8 @@
 #include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
 
+#include "vpl_cli.hpp"
+
 using namespace glint;
 
 namespace {
@@ -67,7 +69,13 @@ void usage() {
         "                      (x / (1 + x) first) (default clamp)\n"
         "  --seed N            random seed (default 0)\n"
         "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
-        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n");
+        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n"
+        "  --integrator NAME   path (the path tracer) or vpl (virtual light sources; one ray per pixel\n"
+        "                      centre; --spp, --roulette, --direct and --sampler do not apply)\n"
+        "  --vpls N            vpl: shooting walks (default 1024)\n"
+        "  --visibility NAME   vpl: rays or spheres (occluder spheres from --insert-mesh or --mesh)\n"
+        "  --spheres K         vpl: occluder spheres (default 100)\n"
+        "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n");
 }
 
 /// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
@@ -166,6 +174,8 @@ struct Args {
     bool reinhard = false;
     std::optional<Vec3f> eye, look_at, up;
     std::optional<float> fov_degrees;
+    std::string integrator = "path";
+    VplCliOptions vpl;
 };
 
 /// Parses and validates every flag (nothing long runs before this returns). Returns false
@@ -211,8 +221,16 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
         else if (a == "--seed") o.seed = to_u64(a, value());
         else if (a == "--insert-mesh") g.insert = value();
         else if (a == "--export-scene") g.export_json = value();
+        else if (a == "--integrator") g.integrator = value();
+        else if (a == "--vpls") g.vpl.vpls = std::size_t(to_int(a, value(), 1, 1 << 24));
+        else if (a == "--visibility") g.vpl.visibility = value();
+        else if (a == "--spheres") g.vpl.spheres = std::size_t(to_int(a, value(), 1, 1 << 20));
+        else if (a == "--clamp") g.vpl.clamp = to_float(a, value(), 0.0f, 1e30f);
         else throw Error("unknown option '" + a + "' (see --help)");
     }
+    if (g.integrator != "path" && g.integrator != "vpl") throw Error("--integrator expects path or vpl, not '" + g.integrator + "'");
+    if (g.vpl.visibility != "rays" && g.vpl.visibility != "spheres")
+        throw Error("--visibility expects rays or spheres, not '" + g.vpl.visibility + "'");
     if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
     if (std::uint64_t(o.settings.width) * std::uint64_t(o.settings.height) > (std::uint64_t(1) << 26))
         throw Error("--width x --height = " + std::to_string(o.settings.width) + " x " + std::to_string(o.settings.height) +
@@ -223,6 +241,13 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
     for (const std::string& f : {g.mesh, g.env})
         if (!f.empty() && access(f.c_str(), R_OK) != 0) throw Error("cannot read '" + f + "': " + std::strerror(errno));
     return true;
+}
+
+/// An RGB image's floats, pixel after pixel (an EXR layer's data).
+std::vector<float> flatten(const Image<Rgb<float>>& img) {
+    std::vector<float> out;
+    for (const auto& p : img.pixels) out.insert(out.end(), {p[0], p[1], p[2]});
+    return out;
 }
 
 /// The camera flags over the scene's camera; throws for a degenerate frame.
@@ -247,6 +272,7 @@ int main(int argc, char** argv) {
         Scene<float> scene = g.mesh.empty() ? builtin_scene<float>(g.scene_name) : scene_from_obj(g.mesh, g.env);
         if (!g.env.empty() && g.mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
         apply_camera(g, scene.camera);
+        const std::size_t before_insert = g.mesh.empty() ? scene.triangles.size() : 0;  // occluders: the mesh
         if (!g.insert.empty())
             insert_mesh<float>(scene, load_obj(g.insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
                                cornell_mesh_placement<float>());
@@ -255,6 +281,20 @@ int main(int argc, char** argv) {
             return 0;
         }
 
+        if (g.integrator == "vpl") {
+            VplSettings st;
+            st.width = o.settings.width, st.height = o.settings.height, st.threads = o.settings.threads, st.seed = o.seed + 1;
+            const std::span<const TriangleVertices<float>> mesh(scene.triangles.data() + before_insert,
+                                                                scene.triangles.size() - before_insert);
+            const VplResult r = render_vpl_cli(scene, mesh, g.vpl, st);
+            const std::string stem = g.out.substr(0, g.out.size() - 4);
+            write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}});
+            write_png(stem + ".png", r.image, g.exposure, g.reinhard);
+            std::printf("rendered %s with %zu VPLs (%s visibility) in %.3f s (shooting %.3f s); wrote %s.exr and %s.png\n",
+                        scene.name.c_str(), r.vpls, g.vpl.visibility.c_str(), r.seconds, r.shooting_seconds, stem.c_str(),
+                        stem.c_str());
+            return 0;
+        }
         std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n",
                      scene.name.c_str(), scene.triangles.size(), scene.area_lights.size(),
                      scene.environment ? ", environment map" : "", o.settings.width, o.settings.height,

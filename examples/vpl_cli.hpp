@@ -1,0 +1,52 @@
+// vpl_cli.hpp: glint-render's --integrator vpl (the virtual light sources method of
+// glint/vpl/integrator.hpp): where the command line's names become the VPL integrator's
+// types. Included by render.cpp only.
+//
+//   --vpls N            shooting walks (default 1024; each leaves a VPL per diffuse hit)
+//   --visibility NAME   rays (shadow rays through the wide BVH) or spheres (occluder spheres
+//                       of 000 chapter 5, built from the --insert-mesh mesh, or from the
+//                       --mesh mesh; the linear scan below 800 spheres, the kd-tree above)
+//   --spheres K         occluder spheres (default 100)
+//   --clamp D           clamp the VPL geometry term at distance D (default 0: unbiased)
+// The shooting walks use the classic (albedo) roulette of 000 section 2.1.
+#pragma once
+
+#include <cstdio>
+#include <span>
+#include <string>
+
+#include <glint/core/error.hpp>
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/occluders/spheres.hpp>
+#include <glint/occluders/visibility.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/trees/mesh_bvh.hpp>
+#include <glint/vpl/integrator.hpp>
+
+namespace glint {
+
+struct VplCliOptions {
+    std::string visibility = "rays";
+    std::size_t vpls = 1024, spheres = 100;
+    double clamp = 0;
+};
+
+/// Renders `scene` with the VPL integrator; occluders (for spheres) are built from `mesh`.
+inline VplResult render_vpl_cli(const Scene<float>& scene, std::span<const TriangleVertices<float>> mesh,
+                                const VplCliOptions& v, VplSettings st) {
+    using Accel = MeshBvh<MollerTrumbore<float>, 8>;
+    const Accel accel(scene.triangles);
+    const ClassicRoulette<float, 3> roulette;
+    st.vpl_walks = v.vpls;
+    st.min_distance = v.clamp;
+    if (v.visibility == "rays") return render_vpl(scene, accel, roulette, ShadowRayVisibility<Accel>(accel, 1e-4f), st);
+    if (v.visibility != "spheres") throw Error("--visibility expects rays or spheres, not '" + v.visibility + "'");
+    if (mesh.empty()) throw Error("--visibility spheres needs --insert-mesh or --mesh: the occluders are built from that mesh");
+    const auto spheres = generate_occluders(mesh, v.spheres);
+    std::fprintf(stderr, "glint-render: %zu occluder spheres from %zu triangles\n", spheres.size(), mesh.size());
+    const std::span<const Sphere<float>> set(spheres);
+    if (spheres.size() < 800) return render_vpl(scene, accel, roulette, SphereVisibilityLinear<float>(set), st);
+    return render_vpl(scene, accel, roulette, SphereVisibilityKdTree<float>(set), st);
+}
+
+}  // namespace glint
