@@ -1,5 +1,6 @@
 // bench_vpl: the VPL integrator (glint/vpl/integrator.hpp) with shadow rays through the wide
-// BVH against occluder spheres (000 chapter 5) on a mesh standing in the Cornell box.
+// BVH against occluder spheres (000 chapter 5) on a mesh standing in the Cornell box (its two
+// blocks removed: the mesh is the only occluder).
 //
 //   bench_vpl [--quick] [--mesh FILE.obj] [--size S] [--vpls N] [--spheres 25,100,400] [--threads T] [--csv FILE]
 //
@@ -76,7 +77,17 @@ int main(int argc, char** argv) try {
             for (std::string t; std::getline(ss, t, ',');) counts.push_back(std::stoul(t));
         } else throw Error("bench_vpl: unknown flag '" + a + "'");
     }
-    Scene<float> scene = builtin_scene<float>("cornell");
+    // The Cornell box without its two blocks (its first 10 triangles are the 5 walls, the last
+    // 2 the light), so that the mesh is the only occluder, as in bench_occluders.
+    const Scene<float> full = builtin_scene<float>("cornell");
+    Scene<float> scene = full;
+    scene.triangles.clear(), scene.material_of.clear(), scene.light_of.clear();
+    for (std::size_t i = 0; i < full.triangles.size(); ++i)
+        if (i < 10 || full.light_of[i] >= 0) {
+            scene.triangles.push_back(full.triangles[i]);
+            scene.material_of.push_back(full.material_of[i]);
+            scene.light_of.push_back(full.light_of[i]);
+        }
     const std::size_t before = scene.triangles.size();
     insert_mesh<float>(scene, load_obj(mesh_path).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
                        cornell_mesh_placement<float>());

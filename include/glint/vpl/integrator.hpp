@@ -9,7 +9,8 @@
 // through the accelerator). V(x, y) is a VisibilityPolicy (occluders/visibility.hpp):
 // ShadowRayVisibility (exact shadow rays, tracer/vpl.hpp) or the occluder-sphere searches
 // of 000 chapter 5 (approximate). The VPL geometry term diverges as |x - y| -> 0; the usual
-// clamp replaces |x - y|^2 by max(|x - y|^2, d_min^2) (VplSettings::min_distance; 0 = off).
+// clamp replaces |x - y|^2 by max(|x - y|^2, d_min^2) (VplSettings::min_distance; 0 = off;
+// Kollig and Keller 2004 analyse the bias it leaves).
 // Clamping only removes energy, so its bias is negative (tests/test_vpl.cpp measures it;
 // docs/vpl.md reports it).
 // One camera ray per pixel, through the pixel centre. Rows are gathered in parallel with

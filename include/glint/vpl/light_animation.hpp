@@ -1,6 +1,7 @@
 // glint/vpl/light_animation.hpp: light animation with path reuse (000 chapter 7, lines
 // 3531-3963): a small light moves through F frames of a static scene; every frame's shooting
-// paths are reused in every frame by connecting their first hit z_1 to that frame's light.
+// paths are reused in every frame by connecting their first hit z_1 to that frame's light
+// (Sbert, Szécsi and Szirmay-Kalos 2004; the balance heuristic of Veach and Guibas 1995).
 //
 // 000 section 7.1 (eq. 7.1, lines 3640-3700). The path z^(f) = (z^(f), z_1, z_2, ...) shot
 // in frame f is, in frame i, the path (z^(i), z_1, z_2, ...). With N paths per frame and the

@@ -1,5 +1,5 @@
 // glint/vpl/shooting.hpp: the shooting phase of the virtual light sources method over the
-// ordinary Scene (area and point lights, the path tracer's materials).
+// ordinary Scene (area and point lights, the path tracer's materials); Keller 1997, instant radiosity.
 //
 // 000 section 1.4 (lines 736-945). A shooting walk starts at a light sample z_0 with
 // direction omega_0 and leaves at every non-specular hit y a virtual point light (VPL) of
