@@ -191,69 +191,59 @@ private:
         return c;
     }
 
-    std::uint32_t build(const AABB<T>& box, Events ev, std::size_t n, int depth) {
-        const auto index = static_cast<std::uint32_t>(out_.nodes.size());
-        out_.nodes.emplace_back();
+    struct Split {
+        double cost;
+        int axis = -1;  // -1: no split beats a leaf
+        T plane = 0;
+        bool planar_left = false;
+    };
 
-        // Sweep (Wald-Havran section 4.2): per axis, for every plane p the triangles ending
-        // at p (p-), lying in p (p|) and starting at p (p+).
-        double best = opt_.intersection_cost * double(n);
-        int best_k = -1;
-        T best_p = 0;
-        bool best_planar_left = false;
+    /// Sweep (Wald-Havran section 4.2): per axis, for every plane p the triangles ending at
+    /// p (p-), lying in p (p|) and starting at p (p+); the cheapest split, or axis -1.
+    Split find_split(const AABB<T>& box, const Events& ev, std::size_t n, int depth) const {
+        Split best{opt_.intersection_cost * double(n)};
         const double sa = double(box.surface_area());
-        if (depth < max_depth_ && sa > 0) {
-            const double inv_sa = 1.0 / sa;
-            for (int k = 0; k < 3; ++k) {
-                const auto& e = ev[k];
-                std::size_t nl = 0, nr = n;
-                for (std::size_t i = 0; i < e.size();) {
-                    const T p = e[i].pos;
-                    std::size_t pe = 0, pp = 0, ps = 0;
-                    while (i < e.size() && e[i].pos == p && e[i].type == Event::end) ++pe, ++i;
-                    while (i < e.size() && e[i].pos == p && e[i].type == Event::planar) ++pp, ++i;
-                    while (i < e.size() && e[i].pos == p && e[i].type == Event::start) ++ps, ++i;
-                    nr -= pp + pe;
-                    if (p > box.lo[k] && p < box.hi[k]) {
-                        const double cl = sah(box, k, p, nl + pp, nr, inv_sa);
-                        const double cr = sah(box, k, p, nl, nr + pp, inv_sa);
-                        if (cl < best) best = cl, best_k = k, best_p = p, best_planar_left = true;
-                        if (cr < best) best = cr, best_k = k, best_p = p, best_planar_left = false;
-                    }
-                    nl += ps + pp;
+        if (depth >= max_depth_ || !(sa > 0)) return best;
+        const double inv_sa = 1.0 / sa;
+        for (int k = 0; k < 3; ++k) {
+            const auto& e = ev[k];
+            std::size_t nl = 0, nr = n;
+            for (std::size_t i = 0; i < e.size();) {
+                const T p = e[i].pos;
+                std::size_t pe = 0, pp = 0, ps = 0;
+                while (i < e.size() && e[i].pos == p && e[i].type == Event::end) ++pe, ++i;
+                while (i < e.size() && e[i].pos == p && e[i].type == Event::planar) ++pp, ++i;
+                while (i < e.size() && e[i].pos == p && e[i].type == Event::start) ++ps, ++i;
+                nr -= pp + pe;
+                if (p > box.lo[k] && p < box.hi[k]) {
+                    const double cl = sah(box, k, p, nl + pp, nr, inv_sa);
+                    const double cr = sah(box, k, p, nl, nr + pp, inv_sa);
+                    if (cl < best.cost) best = {cl, k, p, true};
+                    if (cr < best.cost) best = {cr, k, p, false};
                 }
+                nl += ps + pp;
             }
         }
+        return best;
+    }
 
-        if (best_k < 0) {  // leaf
-            BuildNode<T>& nd = out_.nodes[index];
-            nd.leaf = true;
-            nd.prim_begin = static_cast<std::uint32_t>(out_.prims.size());
-            for (const Event& e : ev[0])
-                if (e.type != Event::end) out_.prims.push_back(e.tri);
-            nd.prim_count = static_cast<std::uint32_t>(out_.prims.size() - nd.prim_begin);
-            return index;
+    /// Classify (Wald-Havran section 5.1) into side_: 1 left only, 2 right only, 3 both.
+    void classify(const std::vector<Event>& e_k, const Split& s) {
+        for (const Event& e : e_k) side_[e.tri] = 3;
+        for (const Event& e : e_k) {
+            if (e.type == Event::end && e.pos <= s.plane) side_[e.tri] = 1;
+            else if (e.type == Event::start && e.pos >= s.plane) side_[e.tri] = 2;
+            else if (e.type == Event::planar)
+                side_[e.tri] = (e.pos < s.plane || (e.pos == s.plane && s.planar_left)) ? 1 : 2;
         }
+    }
 
-        // Classify (Wald-Havran section 5.1): 1 left only, 2 right only, 3 both.
-        const int k = best_k;
-        const T p = best_p;
-        for (const Event& e : ev[k]) side_[e.tri] = 3;
-        for (const Event& e : ev[k]) {
-            if (e.type == Event::end && e.pos <= p) side_[e.tri] = 1;
-            else if (e.type == Event::start && e.pos >= p) side_[e.tri] = 2;
-            else if (e.type == Event::planar) {
-                if (e.pos < p || (e.pos == p && best_planar_left)) side_[e.tri] = 1;
-                else side_[e.tri] = 2;
-            }
-        }
-        AABB<T> lbox = box, rbox = box;
-        lbox.hi[k] = p;
-        rbox.lo[k] = p;
-
-        // Clip the straddling triangles to each child; collect their new events.
+    /// The children's sorted events: the one-sided triangles' events as they are, the
+    /// straddling triangles clipped to each child (new events merged in). Counts in nl, nr.
+    void split_events(const Events& ev, int k, const AABB<T>& lbox, const AABB<T>& rbox, Events& lev, Events& rev,
+                      std::size_t& nl, std::size_t& nr) const {
         Events lnew, rnew;
-        std::size_t nl = 0, nr = 0;
+        nl = nr = 0;
         const AABB<double> lb{Vec3d(lbox.lo), Vec3d(lbox.hi)}, rb{Vec3d(rbox.lo), Vec3d(rbox.hi)};
         for (const Event& e : ev[k]) {
             if (e.type == Event::end) continue;  // one visit per triangle
@@ -268,7 +258,6 @@ private:
                 if (clipped_bounds(a, b, c, rb, cb)) add_events(rnew, e.tri, to_t(cb, rbox)), ++nr;
             }
         }
-        Events lev, rev;
         for (int a = 0; a < 3; ++a) {
             lev[a].reserve(ev[a].size() / 2 + lnew[a].size());
             rev[a].reserve(ev[a].size() / 2 + rnew[a].size());
@@ -280,6 +269,29 @@ private:
             merge_in(lev[a], lnew[a]);
             merge_in(rev[a], rnew[a]);
         }
+    }
+
+    std::uint32_t build(const AABB<T>& box, Events ev, std::size_t n, int depth) {
+        const auto index = static_cast<std::uint32_t>(out_.nodes.size());
+        out_.nodes.emplace_back();
+        const Split split = find_split(box, ev, n, depth);
+        if (split.axis < 0) {  // leaf
+            BuildNode<T>& nd = out_.nodes[index];
+            nd.leaf = true;
+            nd.prim_begin = static_cast<std::uint32_t>(out_.prims.size());
+            for (const Event& e : ev[0])
+                if (e.type != Event::end) out_.prims.push_back(e.tri);
+            nd.prim_count = static_cast<std::uint32_t>(out_.prims.size() - nd.prim_begin);
+            return index;
+        }
+        const int k = split.axis;
+        classify(ev[k], split);
+        AABB<T> lbox = box, rbox = box;
+        lbox.hi[k] = split.plane;
+        rbox.lo[k] = split.plane;
+        Events lev, rev;
+        std::size_t nl = 0, nr = 0;
+        split_events(ev, k, lbox, rbox, lev, rev, nl, nr);
         ev = Events{};  // free the parent's events before recursing
 
         const std::uint32_t l = build(lbox, std::move(lev), nl, depth + 1);
@@ -287,8 +299,8 @@ private:
         BuildNode<T>& nd = out_.nodes[index];
         nd.leaf = false;
         nd.axis = static_cast<std::uint8_t>(k);
-        nd.plane[0] = p;
-        nd.plane[1] = p;
+        nd.plane[0] = split.plane;
+        nd.plane[1] = split.plane;
         nd.left = l;
         nd.right = r;
         return index;
