@@ -217,7 +217,20 @@ private:
                 ++duplicates_;
                 return;
             }
-        // Cavity by breadth-first search over strictly conflicting tetrahedra.
+        grow_cavity(start, p);
+        created_.clear();
+        links_.clear();
+        for (std::int32_t c : cavity_) star_faces(c, pi);
+        for (std::int32_t c : cavity_) {
+            alive_[std::size_t(c)] = 0;
+            free_.push_back(c);
+        }
+        link_star();
+        last_ = created_.back();
+    }
+
+    /// The cavity: breadth-first search from `start` over strictly conflicting tetrahedra.
+    void grow_cavity(std::int32_t start, const Vec3d& p) {
         cavity_.clear();
         cavity_.push_back(start);
         alive_[std::size_t(start)] = 2;  // 2 = in cavity
@@ -229,44 +242,42 @@ private:
                     cavity_.push_back(n);
                 }
         }
-        // One new tetrahedron per boundary face: the face's vertices with p for the vertex
-        // opposite it (same orientation as the old tetrahedron).
-        created_.clear();
-        links_.clear();
-        for (std::int32_t c : cavity_) {
-            const Tetrahedron old = tets_[std::size_t(c)];
-            for (int i = 0; i < 4; ++i) {
-                const std::int32_t n = old.neighbour[std::size_t(i)];
-                if (n >= 0 && alive_[std::size_t(n)] == 2) continue;
-                Tetrahedron nt;
-                nt.v = old.v;
-                nt.v[std::size_t(i)] = pi;
-                nt.neighbour = {-1, -1, -1, -1};
-                nt.neighbour[std::size_t(i)] = n;
-                const std::int32_t id = allocate(nt);
-                if (n >= 0) {
-                    auto& nn = tets_[std::size_t(n)].neighbour;
-                    for (auto& x : nn)
-                        if (x == c) x = id;
+    }
+
+    /// One new tetrahedron per boundary face of cavity member c: the face's vertices with
+    /// point pi for the vertex opposite it (same orientation as the old tetrahedron); its
+    /// faces through pi go to links_ for link_star.
+    void star_faces(std::int32_t c, std::int32_t pi) {
+        const Tetrahedron old = tets_[std::size_t(c)];
+        for (int i = 0; i < 4; ++i) {
+            const std::int32_t n = old.neighbour[std::size_t(i)];
+            if (n >= 0 && alive_[std::size_t(n)] == 2) continue;
+            Tetrahedron nt;
+            nt.v = old.v;
+            nt.v[std::size_t(i)] = pi;
+            nt.neighbour = {-1, -1, -1, -1};
+            nt.neighbour[std::size_t(i)] = n;
+            const std::int32_t id = allocate(nt);
+            if (n >= 0)
+                for (auto& x : tets_[std::size_t(n)].neighbour)
+                    if (x == c) x = id;
+            created_.push_back(id);
+            // Faces through p: opposite vertex j != i; key = the other two vertices.
+            for (int j = 0; j < 4; ++j) {
+                if (j == i) continue;
+                std::int32_t a = -1, b = -1;
+                for (int k = 0; k < 4; ++k) {
+                    if (k == i || k == j) continue;
+                    (a < 0 ? a : b) = nt.v[std::size_t(k)];
                 }
-                created_.push_back(id);
-                // Faces through p: opposite vertex j != i; key = the other two vertices.
-                for (int j = 0; j < 4; ++j) {
-                    if (j == i) continue;
-                    std::int32_t a = -1, b = -1;
-                    for (int k = 0; k < 4; ++k) {
-                        if (k == i || k == j) continue;
-                        (a < 0 ? a : b) = nt.v[std::size_t(k)];
-                    }
-                    if (a > b) std::swap(a, b);
-                    links_.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), id, j});
-                }
+                if (a > b) std::swap(a, b);
+                links_.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), id, j});
             }
         }
-        for (std::int32_t c : cavity_) {
-            alive_[std::size_t(c)] = 0;
-            free_.push_back(c);
-        }
+    }
+
+    /// Pairs the new tetrahedra across their faces through the inserted point.
+    void link_star() {
         std::sort(links_.begin(), links_.end(), [](const Link& x, const Link& y) { return x.key < y.key; });
         for (std::size_t k = 0; k + 1 < links_.size(); k += 2) {
             const Link& x = links_[k];
@@ -275,7 +286,6 @@ private:
             tets_[std::size_t(x.tet)].neighbour[std::size_t(x.face)] = y.tet;
             tets_[std::size_t(y.tet)].neighbour[std::size_t(y.face)] = x.tet;
         }
-        last_ = created_.back();
     }
 
     std::int32_t allocate(const Tetrahedron& t) {
