@@ -84,17 +84,20 @@ struct Ivm {
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
 
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
-        const T t = (T(1) - glm::dot(m[2], r.o)) / glm::dot(m[2], r.d);
-        if (!(t > r.tmin && t < r.tmax)) return false;
-        const Vec3<T> x = r.o + r.d * t;
-        const T b0 = glm::dot(m[0], x), b1 = glm::dot(m[1], x), b2 = T(1) - b0 - b1;
-        if (!(b0 >= T(0) && b1 >= T(0) && b2 >= T(0))) return false;
-        hit.t = t;
-        hit.u = b1;
-        hit.v = b2;
-        return true;
+    /// The test, written once for the scalar and the batch path: x = (m0, m1, q'), t from
+    /// the plane q' . x = 1, then the three barycentrics' signs (bitwise &, not &&: without
+    /// short-circuit branches the batch loop vectorizes on AVX2 too).
+    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
+        const T qx = x[6], qy = x[7], qz = x[8];
+        t = (T(1) - (qx * r.o.x + qy * r.o.y + qz * r.o.z)) / (qx * r.d.x + qy * r.d.y + qz * r.d.z);
+        const T px = r.o.x + r.d.x * t, py = r.o.y + r.d.y * t, pz = r.o.z + r.d.z * t;
+        const T b0 = x[0] * px + x[1] * py + x[2] * pz;
+        u = x[3] * px + x[4] * py + x[5] * pz;
+        v = T(1) - b0 - u;
+        return (t > r.tmin) & (t < r.tmax) & (b0 >= T(0)) & (u >= T(0)) & (v >= T(0));
     }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
 
     void store(T* out) const {
         for (int k = 0; k < 9; ++k) out[k] = m[k / 3][k % 3];
@@ -105,25 +108,9 @@ struct Ivm {
         return r;
     }
 
-    /// Branch-free kernel over records first .. first+n-1 of one block.
     static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
-        const T* f[9];
-        for (int k = 0; k < 9; ++k) f[k] = v.field(k, first);
-        for (std::size_t i = 0; i < n; ++i) {
-            const T qx = f[6][i], qy = f[7][i], qz = f[8][i];
-            const T t = (T(1) - (qx * r.o.x + qy * r.o.y + qz * r.o.z)) /
-                        (qx * r.d.x + qy * r.d.y + qz * r.d.z);
-            const T x = r.o.x + r.d.x * t, y = r.o.y + r.d.y * t, z = r.o.z + r.d.z * t;
-            const T b0 = f[0][i] * x + f[1][i] * y + f[2][i] * z;
-            const T b1 = f[3][i] * x + f[4][i] * y + f[5][i] * z;
-            const T b2 = T(1) - b0 - b1;
-            // Bitwise &, not &&: without short-circuit branches the loop vectorizes on AVX2 too.
-            const bool ok = (t > r.tmin) & (t < r.tmax) & (b0 >= T(0)) & (b1 >= T(0)) & (b2 >= T(0));
-            ts[i] = ok ? t : infinity<T>;
-            us[i] = b1;
-            vs[i] = b2;
-        }
+        detail::test_lanes<Ivm>(v, first, n, r, ts, us, vs);
     }
 };
 

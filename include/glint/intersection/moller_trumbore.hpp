@@ -43,24 +43,28 @@ struct MollerTrumbore {
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
 
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
-        const Vec3<T> p = glm::cross(r.d, e2);
-        const T det = glm::dot(e1, p);
-        if (det == T(0)) return false;
+    /// The test, written once for the scalar and the batch path: x = (v0, e1, e2).
+    /// Bitwise &, not &&: with && GCC vectorizes the batch loop only with AVX-512 masks;
+    /// on AVX2 it compiled to scalar code with a branch per condition.
+    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
+        const T e1x = x[3], e1y = x[4], e1z = x[5];
+        const T e2x = x[6], e2y = x[7], e2z = x[8];
+        const T px = r.d.y * e2z - r.d.z * e2y;
+        const T py = r.d.z * e2x - r.d.x * e2z;
+        const T pz = r.d.x * e2y - r.d.y * e2x;
+        const T det = e1x * px + e1y * py + e1z * pz;
         const T inv = T(1) / det;
-        const Vec3<T> s = r.o - v0;
-        const T u = glm::dot(s, p) * inv;
-        if (!(u >= T(0) && u <= T(1))) return false;
-        const Vec3<T> q = glm::cross(s, e1);
-        const T v = glm::dot(r.d, q) * inv;
-        if (!(v >= T(0) && u + v <= T(1))) return false;
-        const T t = glm::dot(e2, q) * inv;
-        if (!(t > r.tmin && t < r.tmax)) return false;
-        hit.t = t;
-        hit.u = u;
-        hit.v = v;
-        return true;
+        const T sx = r.o.x - x[0], sy = r.o.y - x[1], sz = r.o.z - x[2];
+        u = (sx * px + sy * py + sz * pz) * inv;
+        const T qx = sy * e1z - sz * e1y;
+        const T qy = sz * e1x - sx * e1z;
+        const T qz = sx * e1y - sy * e1x;
+        v = (r.d.x * qx + r.d.y * qy + r.d.z * qz) * inv;
+        t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+        return (det != T(0)) & (u >= T(0)) & (v >= T(0)) & (u + v <= T(1)) & (t > r.tmin) & (t < r.tmax);
     }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
 
     void store(T* out) const {
         for (int k = 0; k < 3; ++k) {
@@ -81,31 +85,7 @@ struct MollerTrumbore {
 
     static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
-        const T* f[9];
-        for (int k = 0; k < 9; ++k) f[k] = v.field(k, first);
-        for (std::size_t i = 0; i < n; ++i) {
-            const T e1x = f[3][i], e1y = f[4][i], e1z = f[5][i];
-            const T e2x = f[6][i], e2y = f[7][i], e2z = f[8][i];
-            const T px = r.d.y * e2z - r.d.z * e2y;
-            const T py = r.d.z * e2x - r.d.x * e2z;
-            const T pz = r.d.x * e2y - r.d.y * e2x;
-            const T det = e1x * px + e1y * py + e1z * pz;
-            const T inv = T(1) / det;
-            const T sx = r.o.x - f[0][i], sy = r.o.y - f[1][i], sz = r.o.z - f[2][i];
-            const T u = (sx * px + sy * py + sz * pz) * inv;
-            const T qx = sy * e1z - sz * e1y;
-            const T qy = sz * e1x - sx * e1z;
-            const T qz = sx * e1y - sy * e1x;
-            const T w = (r.d.x * qx + r.d.y * qy + r.d.z * qz) * inv;
-            const T t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-            // Bitwise &, not &&: with && GCC vectorizes this loop only with AVX-512 masks;
-            // on AVX2 it compiled to scalar code with a branch per condition.
-            const bool ok = (det != T(0)) & (u >= T(0)) & (w >= T(0)) & (u + w <= T(1)) &
-                            (t > r.tmin) & (t < r.tmax);
-            ts[i] = ok ? t : infinity<T>;
-            us[i] = u;
-            vs[i] = w;
-        }
+        detail::test_lanes<MollerTrumbore>(v, first, n, r, ts, us, vs);
     }
 };
 

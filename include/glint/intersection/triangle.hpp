@@ -80,13 +80,17 @@ struct SoaView {
 ///   hits.
 /// - `P::prepare(ray)` makes per-ray data (for example the watertight test's shear),
 ///   computed once per ray and frame.
-/// - `p.intersect(rd, hit)`: true and hit filled when the ray meets the triangle with
-///   t in the open interval (tmin, tmax). NaN or infinite rays give false, never NaN.
-/// - `P::batch(view, first, n, rd, t, u, v)`: the same test for records first .. first+n-1,
-///   which lie in one block of the view (first % batch_width + n <= batch_width), reading
-///   field k from view.field(k, first) at stride 1; branch-free so that the compiler
-///   vectorizes it (with n = batch_width known at compile time, as tree leaves call it, it
-///   is straight-line SIMD code); writes t = +inf for a miss.
+/// - `P::test(x, rd, t, u, v)`: the test itself, written once: x holds one record's
+///   field_count scalars (in the order store() writes them, or as P::select_fields(in, rd,
+///   out) reorders them for this ray when P has it); true, with t, u, v set, when the ray
+///   meets the triangle with t in the open interval (tmin, tmax); NaN or infinite rays give
+///   false. Branch-free (bitwise &, selects), so that a loop over lanes vectorizes.
+/// - `p.intersect(rd, hit)` and `P::batch(view, first, n, rd, t, u, v)`: the scalar and the
+///   batch paths, both made of P::test (detail::test_record, detail::test_lanes). batch
+///   tests records first .. first+n-1, which lie in one block of the view (first %
+///   batch_width + n <= batch_width), reading field k from view.field(k, first) at stride
+///   1; with n = batch_width known at compile time, as tree leaves call it, the lane loop is
+///   straight-line SIMD code; it writes t = +inf for a miss.
 /// - `store(out)`, `load(view, i)` and `field_count`: the record's scalars, for the
 ///   blocked layout.
 /// - `uses_frame`: whether records need a frame away from their planes (IVM only).
@@ -96,11 +100,13 @@ concept TriangleIntersector =
     requires(const P p, Vec3d a, const Ray<typename P::scalar_type>& r,
              const typename P::RayData& rd, TriangleHit<typename P::scalar_type>& h,
              SoaView<typename P::scalar_type, P::field_count> view,
-             typename P::scalar_type* out) {
+             typename P::scalar_type* out, typename P::scalar_type& s,
+             const typename P::scalar_type (&x)[P::field_count]) {
         { P::name } -> std::convertible_to<const char*>;
         { P::uses_frame } -> std::convertible_to<bool>;
         { P::build(a, a, a) } -> std::same_as<P>;
         { P::prepare(r) } -> std::same_as<typename P::RayData>;
+        { P::test(x, rd, s, s, s) } -> std::same_as<bool>;
         { p.intersect(rd, h) } -> std::same_as<bool>;
         { p.store(out) };
         { P::load(view, std::size_t{}) } -> std::same_as<P>;
@@ -236,6 +242,63 @@ Vec3d choose_frame(std::span<const TriangleVertices<T>> tris, double& quality) {
                 }
             }
     return best;
+}
+
+/// Pointers to the fields P::test reads, in its order, from pointers `in` to the
+/// record's fields in store() order: the identity, or P::select_fields for a policy that
+/// picks fields by the ray (the watertight test's axes), once per ray and run of lanes.
+template <class P, int F = P::field_count>
+[[gnu::always_inline]] inline void test_fields(const typename P::scalar_type* const (&in)[F],
+                                               const typename P::RayData& r,
+                                               const typename P::scalar_type* (&out)[F]) {
+    if constexpr (requires { P::select_fields(in, r, out); }) P::select_fields(in, r, out);
+    else
+        for (int k = 0; k < F; ++k) out[k] = in[k];
+}
+
+/// The scalar path: P::test on one record.
+template <class P>
+bool test_record(const P& p, const typename P::RayData& r, TriangleHit<typename P::scalar_type>& hit) {
+    using T = typename P::scalar_type;
+    constexpr int F = P::field_count;
+    T stored[F];
+    p.store(stored);
+    const T* in[F];
+    const T* f[F];
+    for (int k = 0; k < F; ++k) in[k] = stored + k;
+    test_fields<P>(in, r, f);
+    T x[F];
+    for (int k = 0; k < F; ++k) x[k] = *f[k];
+    T t, u, v;
+    if (!P::test(x, r, t, u, v)) return false;
+    hit.t = t;
+    hit.u = u;
+    hit.v = v;
+    return true;
+}
+
+/// The batch path: P::test on lanes first .. first+n-1 of one block of a SoaView, one
+/// lane per iteration of a loop the compiler vectorizes; t = +inf for a miss.
+template <class P>
+[[gnu::always_inline]] inline void test_lanes(const SoaView<typename P::scalar_type, P::field_count>& view,
+                                              std::size_t first, std::size_t n, const typename P::RayData& r,
+                                              typename P::scalar_type* ts, typename P::scalar_type* us,
+                                              typename P::scalar_type* vs) {
+    using T = typename P::scalar_type;
+    constexpr int F = P::field_count;
+    const T* in[F];
+    const T* f[F];
+    for (int k = 0; k < F; ++k) in[k] = view.field(k, first);
+    test_fields<P>(in, r, f);
+    for (std::size_t i = 0; i < n; ++i) {
+        T x[F];
+        for (int k = 0; k < F; ++k) x[k] = f[k][i];
+        T t, u, v;
+        const bool ok = P::test(x, r, t, u, v);
+        ts[i] = ok ? t : infinity<T>;
+        us[i] = u;
+        vs[i] = v;
+    }
 }
 
 }  // namespace detail

@@ -56,21 +56,27 @@ struct Wald {
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
 
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
-        const int u = mod3(k + 1), v = mod3(k + 2);
-        const T t = (n_d - r.o[k] - n_u * r.o[u] - n_v * r.o[v]) /
-                    (r.d[k] + n_u * r.d[u] + n_v * r.d[v]);
-        if (!(t > r.tmin && t < r.tmax)) return false;
-        const T hu = r.o[u] + t * r.d[u], hv = r.o[v] + t * r.d[v];
-        const T beta = hu * beta_u + hv * beta_v + beta_d;
-        if (!(beta >= T(0))) return false;
-        const T gamma = hu * gamma_u + hv * gamma_v + gamma_d;
-        if (!(gamma >= T(0) && beta + gamma <= T(1))) return false;
-        hit.t = t;
-        hit.u = beta;
-        hit.v = gamma;
-        return true;
+    /// The test, written once for the scalar and the batch path: x = (n_u, n_v, n_d,
+    /// beta_u, beta_v, beta_d, gamma_u, gamma_v, gamma_d, k). The record's axis k selects
+    /// the ray's components by selects, not by indexing (blends in the batch loop, not
+    /// gathers); bitwise &, not &&: with && GCC vectorizes the loop only with AVX-512 masks.
+    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
+        const bool k0 = x[9] == T(0), k1 = x[9] == T(1);
+        // (k, u, v) = (x, y, z), (y, z, x) or (z, x, y)
+        const T ok_ = k0 ? r.o.x : (k1 ? r.o.y : r.o.z);
+        const T ou = k0 ? r.o.y : (k1 ? r.o.z : r.o.x);
+        const T ov = k0 ? r.o.z : (k1 ? r.o.x : r.o.y);
+        const T dk = k0 ? r.d.x : (k1 ? r.d.y : r.d.z);
+        const T du = k0 ? r.d.y : (k1 ? r.d.z : r.d.x);
+        const T dv = k0 ? r.d.z : (k1 ? r.d.x : r.d.y);
+        t = (x[2] - ok_ - x[0] * ou - x[1] * ov) / (dk + x[0] * du + x[1] * dv);
+        const T hu = ou + t * du, hv = ov + t * dv;
+        u = hu * x[3] + hv * x[4] + x[5];
+        v = hu * x[6] + hv * x[7] + x[8];
+        return (t > r.tmin) & (t < r.tmax) & (u >= T(0)) & (v >= T(0)) & (u + v <= T(1));
     }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
 
     void store(T* out) const {
         const T vals[10] = {n_u, n_v, n_d, beta_u, beta_v, beta_d, gamma_u, gamma_v, gamma_d, T(k)};
@@ -85,37 +91,10 @@ struct Wald {
         return r;
     }
 
-    /// Branch-free kernel: the per-record axis selects ray components by blends, not gathers.
     static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
-        const T* f[10];
-        for (int c = 0; c < 10; ++c) f[c] = s.field(c, first);
-        for (std::size_t i = 0; i < n; ++i) {
-            const T kf = f[9][i];
-            const bool k0 = kf == T(0), k1 = kf == T(1);
-            // (k, u, v) = (x, y, z), (y, z, x) or (z, x, y)
-            const T ok_ = k0 ? r.o.x : (k1 ? r.o.y : r.o.z);
-            const T ou = k0 ? r.o.y : (k1 ? r.o.z : r.o.x);
-            const T ov = k0 ? r.o.z : (k1 ? r.o.x : r.o.y);
-            const T dk = k0 ? r.d.x : (k1 ? r.d.y : r.d.z);
-            const T du = k0 ? r.d.y : (k1 ? r.d.z : r.d.x);
-            const T dv = k0 ? r.d.z : (k1 ? r.d.x : r.d.y);
-            const T t = (f[2][i] - ok_ - f[0][i] * ou - f[1][i] * ov) /
-                        (dk + f[0][i] * du + f[1][i] * dv);
-            const T hu = ou + t * du, hv = ov + t * dv;
-            const T beta = hu * f[3][i] + hv * f[4][i] + f[5][i];
-            const T gamma = hu * f[6][i] + hv * f[7][i] + f[8][i];
-            // Bitwise &, not &&: with && GCC vectorizes this loop only with AVX-512 masks.
-            const bool ok = (t > r.tmin) & (t < r.tmax) & (beta >= T(0)) & (gamma >= T(0)) &
-                            (beta + gamma <= T(1));
-            ts[i] = ok ? t : infinity<T>;
-            us[i] = beta;
-            vs[i] = gamma;
-        }
+        detail::test_lanes<Wald>(s, first, n, r, ts, us, vs);
     }
-
-private:
-    static constexpr int mod3(std::uint32_t i) { return static_cast<int>(i % 3u); }
 };
 
 }  // namespace glint

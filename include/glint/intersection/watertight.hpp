@@ -61,6 +61,7 @@ struct Watertight {
 
     struct RayData {
         Vec3<T> o;
+        T okx, oky, okz;  // the origin's coordinates on the axes kx, ky, kz
         int kx, ky, kz;
         T sx, sy, sz;
         T tmin, tmax;
@@ -95,27 +96,51 @@ struct Watertight {
         d.sx = r.direction[d.kx] / r.direction[d.kz];
         d.sy = r.direction[d.ky] / r.direction[d.kz];
         d.sz = T(1) / r.direction[d.kz];
+        d.okx = r.origin[d.kx];
+        d.oky = r.origin[d.ky];
+        d.okz = r.origin[d.kz];
         d.tmin = r.tmin;
         d.tmax = r.tmax;
         return d;
     }
 
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const {
-        T x[3], y[3], z[3], m = 0;
+    /// The test, written once for the scalar and the batch path: x holds the three
+    /// vertices' coordinates on the ray's axes (kx, ky, kz), as select_fields orders them.
+    /// Bitwise (not short-circuit) logic keeps the batch loop branch-free.
+    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
+        T px[3], py[3], pz[3], sx[3], sy[3], m = 0;
         for (int i = 0; i < 3; ++i) {
-            const Vec3<T> p = v[i] - r.o;
-            x[i] = p[r.kx] - r.sx * p[r.kz];
-            y[i] = p[r.ky] - r.sy * p[r.kz];
-            z[i] = r.sz * p[r.kz];
-            m = std::max(m, shear_magnitude(p[r.kx], p[r.ky], p[r.kz], r));
+            px[i] = x[3 * i] - r.okx;
+            py[i] = x[3 * i + 1] - r.oky;
+            pz[i] = x[3 * i + 2] - r.okz;
+            sx[i] = px[i] - r.sx * pz[i];
+            sy[i] = py[i] - r.sy * pz[i];
+            m = std::max(m, shear_magnitude(px[i], py[i], pz[i], r));
         }
-        T t, u, w;
-        if (!solve(x, y, z, r, noise(x, y, m), t, u, w)) return false;
-        hit.t = t;
-        hit.u = u;
-        hit.v = w;
-        return true;
+        const double e0 = detail::edge_function(sx[2], sy[1], sy[2], sx[1]);  // U: weight of v0
+        const double e1 = detail::edge_function(sx[0], sy[2], sy[0], sx[2]);  // V: weight of v1
+        const double e2 = detail::edge_function(sx[1], sy[0], sy[1], sx[0]);  // W: weight of v2
+        const bool has_neg = (e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0);
+        const bool has_pos = (e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0);
+        const double det = e0 + e1 + e2;
+        const double inv = 1.0 / det;
+        t = T((e0 * double(r.sz * pz[0]) + e1 * double(r.sz * pz[1]) + e2 * double(r.sz * pz[2])) * inv);
+        u = T(e1 * inv);
+        v = T(e2 * inv);
+        return !(has_neg & has_pos) & (std::abs(det) > noise(sx, sy, m)) & (t > r.tmin) & (t < r.tmax);
     }
+
+    /// Orders a record's fields for test(): each vertex's coordinates on kx, ky, kz (the
+    /// ray's axes are the same for every record: the fields are picked once per run).
+    static void select_fields(const T* const (&in)[field_count], const RayData& r, const T* (&out)[field_count]) {
+        for (int i = 0; i < 3; ++i) {
+            out[3 * i] = in[3 * i + r.kx];
+            out[3 * i + 1] = in[3 * i + r.ky];
+            out[3 * i + 2] = in[3 * i + r.kz];
+        }
+    }
+
+    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
 
     void store(T* out) const {
         for (int i = 0; i < 3; ++i)
@@ -129,56 +154,10 @@ struct Watertight {
 
     static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
                       const RayData& r, T* ts, T* us, T* vs) {
-        // The ray's axes are the same for every record: pick the fields once.
-        const T* fx[3]; const T* fy[3]; const T* fz[3];
-        for (int i = 0; i < 3; ++i) {
-            fx[i] = s.field(3 * i + r.kx, first);
-            fy[i] = s.field(3 * i + r.ky, first);
-            fz[i] = s.field(3 * i + r.kz, first);
-        }
-        const T ox = r.o[r.kx], oy = r.o[r.ky], oz = r.o[r.kz];
-        for (std::size_t j = 0; j < n; ++j) {
-            const T az = fz[0][j] - oz, bz = fz[1][j] - oz, cz = fz[2][j] - oz;
-            const T ax = (fx[0][j] - ox) - r.sx * az, ay = (fy[0][j] - oy) - r.sy * az;
-            const T bx = (fx[1][j] - ox) - r.sx * bz, by = (fy[1][j] - oy) - r.sy * bz;
-            const T cx = (fx[2][j] - ox) - r.sx * cz, cy = (fy[2][j] - oy) - r.sy * cz;
-            const double e0 = detail::edge_function(cx, by, cy, bx);
-            const double e1 = detail::edge_function(ax, cy, ay, cx);
-            const double e2 = detail::edge_function(bx, ay, by, ax);
-            const T ms[3] = {shear_magnitude(fx[0][j] - ox, fy[0][j] - oy, az, r),
-                             shear_magnitude(fx[1][j] - ox, fy[1][j] - oy, bz, r),
-                             shear_magnitude(fx[2][j] - ox, fy[2][j] - oy, cz, r)};
-            const T xs[3] = {ax, bx, cx}, ys[3] = {ay, by, cy};
-            const double bound = noise(xs, ys, std::max({ms[0], ms[1], ms[2]}));
-            // Bitwise (not short-circuit) logic keeps the loop branch-free.
-            const bool has_neg = (e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0);
-            const bool has_pos = (e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0);
-            const double det = e0 + e1 + e2;
-            const double inv = 1.0 / det;
-            const T t = T((e0 * double(r.sz * az) + e1 * double(r.sz * bz) + e2 * double(r.sz * cz)) * inv);
-            const bool ok = !(has_neg & has_pos) & (std::abs(det) > bound) & (t > r.tmin) & (t < r.tmax);
-            ts[j] = ok ? t : infinity<T>;
-            us[j] = T(e1 * inv);
-            vs[j] = T(e2 * inv);
-        }
+        detail::test_lanes<Watertight>(s, first, n, r, ts, us, vs);
     }
 
 private:
-    /// Edge functions, sign test, determinant and distance from sheared vertices.
-    static bool solve(const T* x, const T* y, const T* z, const RayData& r, double bound, T& t, T& u, T& w) {
-        const double e0 = detail::edge_function(x[2], y[1], y[2], x[1]);  // U: weight of v0
-        const double e1 = detail::edge_function(x[0], y[2], y[0], x[2]);  // V: weight of v1
-        const double e2 = detail::edge_function(x[1], y[0], y[1], x[0]);  // W: weight of v2
-        const bool has_neg = e0 < 0.0 || e1 < 0.0 || e2 < 0.0;
-        const bool has_pos = e0 > 0.0 || e1 > 0.0 || e2 > 0.0;
-        const double det = e0 + e1 + e2;
-        const double tt = (e0 * double(z[0]) + e1 * double(z[1]) + e2 * double(z[2])) / det;
-        t = T(tt);
-        u = T(e1 / det);
-        w = T(e2 / det);
-        return !(has_neg && has_pos) && std::abs(det) > bound && t > r.tmin && t < r.tmax;
-    }
-
     /// |p_k| + |s p_z| for the two sheared coordinates of a vertex p (translated by the origin).
     static T shear_magnitude(T px, T py, T pz, const RayData& r) {
         const T az = std::abs(pz);
