@@ -258,23 +258,30 @@ template <class P, int F = P::field_count>
 
 /// The scalar path: P::test on one record.
 template <class P>
-bool test_record(const P& p, const typename P::RayData& r, TriangleHit<typename P::scalar_type>& hit) {
+[[gnu::always_inline]] inline bool test_record(const P& p, const typename P::RayData& r,
+                                               TriangleHit<typename P::scalar_type>& hit) {
     using T = typename P::scalar_type;
     constexpr int F = P::field_count;
-    T stored[F];
-    p.store(stored);
-    const T* in[F];
-    const T* f[F];
-    for (int k = 0; k < F; ++k) in[k] = stored + k;
-    test_fields<P>(in, r, f);
     T x[F];
-    for (int k = 0; k < F; ++k) x[k] = *f[k];
+    if constexpr (requires(const T* const (&in)[F], const T* (&out)[F]) { P::select_fields(in, r, out); }) {
+        T stored[F];
+        p.store(stored);
+        const T* in[F];
+        const T* f[F];
+        for (int k = 0; k < F; ++k) in[k] = stored + k;
+        P::select_fields(in, r, f);
+        for (int k = 0; k < F; ++k) x[k] = *f[k];
+    } else {
+        p.store(x);
+    }
     T t, u, v;
-    if (!P::test(x, r, t, u, v)) return false;
-    hit.t = t;
-    hit.u = u;
-    hit.v = v;
-    return true;
+    const bool ok = P::test(x, r, t, u, v);
+    if (ok) {
+        hit.t = t;
+        hit.u = u;
+        hit.v = v;
+    }
+    return ok;
 }
 
 /// The batch path: P::test on lanes first .. first+n-1 of one block of a SoaView, one

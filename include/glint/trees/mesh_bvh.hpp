@@ -6,8 +6,9 @@
 //   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
 //   if (bvh.closest_hit(ray, hit)) ...
 //
-// Leaves are blocks of a TriangleStore<P> (padded to whole batches of 8 records, tested
-// with the intersector's batch kernel), laid out in the order traversal meets the nodes.
+// Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
+// intersector's batch kernel through the leaf callable WideBvh::intersect takes), laid out
+// in the order traversal meets the nodes.
 // The mesh is read only while building; the accelerator keeps its own records.
 // Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
@@ -26,6 +27,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/intersection/triangle_leaves.hpp>
 #include <glint/trees/bvh_builder.hpp>
 #include <glint/trees/tree.hpp>
 #include <glint/trees/wide_bvh.hpp>
@@ -91,46 +93,33 @@ public:
         StoreHit<float> h = hit;  // a local copy the compiler keeps in registers
         Ray<float> r = ray;
         r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
-        typename P::RayData world{};
-        if constexpr (!P::uses_frame) world = P::prepare(r);
+        const auto leaf = leaves_.template leaf_test<false>(r, h);
         const bool found = bvh_.template intersect<false>(
             r,
             [&](std::uint32_t first, std::uint32_t count) {
-                if (counters) counters->records += records(first, count);
-                if (!store_.template test_leaf<false>(first, count, r, world, h)) return false;
-                r.tmax = h.t;
-                return true;
+                if (counters) counters->records += leaves_.records(first, count);
+                return leaf(first, count);
             },
             counters);
         if (!found) return false;
         hit = h;
-        hit.id = store_.id(h.id);  // the leaf test reports the record
+        hit.id = leaves_.id(h.id);  // the leaf test reports the record
         return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
         StoreHit<float> h;
         Ray<float> r = ray;
-        typename P::RayData world{};
-        if constexpr (!P::uses_frame) world = P::prepare(r);
-        return bvh_.template intersect<true>(
-            r, [&](std::uint32_t first, std::uint32_t count) { return store_.template test_leaf<true>(first, count, r, world, h); });
+        return bvh_.template intersect<true>(r, leaves_.template leaf_test<true>(r, h));
     }
 
     const WideBvh<N>& bvh() const { return bvh_; }
-    /// Record slots (padded batches) of a leaf reference's range.
-    std::uint64_t records(std::uint32_t first, std::uint32_t count) const {
-        if constexpr (!P::uses_frame) return count;
-        std::uint64_t n = 0;
-        for (std::uint32_t g = first; g < first + count; ++g)
-            n += (store_.group(g).end - store_.group(g).begin + batch_width - 1) / batch_width * batch_width;
-        return n;
-    }
-    const TriangleStore<P>& store() const { return store_; }
+    /// The triangle records of the leaves.
+    const TriangleLeaves<P>& leaves() const { return leaves_; }
     /// Build time (boxes, tree, records), in seconds.
     double build_seconds() const { return build_seconds_; }
     /// Node bytes plus triangle-record bytes.
-    std::size_t total_bytes() const { return bvh_.stats().node_bytes + store_.bytes(); }
+    std::size_t total_bytes() const { return bvh_.stats().node_bytes + leaves_.bytes(); }
 
 private:
     template <class Get>
@@ -150,16 +139,13 @@ private:
             const std::span<const std::uint32_t> ids(bvh_.prims().data() + first, count);
             leaf_tris.clear();
             for (std::uint32_t id : ids) leaf_tris.push_back(tri(id));
-            const auto ref = store_.add_block(leaf_tris, ids, TriangleStore<P>::Padding::batches);
-            if constexpr (P::uses_frame) return std::pair(ref.group_begin, ref.group_end - ref.group_begin);
-            const auto& g = store_.group(ref.group_begin);  // one group in the world frame
-            return std::pair(g.begin, (g.end - g.begin + std::uint32_t(batch_width) - 1) & ~std::uint32_t(batch_width - 1));
+            return leaves_.add(leaf_tris, ids);
         });
         build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
 
     WideBvh<N> bvh_;
-    TriangleStore<P> store_;
+    TriangleLeaves<P> leaves_;
     double build_seconds_ = 0;
 };
 

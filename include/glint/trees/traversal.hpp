@@ -36,6 +36,7 @@
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/intersection/triangle_leaves.hpp>
 #include <glint/trees/bih_builder.hpp>
 #include <glint/trees/kdtree_builder.hpp>
 #include <glint/trees/layouts.hpp>
@@ -44,9 +45,11 @@
 namespace glint {
 
 /// A tree built by B over triangles of intersector P, encoded with layout L.
-/// Leaves are blocks of one TriangleStore<P> (kd-tree leaves may repeat triangles); hits
-/// report the original triangle index in StoreHit::id.
-template <TreeBuilder B, TriangleIntersector P, class L>
+/// Leaves are TriangleLeaves<P> (kd-tree leaves may repeat triangles), tested through the
+/// leaf callable intersect() takes; hits report the original triangle index in StoreHit::id.
+/// Queries are const and keep their state on the caller's stack: any number of threads may
+/// query one tree at once.
+template <TreeBuilder B, TriangleIntersector P, NodeLayout L>
     requires std::same_as<typename B::scalar_type, typename P::scalar_type>
 class TreeAccelerator {
 public:
@@ -72,26 +75,15 @@ public:
         bounds_ = tree.bounds;
         std::vector<std::array<std::uint32_t, 2>> groups(tree.nodes.size(), {0u, 0u});
         std::vector<TriangleVertices<T>> leaf_tris;
-        std::vector<std::uint32_t> leaf_ids;
         for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
             const BuildNode<T>& n = tree.nodes[i];
             if (!n.leaf || n.prim_count == 0) continue;
-            leaf_ids.assign(tree.prims.begin() + n.prim_begin, tree.prims.begin() + n.prim_begin + n.prim_count);
+            const std::span<const std::uint32_t> ids(tree.prims.data() + n.prim_begin, n.prim_count);
             leaf_tris.clear();
-            for (std::uint32_t id : leaf_ids) leaf_tris.push_back(tris[id]);
-            // Groups padded to whole batches (records that never hit): the leaf test runs
-            // the batch kernel at its full, compile-time width, with no remainder loop.
-            const auto ref = store_.add_block(leaf_tris, leaf_ids, TriangleStore<P>::Padding::batches);
-            if constexpr (P::uses_frame) {
-                groups[i] = {ref.group_begin, ref.group_end - ref.group_begin};
-            } else {
-                // One group in the world frame: the leaf holds its record range itself,
-                // which saves traversal a dependent load of the group.
-                const auto& g = store_.group(ref.group_begin);
-                groups[i] = {g.begin, g.end - g.begin};
-                detail::check_index(g.end);
-            }
-            detail::check_index(ref.group_end);
+            for (std::uint32_t id : ids) leaf_tris.push_back(tris[id]);
+            const auto ref = leaves_.add(leaf_tris, ids);
+            groups[i] = {ref.first, ref.second};
+            detail::check_index(std::size_t(ref.first) + ref.second);
         }
         stats_ = L::encode(tree, std::span<const std::array<std::uint32_t, 2>>(groups), nodes_);
         build_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -99,37 +91,38 @@ public:
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const {
-        // On a local copy: the compiler keeps it in registers (the caller's `hit` could alias
-        // the stack's floats).
+        // On local copies: the compiler keeps them in registers (the caller's `hit` could
+        // alias the stack's floats).
         StoreHit<T> h = hit;
-        if (!trace<false>(ray, h)) return false;
+        Ray<T> r = ray;
+        r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
+        if (!intersect<false>(r, leaves_.template leaf_test<false>(r, h))) return false;
         hit = h;
-        hit.id = store_.id(h.id);  // the leaf test reports the record
+        hit.id = leaves_.id(h.id);  // the leaf test reports the record
         return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<T>& ray) const {
-        StoreHit<T> hit;
-        return trace<true>(ray, hit);
+        StoreHit<T> h;
+        Ray<T> r = ray;
+        return intersect<true>(r, leaves_.template leaf_test<true>(r, h));
     }
 
     const LayoutStats& stats() const { return stats_; }
-    const TriangleStore<P>& store() const { return store_; }
+    const TriangleLeaves<P>& leaves() const { return leaves_; }
     const std::vector<Node>& nodes() const { return nodes_; }
     const AABB<T>& bounds() const { return bounds_; }
     /// Builder time plus leaf-record and layout encoding time, in seconds.
     double build_seconds() const { return build_seconds_; }
     /// Node bytes plus triangle-record bytes.
-    std::size_t total_bytes() const { return stats_.node_bytes() + store_.bytes(); }
+    std::size_t total_bytes() const { return stats_.node_bytes() + leaves_.bytes(); }
 
-private:
-    struct Entry {
-        std::uint32_t index, base;
-        T t0, t1;
-    };
-
-    template <bool Any>
-    bool trace(const Ray<T>& ray, StoreHit<T>& hit) const {
+    /// Closest (Any = false) or any hit through a leaf callable (LeafTest):
+    /// `leaf(first, count)` is called for the non-empty leaves the ray enters, near to far,
+    /// with the leaf's reference in the TriangleLeaves (leaves()); for closest hit it lowers
+    /// ray.tmax to each hit it finds, and cells beyond ray.tmax are skipped.
+    template <bool Any, LeafTest Leaf>
+    bool intersect(Ray<T>& ray, Leaf&& leaf) const {
         // Plain arrays: glm's operator[] with a run-time index is a switch, i.e. a branch on
         // the split axis that incoherent rays mispredict.
         const T org[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
@@ -137,104 +130,120 @@ private:
         const std::uint32_t neg[3] = {std::signbit(ray.direction.x) ? 1u : 0u,
                                       std::signbit(ray.direction.y) ? 1u : 0u,
                                       std::signbit(ray.direction.z) ? 1u : 0u};
-        // Clip (tmin, tmax) to the scene box. Entry and exit planes are chosen by the sign
-        // of the direction, not by comparing the two distances, so that a ray parallel to a
-        // face and lying in it ((face - o) * inf = NaN) keeps its interval: such a ray can
-        // hit triangles in that face. (AABB::intersect swaps by comparison and rejects it.)
         T t0 = ray.tmin, t1 = ray.tmax;
+        if (!clip(org, inv, neg, t0, t1)) return false;
+        Entry stack[max_stack];
+        int sp = 0;
+        std::uint32_t index = 0, base = 0;
+        bool found = false;
+        for (;;) {
+            const Node* n = descend(org, inv, neg, index, base, t0, t1, stack, sp);
+            if (n) {
+                if (leaf(n->group_begin(), n->group_count())) {
+                    if constexpr (Any) return true;
+                    found = true;
+                }
+            }
+            for (;;) {  // pop
+                if (sp == 0) return found;
+                const Entry& e = stack[--sp];
+                if constexpr (!Any) {
+                    if (e.t0 > ray.tmax) continue;
+                }
+                index = e.index;
+                base = e.base;
+                t0 = e.t0;
+                t1 = e.t1;
+                if constexpr (!Any) t1 = ray.tmax < t1 ? ray.tmax : t1;
+                break;
+            }
+        }
+    }
+
+private:
+    struct Entry {
+        std::uint32_t index, base;
+        T t0, t1;
+    };
+
+    /// Clips (t0, t1) = (ray.tmin, ray.tmax) to the scene box; false when nothing is left.
+    /// Entry and exit planes are chosen by the sign of the direction, not by comparing the
+    /// two distances, so that a ray parallel to a face and lying in it ((face - o) * inf =
+    /// NaN) keeps its interval: such a ray can hit triangles in that face. (AABB::intersect
+    /// swaps by comparison and rejects it.) A NaN tmax stays NaN: such a ray hits nothing.
+    [[gnu::always_inline]] bool clip(const T (&org)[3], const T (&inv)[3], const std::uint32_t (&neg)[3], T& t0,
+                                     T& t1) const {
         for (int a = 0; a < 3; ++a) {
             const T tl = (bounds_.lo[a] - org[a]) * inv[a], th = (bounds_.hi[a] - org[a]) * inv[a];
             const T tn = neg[a] ? th : tl, tf = neg[a] ? tl : th;
             t0 = tn > t0 ? tn : t0;
             t1 = tf < t1 ? tf : t1;
         }
-        // min(t1, hit.t) that keeps a NaN t1 (a NaN tmax), so that such a ray hits nothing.
-        if constexpr (!Any) t1 = hit.t < t1 ? hit.t : t1;
-        if (!(t0 <= t1)) return false;
+        return t0 <= t1;
+    }
+
+    /// From cell `index` with segment (t0, t1), steps down to the leaf the ray enters first,
+    /// pushing far cells; returns that leaf, or nullptr when no non-empty leaf is entered
+    /// (the caller pops).
+    [[gnu::always_inline]] const Node* descend(const T (&org)[3], const T (&inv)[3], const std::uint32_t (&neg)[3],
+                                               std::uint32_t& index, std::uint32_t& base, T& t0, T& t1,
+                                               Entry* stack, int& sp) const {
         const Node* nodes = nodes_.data();
-        // Frame-free intersectors prepare the ray once, not once per leaf.
-        typename P::RayData world{};
-        if constexpr (!P::uses_frame) world = P::prepare(ray);
-        Entry stack[max_stack];
-        int sp = 0;
-        std::uint32_t index = 0, base = 0;
-        bool found = false;
-        for (;;) {
-            const Node* n = nodes + index;
-            while (!n->is_leaf()) {
-                if (n->is_pointer()) {
-                    index = n->target();
-                    base = L::block_base(index);
-                    n = nodes + index;
-                    continue;
-                }
-                const int axis = n->axis();
-                const std::uint32_t first = L::first_child(*n, index, base);
-                const std::uint32_t ng = neg[axis];
-                T tn, tf;
-                if constexpr (B::kind == TreeKind::kd) {
-                    tn = tf = (n->plane[0] - org[axis]) * inv[axis];
-                } else {
-                    const T tl = (n->plane[0] - org[axis]) * inv[axis];
-                    const T tr = (n->plane[1] - org[axis]) * inv[axis];
-                    tn = ng ? tr : tl;
-                    tf = ng ? tl : tr;
-                }
-                const std::uint32_t near = first + ng, far = first + 1 - ng;
-                // Empty leaves (the empty space the SAH cut off) are never entered: on
-                // incoherent rays they were two of every three leaves visited, each a step
-                // and a pop (knot-128k: 7.7 leaves per ray, 2.5 of them with triangles).
-                const bool visit_near = !(tn < t0) & !nodes[near].is_empty_leaf();
-                const bool visit_far = !(tf > t1) & !nodes[far].is_empty_leaf();
-                if (!(visit_near | visit_far)) goto pop;
-                // The far cell is always written to the stack but kept only when both cells
-                // are entered; the cell entered is the near one if its segment is not
-                // empty, else the far one. (The compiler turns the selects into a predicted
-                // branch; forcing bitwise selects measured 20% slower on knot-128k.)
-                const T near_t1 = tn < t1 ? tn : t1, far_t0 = tf > t0 ? tf : t0;
-                stack[sp] = Entry{far, base, far_t0, t1};
-                sp += int(visit_near & visit_far);
-                index = visit_near ? near : far;
-                t1 = visit_near ? near_t1 : t1;
-                t0 = visit_near ? t0 : far_t0;
+        const Node* n = nodes + index;
+        while (!n->is_leaf()) {
+            if (n->is_pointer()) {
+                index = n->target();
+                base = L::block_base(index);
                 n = nodes + index;
+                continue;
             }
-            if (const std::uint32_t count = n->group_count()) {
-                if (store_.template test_leaf<Any>(n->group_begin(), count, ray, world, hit)) {
-                    if constexpr (Any) return true;
-                    found = true;
-                }
+            const int axis = n->axis();
+            const std::uint32_t first = L::first_child(*n, index, base);
+            const std::uint32_t ng = neg[axis];
+            T tn, tf;
+            if constexpr (B::kind == TreeKind::kd) {
+                tn = tf = (n->plane[0] - org[axis]) * inv[axis];
+            } else {
+                const T tl = (n->plane[0] - org[axis]) * inv[axis];
+                const T tr = (n->plane[1] - org[axis]) * inv[axis];
+                tn = ng ? tr : tl;
+                tf = ng ? tl : tr;
             }
-        pop:
-            for (;;) {
-                if (sp == 0) return found;
-                const Entry& e = stack[--sp];
-                if constexpr (!Any) {
-                    if (e.t0 > hit.t) continue;
-                }
-                index = e.index;
-                base = e.base;
-                t0 = e.t0;
-                t1 = e.t1;
-                if constexpr (!Any) t1 = hit.t < t1 ? hit.t : t1;
-                break;
-            }
+            const std::uint32_t near = first + ng, far = first + 1 - ng;
+            // Empty leaves (the empty space the SAH cut off) are never entered: on
+            // incoherent rays they were two of every three leaves visited, each a step
+            // and a pop (knot-128k: 7.7 leaves per ray, 2.5 of them with triangles).
+            const bool visit_near = !(tn < t0) & !nodes[near].is_empty_leaf();
+            const bool visit_far = !(tf > t1) & !nodes[far].is_empty_leaf();
+            if (!(visit_near | visit_far)) return nullptr;
+            // The far cell is always written to the stack but kept only when both cells
+            // are entered; the cell entered is the near one if its segment is not
+            // empty, else the far one. (The compiler turns the selects into a predicted
+            // branch; forcing bitwise selects measured 20% slower on knot-128k.)
+            const T near_t1 = tn < t1 ? tn : t1, far_t0 = tf > t0 ? tf : t0;
+            stack[sp] = Entry{far, base, far_t0, t1};
+            sp += int(visit_near & visit_far);
+            index = visit_near ? near : far;
+            t1 = visit_near ? near_t1 : t1;
+            t0 = visit_near ? t0 : far_t0;
+            n = nodes + index;
         }
+        return n->group_count() ? n : nullptr;
     }
 
     std::vector<Node> nodes_;
-    TriangleStore<P> store_;
+    TriangleLeaves<P> leaves_;
     AABB<T> bounds_;
     LayoutStats stats_;
     double build_seconds_ = 0;
 };
 
 /// SAH kd-tree over intersector P in layout L, e.g. KdTree<float, Ivm<float>, CompactSubtrees<31>>.
-template <Scalar T, TriangleIntersector P, class L>
+template <Scalar T, TriangleIntersector P, NodeLayout L>
 using KdTree = TreeAccelerator<KdTreeBuilder<T>, P, L>;
 
 /// Bounding interval hierarchy over intersector P in layout L.
-template <Scalar T, TriangleIntersector P, class L>
+template <Scalar T, TriangleIntersector P, NodeLayout L>
 using Bih = TreeAccelerator<BihBuilder<T>, P, L>;
 
 }  // namespace glint

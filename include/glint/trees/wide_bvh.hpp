@@ -44,6 +44,7 @@
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/intersection/triangle_leaves.hpp>
 #include <glint/trees/bvh_builder.hpp>
 
 namespace glint {
@@ -186,13 +187,9 @@ inline bool wide_ray_valid(const Ray<float>& r) {
 
 }  // namespace detail
 
-/// A leaf callable for WideBvh::intersect: `leaf(first, count)` tests the leaf's items and
-/// returns whether it found a hit (closest-hit queries: a hit nearer than the ray's tmax,
-/// to which it must lower the ray's tmax).
+/// A leaf callable for WideBvh::intersect: the trees' LeafTest (triangle_leaves.hpp).
 template <class F>
-concept WideLeafTest = requires(F f, std::uint32_t i) {
-    { f(i, i) } -> std::convertible_to<bool>;
-};
+concept WideLeafTest = LeafTest<F>;
 
 /// What one or more queries did (for measurements): nodes whose children were tested, and
 /// leaves and records (lanes of padded batches) tested.

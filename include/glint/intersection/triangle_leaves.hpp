@@ -1,0 +1,85 @@
+// glint/intersection/triangle_leaves.hpp: the leaf storage of every triangle tree, the one
+// seam between a tree and a ray-triangle test.
+//
+// A tree (kd-tree, BIH, wide BVH) knows its leaves only as a reference (first, count) of
+// two integers it stores in its nodes, and tests a leaf by calling a leaf callable
+// `leaf(first, count)` that returns whether the leaf holds a hit; for closest-hit queries
+// the callable lowers the ray's tmax to the hit, so the tree culls by it (madmann91/bvh
+// v2's `intersect(ray, ..., leaf_fn)` works the same way). TriangleLeaves<P> is that
+// storage for triangles of intersector P: it owns the records (a TriangleStore<P>), their
+// padding to whole batches of batch_width records (so a leaf runs P's batch kernel at its
+// full, compile-time width), and for intersectors with frames (IVM, 000 section 4.1) the
+// per-group frame origins; what a reference counts (padded records, or groups of records
+// sharing a frame) is its business, not the tree's. A tree over other primitives passes a
+// callable of its own (tests/test_trees.cpp puts spheres in a WideBvh's leaves).
+//
+// Thread safety: leaf tests are const and keep their state in the caller's callable.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <utility>
+
+#include <glint/core/ray.hpp>
+#include <glint/intersection/triangle.hpp>
+
+namespace glint {
+
+/// A leaf callable: `leaf(first, count)` tests the leaf (first, count) and returns whether it
+/// found a hit (closest-hit queries: a hit nearer than the ray's tmax, to which it lowers the
+/// ray's tmax).
+template <class F>
+concept LeafTest = requires(F f, std::uint32_t i) {
+    { f(i, i) } -> std::convertible_to<bool>;
+};
+
+/// Triangle records of intersector P laid out for tree leaves (see the file comment).
+template <TriangleIntersector P>
+class TriangleLeaves {
+public:
+    using T = typename P::scalar_type;
+
+    /// Appends one leaf of triangles `tris` (non-empty), reported as `ids` (the user's
+    /// triangle indices); returns its reference (first, count).
+    std::pair<std::uint32_t, std::uint32_t> add(std::span<const TriangleVertices<T>> tris,
+                                                std::span<const std::uint32_t> ids) {
+        const auto ref = store_.add_block(tris, ids, TriangleStore<P>::Padding::batches);
+        if constexpr (P::uses_frame) return {ref.group_begin, ref.group_end - ref.group_begin};
+        const auto& g = store_.group(ref.group_begin);  // one group in the world frame
+        constexpr std::uint32_t w = std::uint32_t(batch_width);
+        return {g.begin, (g.end - g.begin + w - 1) / w * w};
+    }
+
+    /// The leaf callable of one query: tests leaves with the interval (ray.tmin, ray.tmax)
+    /// and, for closest hit (Any = false), keeps the nearest hit in `hit` (hit.id is then a
+    /// record index: map it with id()) and lowers ray.tmax to it. `ray` and `hit` must
+    /// outlive the callable; ray.tmax must not exceed hit.t.
+    template <bool Any>
+    [[gnu::always_inline]] auto leaf_test(Ray<T>& ray, StoreHit<T>& hit) const {
+        typename P::RayData world{};
+        if constexpr (!P::uses_frame) world = P::prepare(ray);  // once per query, not per leaf
+        return [this, &ray, &hit, world](std::uint32_t first, std::uint32_t count) {
+            if (!store_.template test_leaf<Any>(first, count, ray, world, hit)) return false;
+            if constexpr (!Any) ray.tmax = hit.t;
+            return true;
+        };
+    }
+
+    /// The user's triangle index of record `record` (a closest hit's hit.id).
+    std::uint32_t id(std::uint32_t record) const { return store_.id(record); }
+    /// Record slots (padding included) that testing leaf (first, count) reads.
+    std::uint64_t records(std::uint32_t first, std::uint32_t count) const {
+        if constexpr (!P::uses_frame) return count;
+        std::uint64_t n = 0;
+        for (std::uint32_t g = first; g < first + count; ++g)
+            n += (store_.group(g).end - store_.group(g).begin + batch_width - 1) / batch_width * batch_width;
+        return n;
+    }
+    std::size_t bytes() const { return store_.bytes(); }
+    const TriangleStore<P>& store() const { return store_; }
+
+private:
+    TriangleStore<P> store_;
+};
+
+}  // namespace glint
