@@ -756,3 +756,121 @@ TEST_CASE("wide BVH: NaN tmax, empty interval, NaN and zero rays, degenerate and
     CHECK_FALSE(e.closest_hit(r, h));
     CHECK_FALSE(e.any_hit(r));
 }
+
+namespace {
+
+/// A user's own primitive: a sphere, with the nearest root of |o + t d - c|^2 = r^2 in
+/// (tmin, tmax) as its hit.
+struct UserSphere {
+    Vec3f c;
+    float r;
+    bool intersect(const Ray<float>& ray, float& t) const {
+        const Vec3f oc = ray.origin - c;
+        const float a = glm::dot(ray.direction, ray.direction), b = glm::dot(oc, ray.direction);
+        const float disc = b * b - a * (glm::dot(oc, oc) - r * r);
+        if (!(disc >= 0.0f)) return false;
+        const float s = std::sqrt(disc);
+        for (const float root : {(-b - s) / a, (-b + s) / a})
+            if (root > ray.tmin && root < ray.tmax) {
+                t = root;
+                return true;
+            }
+        return false;
+    }
+};
+
+}  // namespace
+
+TEST_CASE("wide BVH: a user's own primitives (spheres) in the leaves through the leaf callable agree with brute force") {
+    Pcg32 rng(7);
+    std::vector<UserSphere> spheres(3000);
+    std::vector<AABB<float>> boxes;
+    for (UserSphere& s : spheres) {
+        s.c = Vec3f(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0f;
+        s.r = 0.02f + 0.2f * rng.uniform();
+        boxes.push_back(AABB<float>{s.c - Vec3f(s.r), s.c + Vec3f(s.r)});
+    }
+    const WideBvh<8> bvh(boxes);
+    std::size_t rays = 0, hits = 0, wrong = 0, any_wrong = 0;
+    for (; rays < 20000; ++rays) {
+        Ray<float> ray;
+        ray.origin = Vec3f(rng.uniform(), rng.uniform(), rng.uniform()) * 12.0f - Vec3f(1.0f);
+        ray.direction = Vec3f(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0f - Vec3f(1.0f);
+        ray.tmin = 0.0f;
+        ray.tmax = rays % 2 ? 5.0f : infinity<float>;
+        // Brute force: the nearest sphere (the first of equal t).
+        float best_t = ray.tmax;
+        std::uint32_t best = ~0u;
+        for (std::uint32_t i = 0; i < spheres.size(); ++i) {
+            float t;
+            if (spheres[i].intersect(Ray<float>{ray.origin, ray.direction, ray.tmin, best_t}, t)) {
+                best_t = t;
+                best = i;
+            }
+        }
+        // The tree: its leaf callable tests the leaf's spheres and lowers tmax to each hit.
+        const auto leaf_for = [&spheres, &bvh](Ray<float>& q, std::uint32_t& found) {
+            return [&spheres, &bvh, &q, &found](std::uint32_t first, std::uint32_t count) {
+                bool any = false;
+                for (std::uint32_t k = first; k < first + count; ++k) {
+                    float t;
+                    if (spheres[bvh.prims()[k]].intersect(q, t)) {
+                        q.tmax = t;
+                        found = bvh.prims()[k];
+                        any = true;
+                    }
+                }
+                return any;
+            };
+        };
+        Ray<float> r = ray, shadow = ray;
+        std::uint32_t found = ~0u, shadow_found = ~0u;
+        const bool hit = bvh.intersect<false>(r, leaf_for(r, found));
+        hits += best != ~0u;
+        // The same t (the same sphere, or one whose root rounds to the same float).
+        wrong += hit != (best != ~0u) || (hit && (r.tmax != best_t || found == ~0u));
+        any_wrong += bvh.intersect<true>(shadow, leaf_for(shadow, shadow_found)) != (best != ~0u);
+    }
+    INFO("rays " << rays << " hits " << hits << " wrong " << wrong << " any-hit wrong " << any_wrong);
+    CHECK(wrong == 0);
+    CHECK(any_wrong == 0);
+    CHECK(hits > rays / 10);
+    CHECK(hits < rays);  // some rays miss: the test is not vacuous either way
+}
+
+// Concepts: a wrong type is reported where the template is named, not deep inside traversal.
+// `Names<...>` is true exactly when the specialization is well-formed, i.e. every concept
+// constraining its parameters is satisfied.
+namespace {
+struct NotALayout {};
+struct OnlyClosestHit {  // an accelerator without any_hit
+    using scalar_type = float;
+    bool closest_hit(const Ray<float>&, StoreHit<float>&) const { return false; }
+};
+template <class T, class P, class L>
+concept NamesKdTree = requires { typename KdTree<T, P, L>; };
+template <class T, class P, class L>
+concept NamesBih = requires { typename Bih<T, P, L>; };
+template <class P>
+concept NamesMeshBvh = requires { typename MeshBvh<P>; };
+template <class P>
+concept NamesBruteForce = requires { typename BruteForce<P>; };
+}  // namespace
+
+static_assert(NodeLayout<PointerLayout> && NodeLayout<CompactSubtrees<31>> && NodeLayout<HavranSubtrees<15>>);
+static_assert(!NodeLayout<int> && !NodeLayout<NotALayout> && !NodeLayout<Ivm<float>>);
+static_assert(TriangleIntersector<Ivm<float>> && TriangleIntersector<MollerTrumbore<double>> &&
+              TriangleIntersector<Wald<float>> && TriangleIntersector<Watertight<float>>);
+static_assert(!TriangleIntersector<int> && !TriangleIntersector<PointerLayout> && !TriangleIntersector<UserSphere>);
+static_assert(RayAccelerator<KdTree<float, Ivm<float>, PointerLayout>> && RayAccelerator<Bih<float, Wald<float>, CompactSubtrees<15>>> &&
+              RayAccelerator<MeshBvh<MollerTrumbore<float>>> && RayAccelerator<BruteForce<Watertight<float>>>);
+static_assert(!RayAccelerator<OnlyClosestHit> && !RayAccelerator<PointerLayout> && !RayAccelerator<WideBvh<8>>);
+static_assert(NamesKdTree<float, MollerTrumbore<float>, PointerLayout> && NamesBih<float, Ivm<float>, CompactSubtrees<31>>);
+static_assert(!NamesKdTree<float, int, PointerLayout>);                 // not an intersector
+static_assert(!NamesKdTree<float, Ivm<float>, int>);                    // not a layout
+static_assert(!NamesKdTree<float, PointerLayout, Ivm<float>>);          // swapped
+static_assert(!NamesKdTree<float, Ivm<double>, PointerLayout>);         // scalar types differ
+static_assert(!NamesBih<float, MollerTrumbore<float>, NotALayout>);
+static_assert(!NamesMeshBvh<int> && !NamesMeshBvh<Ivm<double>> && NamesMeshBvh<Wald<float>>);
+static_assert(!NamesBruteForce<PointerLayout> && NamesBruteForce<Ivm<float>>);
+static_assert(LeafTest<bool (*)(std::uint32_t, std::uint32_t)> && !LeafTest<int> && !LeafTest<void (*)(std::uint32_t)>);

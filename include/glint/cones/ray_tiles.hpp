@@ -39,6 +39,7 @@
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/trees/tree.hpp>
 
 namespace glint {
 
@@ -369,10 +370,8 @@ private:
 /// The same passes with a per-ray accelerator (BruteForce, a KdTree: any RayAccelerator),
 /// the reference the engine is compared with. PassStats::tests is left 0 (per-ray
 /// accelerators do not count their tests).
-template <class A, class Shade>
-    requires requires(const A a, const Ray<typename A::scalar_type>& r, StoreHit<typename A::scalar_type>& h) {
-        { a.closest_hit(r, h) } -> std::same_as<bool>;
-    } && PassShader<Shade, typename A::scalar_type>
+template <RayAccelerator A, class Shade>
+    requires PassShader<Shade, typename A::scalar_type>
 PassStats trace_passes(const A& accel, std::span<Ray<typename A::scalar_type>> rays, int max_passes, Shade&& shade,
                        TileWorkspace<typename A::scalar_type>& ws) {
     using T = typename A::scalar_type;

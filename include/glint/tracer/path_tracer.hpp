@@ -48,6 +48,7 @@
 #include <glint/sampling/warps.hpp>
 #include <glint/tracer/brdf.hpp>
 #include <glint/tracer/scene.hpp>
+#include <glint/trees/tree.hpp>
 
 namespace glint {
 
@@ -154,7 +155,7 @@ concept DirectLighting = requires {
     { D::collects_emission } -> std::convertible_to<bool>;
 };
 
-template <class Accel, class S, class R, DirectLighting D, bool Env, bool Points, Scalar T = float>
+template <RayAccelerator Accel, class S, class R, DirectLighting D, bool Env, bool Points, Scalar T = float>
     requires Sampler<S, T> && RoulettePolicy<R, T, 3>
 class PathTracer {
 public:

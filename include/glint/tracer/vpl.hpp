@@ -36,6 +36,7 @@
 #include <glint/occluders/visibility.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/warps.hpp>
+#include <glint/trees/tree.hpp>
 
 namespace glint {
 
@@ -74,7 +75,7 @@ struct Vpl {
 };
 
 /// Exact visibility: a shadow ray through a RayAccelerator (trees/ kd-tree, BIH, brute force).
-template <class Accel>
+template <RayAccelerator Accel>
 class ShadowRayVisibility {
 public:
     using T = typename Accel::scalar_type;
@@ -106,7 +107,7 @@ Vec3<T> triangle_normal(const TriangleVertices<T>& t) {
 
 /// Shooting phase: `walks` random walks from the emitters (area-weighted by emitted
 /// luminance, cosine-distributed directions), continued by roulette R; returns the VPLs.
-template <Scalar T, class Accel, RoulettePolicy<T, 3> R>
+template <Scalar T, RayAccelerator Accel, RoulettePolicy<T, 3> R>
 std::vector<Vpl<T>> shoot_vpls(const VplScene<T>& scene, const Accel& accel, const R& roulette, std::size_t walks,
                                std::uint64_t seed, std::size_t max_depth = 16) {
     scene.validate();
@@ -180,7 +181,7 @@ struct PinholeCamera {
 
 /// Gathering phase: one primary ray per pixel, every VPL connected through visibility policy
 /// V. Returns width * height RGB values (row-major). `vis` is used by this thread only.
-template <Scalar T, class Accel, class V>
+template <Scalar T, RayAccelerator Accel, class V>
     requires VisibilityPolicy<V, T>
 std::vector<Rgb<T>> gather_vpls(const VplScene<T>& scene, const Accel& accel, std::span<const Vpl<T>> vpls,
                                 const PinholeCamera<T>& cam, V& vis, T min_distance) {
