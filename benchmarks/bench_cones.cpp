@@ -57,6 +57,9 @@ struct CountingIvm {
 
     static CountingIvm build(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return {Ivm<float>::build(a, b, c)}; }
     static RayData prepare(const Ray<float>& r) { return Ivm<float>::prepare(r); }
+    static bool test(const float (&x)[9], const RayData& r, float& t, float& u, float& v) {
+        return Ivm<float>::test(x, r, t, u, v);
+    }
     bool intersect(const RayData& r, TriangleHit<float>& h) const {
         ++counted_tests;
         return rec.intersect(r, h);

@@ -361,6 +361,7 @@ struct StoreHit : TriangleHit<T> {
 /// every policy's build() gives it a record that misses), so that a caller may test the
 /// group in whole batches with the kernel's full width: tree leaves do. Unpadded blocks
 /// (the default) keep records back to back, as brute force and one-triangle blocks want.
+/// Queries (closest_hit, any_hit, test_*) are const and thread-safe; add_block is not.
 template <TriangleIntersector P>
 class TriangleStore {
 public:

@@ -1,6 +1,7 @@
 // glint/trees/brute_force.hpp: the reference accelerator. Every ray is tested against every
 // triangle with the intersector's batch kernel; the trees must return the same hits.
 // It has the trees' interface (RayAccelerator): closest_hit(ray, hit) and any_hit(ray).
+// Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
 
 #include <cstdint>

@@ -214,6 +214,9 @@ concept NodeLayout = requires(const BuiltTree<float>& t, std::vector<KdNode<floa
 };
 
 /// A ray accelerator: the interface shared by the trees and the brute-force reference.
+/// Every glint accelerator's queries are const and keep their state on the caller's stack
+/// (no caches, no counters in the object): any number of threads may query one accelerator
+/// at once, as the renderers do.
 template <class A>
 concept RayAccelerator = requires(const A a, const Ray<typename A::scalar_type>& r,
                                   StoreHit<typename A::scalar_type>& h) {
