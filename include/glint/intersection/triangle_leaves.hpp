@@ -10,7 +10,9 @@
 // padding to whole batches of batch_width records (so a leaf runs P's batch kernel at its
 // full, compile-time width), and for intersectors with frames (IVM, 000 section 4.1) the
 // per-group frame origins; what a reference counts (padded records, or groups of records
-// sharing a frame) is its business, not the tree's. A tree over other primitives passes a
+// sharing a frame) is its business, not the tree's. A tree's leaf callable is
+// `[&](first, count) { return leaves.test<Any>(first, count, ray, world, hit); }` with
+// world = leaves.prepare(ray), made once per query. A tree over other primitives passes a
 // callable of its own (tests/test_trees.cpp puts spheres in a WideBvh's leaves).
 //
 // Thread safety: leaf tests are const and keep their state in the caller's callable.
@@ -50,19 +52,22 @@ public:
         return {g.begin, (g.end - g.begin + w - 1) / w * w};
     }
 
-    /// The leaf callable of one query: tests leaves with the interval (ray.tmin, ray.tmax)
-    /// and, for closest hit (Any = false), keeps the nearest hit in `hit` (hit.id is then a
-    /// record index: map it with id()) and lowers ray.tmax to it. `ray` and `hit` must
-    /// outlive the callable; ray.tmax must not exceed hit.t.
+    /// The per-query ray data of test(): P's prepared ray in the world frame (intersectors
+    /// with frames prepare the ray per group instead, and ignore it).
+    typename P::RayData prepare(const Ray<T>& ray) const {
+        if constexpr (P::uses_frame) return {};
+        else return P::prepare(ray);
+    }
+    /// Tests leaf (first, count) with the interval (ray.tmin, ray.tmax); `world` is
+    /// prepare(ray) of the query. For closest hit (Any = false) keeps the nearest hit in
+    /// `hit` (hit.id is then a record index: map it with id()) and lowers ray.tmax to it;
+    /// ray.tmax must not exceed hit.t. True when the leaf holds a hit.
     template <bool Any>
-    [[gnu::always_inline]] auto leaf_test(Ray<T>& ray, StoreHit<T>& hit) const {
-        typename P::RayData world{};
-        if constexpr (!P::uses_frame) world = P::prepare(ray);  // once per query, not per leaf
-        return [this, &ray, &hit, world](std::uint32_t first, std::uint32_t count) {
-            if (!store_.template test_leaf<Any>(first, count, ray, world, hit)) return false;
-            if constexpr (!Any) ray.tmax = hit.t;
-            return true;
-        };
+    [[gnu::always_inline]] bool test(std::uint32_t first, std::uint32_t count, Ray<T>& ray,
+                                     const typename P::RayData& world, StoreHit<T>& hit) const {
+        if (!store_.template test_leaf<Any>(first, count, ray, world, hit)) return false;
+        if constexpr (!Any) ray.tmax = hit.t;
+        return true;
     }
 
     /// The user's triangle index of record `record` (a closest hit's hit.id).

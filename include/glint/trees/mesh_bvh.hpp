@@ -93,12 +93,12 @@ public:
         StoreHit<float> h = hit;  // a local copy the compiler keeps in registers
         Ray<float> r = ray;
         r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
-        const auto leaf = leaves_.template leaf_test<false>(r, h);
+        const auto world = leaves_.prepare(r);
         const bool found = bvh_.template intersect<false>(
             r,
             [&](std::uint32_t first, std::uint32_t count) {
                 if (counters) counters->records += leaves_.records(first, count);
-                return leaf(first, count);
+                return leaves_.template test<false>(first, count, r, world, h);
             },
             counters);
         if (!found) return false;
@@ -110,7 +110,10 @@ public:
     bool any_hit(const Ray<float>& ray) const {
         StoreHit<float> h;
         Ray<float> r = ray;
-        return bvh_.template intersect<true>(r, leaves_.template leaf_test<true>(r, h));
+        const auto world = leaves_.prepare(r);
+        return bvh_.template intersect<true>(r, [&](std::uint32_t first, std::uint32_t count) {
+            return leaves_.template test<true>(first, count, r, world, h);
+        });
     }
 
     const WideBvh<N>& bvh() const { return bvh_; }

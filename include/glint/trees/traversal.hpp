@@ -96,7 +96,11 @@ public:
         StoreHit<T> h = hit;
         Ray<T> r = ray;
         r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
-        if (!intersect<false>(r, leaves_.template leaf_test<false>(r, h))) return false;
+        const auto world = leaves_.prepare(r);
+        if (!intersect<false>(r, [&](std::uint32_t first, std::uint32_t count) {
+                return leaves_.template test<false>(first, count, r, world, h);
+            }))
+            return false;
         hit = h;
         hit.id = leaves_.id(h.id);  // the leaf test reports the record
         return true;
@@ -105,7 +109,10 @@ public:
     bool any_hit(const Ray<T>& ray) const {
         StoreHit<T> h;
         Ray<T> r = ray;
-        return intersect<true>(r, leaves_.template leaf_test<true>(r, h));
+        const auto world = leaves_.prepare(r);
+        return intersect<true>(r, [&](std::uint32_t first, std::uint32_t count) {
+            return leaves_.template test<true>(first, count, r, world, h);
+        });
     }
 
     const LayoutStats& stats() const { return stats_; }
