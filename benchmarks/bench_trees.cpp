@@ -309,16 +309,16 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer*
     time_sets(sc, acc, peer, opt, base, rows);
 }
 
-/// The wide BVH over intersector P, N wide, built on one thread.
-template <class P, int N>
+/// The wide BVH over intersector P, N wide, child boxes as B, built on one thread.
+template <class P, int N, WideBoxes B = WideBoxes::floats>
 void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector<Row>& rows) {
     BvhBuildOptions bo = opt.bvh;
     bo.threads = 1;
-    const MeshBvh<P, N> acc(sc.mesh, bo);
+    const MeshBvh<P, N, B> acc(sc.mesh, bo);
     Row base;
     base.scene = sc.name;
-    base.tree = MeshBvh<P, N>::name;
-    base.layout = "soa";
+    base.tree = MeshBvh<P, N, B>::name;
+    base.layout = WideBvh<N, B>::boxes_label;
     base.intersector = P::name;
     base.build_s = acc.build_seconds();
     base.node_bytes = acc.bvh().stats().node_bytes;
@@ -506,6 +506,7 @@ int main(int argc, char** argv) try {
 #endif
         wide_build_table(sc, peer.get(), opt);
         run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
+        run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
         if (!opt.quick && !opt.few) {
             run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);

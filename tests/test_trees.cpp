@@ -293,7 +293,7 @@ void check_agreement(const Scene& sc, const std::vector<StoreHit<float>>& ref, c
     if constexpr (requires { Accel::layout_type::label(); })
         what += std::string(Accel::builder_type::name) + " " + Accel::layout_type::label();
     else
-        what += Accel::name;
+        what += std::string(Accel::name) + " " + Accel::boxes_label;
     INFO(what);
     INFO("closest: rays " << closest.rays << " hits " << closest.hits << " ties " << closest.ties << " edges "
                           << closest.edges << " (generic " << closest.generic_edges << " of " << closest.generic_rays
@@ -326,6 +326,8 @@ void check_intersector() {
         check_layouts<P, Bih, PointerLayout, HavranSubtrees<31>, CompactSubtrees<7>, CompactSubtrees<63>>(sc, ref, found);
         check_agreement<MeshBvh<P, 8>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 4>, P>(sc, ref, found);
+        check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);
+        check_agreement<MeshBvh<P, 4, WideBoxes::quantized>, P>(sc, ref, found);
     }
 }
 
@@ -608,8 +610,8 @@ std::vector<AABB<float>> triangle_boxes(const Mesh<float>& m) {
 
 /// Closest hit through WideBvh::intersect with a user leaf callable (one Triangle per
 /// primitive): the traversal API a user with their own primitives calls.
-template <int N, bool Portable>
-bool user_leaf_closest(const WideBvh<N>& bvh, const std::vector<Triangle<MollerTrumbore<float>>>& tris,
+template <int N, bool Portable, WideBoxes B>
+bool user_leaf_closest(const WideBvh<N, B>& bvh, const std::vector<Triangle<MollerTrumbore<float>>>& tris,
                        Ray<float> r, StoreHit<float>& hit) {
     return bvh.template intersect<false, Portable>(r, [&](std::uint32_t first, std::uint32_t count) {
         bool found = false;
@@ -626,9 +628,9 @@ bool user_leaf_closest(const WideBvh<N>& bvh, const std::vector<Triangle<MollerT
     });
 }
 
-template <int N>
+template <int N, WideBoxes B>
 void check_portable_and_user_leaf(const Scene& sc) {
-    const WideBvh<N> bvh(triangle_boxes(sc.mesh));
+    const WideBvh<N, B> bvh(triangle_boxes(sc.mesh));
     std::vector<Triangle<MollerTrumbore<float>>> tris;
     for (const auto& t : sc.mesh) tris.emplace_back(t[0], t[1], t[2]);
     const BruteForce<MollerTrumbore<float>> bf(sc.mesh);
@@ -637,15 +639,15 @@ void check_portable_and_user_leaf(const Scene& sc) {
     for (std::size_t i = 0; i < sc.rays.size(); ++i) {
         const Ray<float>& r = sc.rays[i];
         StoreHit<float> a, b, ref;
-        const bool fa = user_leaf_closest<N, false>(bvh, tris, r, a);
-        const bool fb = user_leaf_closest<N, true>(bvh, tris, r, b);
+        const bool fa = user_leaf_closest<N, false, B>(bvh, tris, r, a);
+        const bool fb = user_leaf_closest<N, true, B>(bvh, tris, r, b);
         differ += fa != fb || a.t != b.t || a.id != b.id;  // SIMD and portable: the same floats
         // Against brute force (whose batch kernel may round differently from the scalar
         // test), by the agreement rules at the top of this file.
         const bool fr = bf.closest_hit(r, ref);
         compare(sc, i, a, fa, ref, fr, tally);
     }
-    INFO(sc.name << " width " << N << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
+    INFO(sc.name << " width " << N << " " << WideBvh<N, B>::boxes_label << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
                  << " (generic " << tally.generic_edges << ") errors " << tally.errors);
     CHECK(differ == 0);
     CHECK(tally.errors == 0);
@@ -657,9 +659,49 @@ void check_portable_and_user_leaf(const Scene& sc) {
 
 TEST_CASE("wide BVH: SIMD and portable box tests give the same hits; a user's leaf callable") {
     for (const Scene& sc : scenes()) {
-        check_portable_and_user_leaf<8>(sc);
-        check_portable_and_user_leaf<4>(sc);
+        check_portable_and_user_leaf<8, WideBoxes::floats>(sc);
+        check_portable_and_user_leaf<4, WideBoxes::floats>(sc);
+        check_portable_and_user_leaf<8, WideBoxes::quantized>(sc);
+        check_portable_and_user_leaf<4, WideBoxes::quantized>(sc);
     }
+}
+
+TEST_CASE("wide BVH: quantized child boxes contain the float boxes, extreme ranges included") {
+    Pcg32 rng(7);
+    auto u = [&] { return rng.uniform<float>(); };
+    std::size_t planes = 0, tight = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        // Node scales from 1e-30 to 1e30, offsets up to 1e6 node sizes, flat and point children.
+        const float size = std::pow(10.0f, 60 * u() - 30), offset = size * std::pow(10.0f, 6 * u()) * (u() - 0.5f);
+        WideBvhNode<8> f{};
+        const int k = 1 + int(rng.bounded(8));
+        for (int i = 0; i < 8; ++i) {
+            f.child[i] = i;
+            for (int a = 0; a < 3; ++a) {
+                float lo = offset + size * u(), hi = lo + size * u() * (u() < 0.2f ? 0.0f : 1.0f);
+                if (i >= k) lo = infinity<float>, hi = -infinity<float>;
+                f.bounds[2 * a][i] = lo;
+                f.bounds[2 * a + 1][i] = hi;
+            }
+        }
+        const WideBvhQNode<8> q = detail::wide_quantize(f);
+        REQUIRE(q.count == k);
+        for (int a = 0; a < 3; ++a) {
+            const float s = detail::wide_scale(q.exp[a]);
+            // Looseness allowed: one step plus the rounding of the decoded plane (one ulp of
+            // the largest decoded magnitude), twice (a loose box costs speed, not hits).
+            const float big = std::abs(q.origin[a]) + 256 * s, ulp = std::nextafter(big, infinity<float>) - big;
+            for (int i = 0; i < k; ++i) {
+                const float lo = detail::wide_plane(q.origin[a], q.q[2 * a][i], s);
+                const float hi = detail::wide_plane(q.origin[a], q.q[2 * a + 1][i], s);
+                CHECK(lo <= f.bounds[2 * a][i]);
+                CHECK(hi >= f.bounds[2 * a + 1][i]);
+                ++planes;
+                tight += f.bounds[2 * a][i] - lo <= 2 * (s + ulp) && hi - f.bounds[2 * a + 1][i] <= 2 * (s + ulp);
+            }
+        }
+    }
+    CHECK(tight == planes);
 }
 
 TEST_CASE("wide BVH: the tree does not depend on the thread count") {
