@@ -143,15 +143,22 @@ private:
     }
 
     /// Runs the two children, the left one on a thread of its own when the subtree is
-    /// large and a thread is free (the tree does not depend on which runs where).
+    /// large and a thread is free (the tree does not depend on which runs where). A thread
+    /// gives its token back as soon as its subtree is done, and so does the waiting parent
+    /// until the join, so that the side still at work can split its own large subtrees off
+    /// again (uneven splits).
     void recurse(std::uint32_t ls, std::uint32_t b, std::uint32_t m, const AABB<float>& lb, std::uint32_t rs,
                  std::uint32_t e, const AABB<float>& rb) {
         constexpr std::uint32_t parallel_min = 4096;
         if (e - b >= parallel_min && tokens_.fetch_sub(1) > 0) {
-            std::thread left([&] { node(ls, b, m, lb); });
+            std::thread left([&] {
+                node(ls, b, m, lb);
+                tokens_.fetch_add(1);
+            });
             node(rs, m, e, rb);
+            tokens_.fetch_add(1);  // this thread waits: another may run meanwhile
             left.join();
-            tokens_.fetch_add(1);
+            tokens_.fetch_sub(1);
             return;
         }
         if (e - b >= parallel_min) tokens_.fetch_add(1);
