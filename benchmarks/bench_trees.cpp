@@ -23,7 +23,8 @@
 // CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore,
 // float (layout soa) and quantized (soa-q8) child boxes. --bvh-ct / --bvh-ci / --bvh-block /
 // --bvh-leaf / --bvh-bins set its SAH constants (BvhBuildOptions); --build-threads N builds the
-// timed trees on N threads (the CSV's build_threads).
+// timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
+// children side by side (WideNodeOrder::sibling_blocks).
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63); --few: pointer and
 // compact-31 only (as --quick, with the full ray count).
@@ -470,6 +471,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--set") o.set = value();
         else if (a == "--big") o.big = true;
         else if (a == "--solo") o.solo = value();
+        else if (a == "--bvh-siblings") o.bvh.node_order = std::stoi(value()) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
         else if (a == "--build-threads") o.build_threads = unsigned(std::stoul(value()));
         else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
         else if (a == "--bvh-ci") o.bvh.intersection_cost = std::stof(value());
@@ -483,7 +485,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree]");
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");

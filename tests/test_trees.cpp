@@ -17,7 +17,8 @@
 // adversarial rays (axis-parallel through vertex coordinates) may have any number, but
 // every one must be an edge case. Nothing else is tolerated.
 //
-// CI runs 2 * 10^4 rays per scene and combination; -DGLINT_LONG_TESTS runs 10^6.
+// CI runs 2 * 10^4 rays per scene and combination; -DGLINT_LONG_TESTS runs 10^6 (for the wide
+// BVH alone: test_trees -tc="agreement: wide*").
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
@@ -324,6 +325,18 @@ void check_intersector() {
         check_layouts<P, KdTree, PointerLayout, HavranSubtrees<7>, CompactSubtrees<3>, CompactSubtrees<31>,
                       HavranSubtrees<63>>(sc, ref, found);
         check_layouts<P, Bih, PointerLayout, HavranSubtrees<31>, CompactSubtrees<7>, CompactSubtrees<63>>(sc, ref, found);
+    }
+}
+
+/// The wide BVH, 8 and 4 wide, float and quantized child boxes, against brute force (the
+/// same rules and rays as the other trees; 10^6 rays per scene with GLINT_LONG_TESTS).
+template <class P>
+void check_wide() {
+    for (const Scene& sc : scenes()) {
+        const BruteForce<P> bf(sc.mesh);
+        std::vector<StoreHit<float>> ref(sc.rays.size());
+        std::vector<char> found(sc.rays.size());
+        for (std::size_t i = 0; i < sc.rays.size(); ++i) found[i] = bf.closest_hit(sc.rays[i], ref[i]);
         check_agreement<MeshBvh<P, 8>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 4>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);
@@ -405,10 +418,17 @@ TEST_CASE("errors: kd-tree cost constants out of range are rejected by name") {
     CHECK_THROWS_WITH_AS(build(o), doctest::Contains("max_depth"), Error);
 }
 
-TEST_CASE("agreement: Ivm, all trees and layouts vs brute force") { check_intersector<Ivm<float>>(); }
-TEST_CASE("agreement: MollerTrumbore, all trees and layouts vs brute force") { check_intersector<MollerTrumbore<float>>(); }
-TEST_CASE("agreement: Wald, all trees and layouts vs brute force") { check_intersector<Wald<float>>(); }
-TEST_CASE("agreement: Watertight, all trees and layouts vs brute force") { check_intersector<Watertight<float>>(); }
+TEST_CASE("agreement: Ivm, kd-tree and BIH, all layouts vs brute force") { check_intersector<Ivm<float>>(); }
+TEST_CASE("agreement: MollerTrumbore, kd-tree and BIH, all layouts vs brute force") { check_intersector<MollerTrumbore<float>>(); }
+TEST_CASE("agreement: Wald, kd-tree and BIH, all layouts vs brute force") { check_intersector<Wald<float>>(); }
+TEST_CASE("agreement: Watertight, kd-tree and BIH, all layouts vs brute force") { check_intersector<Watertight<float>>(); }
+
+TEST_CASE("agreement: wide BVH (8, 4 wide; float, quantized boxes), every intersector vs brute force") {
+    check_wide<Ivm<float>>();
+    check_wide<MollerTrumbore<float>>();
+    check_wide<Wald<float>>();
+    check_wide<Watertight<float>>();
+}
 
 TEST_CASE("agreement: double precision kd-tree and BIH") {
     const Mesh<float> mf = make_torus_knot<float>();
@@ -714,6 +734,35 @@ TEST_CASE("wide BVH: the tree does not depend on the thread count") {
         CHECK(std::memcmp(other->nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
     }
     CHECK(one.stats().nodes > 100);
+}
+
+TEST_CASE("wide BVH: sibling blocks place a node's inner children side by side, with the same hits") {
+    const Scene& sc = scenes()[1];
+    const auto boxes = triangle_boxes(sc.mesh);
+    const WideBvh<8> depth(boxes), blocks(boxes, {.node_order = WideNodeOrder::sibling_blocks});
+    REQUIRE(blocks.nodes().size() == depth.nodes().size());
+    CHECK(blocks.prims() == depth.prims());
+    std::size_t runs = 0;
+    for (const auto& n : blocks.nodes()) {
+        std::uint32_t next = 0;
+        for (int i = 0; i < 8; ++i) {
+            if (n.child[i] == 0xffffffffu || detail::wide_is_leaf(n.child[i])) continue;
+            if (next != 0) CHECK(n.child[i] == next);  // consecutive
+            next = n.child[i] + 1;
+            ++runs;
+        }
+    }
+    CHECK(runs + 1 == blocks.nodes().size());  // every node but the root is someone's child
+    std::vector<Triangle<MollerTrumbore<float>>> tris;
+    for (const auto& t : sc.mesh) tris.emplace_back(t[0], t[1], t[2]);
+    std::size_t differ = 0;
+    for (const Ray<float>& r : sc.rays) {
+        StoreHit<float> a, b;
+        const bool fa = user_leaf_closest<8, false, WideBoxes::floats>(depth, tris, r, a);
+        const bool fb = user_leaf_closest<8, false, WideBoxes::floats>(blocks, tris, r, b);
+        differ += fa != fb || a.t != b.t || a.id != b.id;
+    }
+    CHECK(differ == 0);
 }
 
 TEST_CASE("wide BVH: the user's indexed mesh with a stride, hits report the user's triangle") {

@@ -33,6 +33,11 @@
 
 namespace glint {
 
+/// Where the wide collapse (wide_bvh.hpp) puts a node's children in the node array: each
+/// child's subtree right after it (depth first), or a node's inner children side by side in
+/// one block, then their subtrees (000 §4.4's idea of placing a node's children together).
+enum class WideNodeOrder { depth_first, sibling_blocks };
+
 /// Cost constants and limits of the binned SAH build (docs/trees.md: how they were chosen).
 struct BvhBuildOptions {
     float traversal_cost = 1.0f;     // C_T, per binary node
@@ -41,6 +46,7 @@ struct BvhBuildOptions {
     std::uint32_t max_leaf = 16;     // at most this many primitives per leaf (1 ... 16)
     std::uint32_t bins = 16;         // centre bins per axis (2 ... 64)
     unsigned threads = 1;            // build threads; 0: std::thread::hardware_concurrency()
+    WideNodeOrder node_order = WideNodeOrder::depth_first;  // the wide nodes' order in memory
 
     void check() const {
         auto bad = [](const std::string& what) { throw Error("BvhBuildOptions: " + what); };

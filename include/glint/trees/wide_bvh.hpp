@@ -335,6 +335,7 @@ public:
     explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}) {
         const BinaryBvh bin = build_binary_bvh(boxes, opt);
         prims_ = bin.prims;
+        order_ = opt.node_order;
         if (bin.empty()) return;
         FloatNodes wide;
         wide.emplace_back(empty_node());
@@ -471,6 +472,7 @@ private:
             kids[k++] = bin.nodes[s].right;
         }
         stats_.depth = std::max(stats_.depth, depth + 1);  // its leaves, at least
+        std::uint32_t first_child = 0;
         for (int i = 0; i < k; ++i) {
             const BinaryBvhNode& c = bin.nodes[kids[i]];
             if (c.leaf()) {
@@ -479,14 +481,19 @@ private:
                 continue;
             }
             const std::uint32_t child = std::uint32_t(wide.size());
+            if (first_child == 0) first_child = child;
             wide.emplace_back(empty_node());
             set_child(wide[node], i, c, child);
-            fill(bin, wide, kids[i], child, depth + 1);
+            if (order_ == WideNodeOrder::depth_first) fill(bin, wide, kids[i], child, depth + 1);
         }
+        if (order_ == WideNodeOrder::sibling_blocks)  // the inner children were placed side by side
+            for (int i = 0; i < k; ++i)
+                if (!bin.nodes[kids[i]].leaf()) fill(bin, wide, kids[i], first_child++, depth + 1);
     }
 
     std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
     std::vector<std::uint32_t> prims_;
+    WideNodeOrder order_ = WideNodeOrder::depth_first;
     WideBvhStats stats_;
 };
 
