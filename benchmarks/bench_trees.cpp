@@ -20,8 +20,9 @@
 // thread; --wide runs only it (every intersector, 8 and 4 wide) and prints its build time
 // on 1 and 2 threads next to Embree's (threads=1) and its bytes per triangle next to
 // Embree's (from Embree's memory monitor); --cpu-time times trace passes by the thread's
-// CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore,
-// float (layout soa) and quantized (soa-q8) child boxes. --bvh-ct / --bvh-ci / --bvh-block /
+// CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore
+// (float child boxes, layout soa; --quantized adds quantized boxes, soa-q8, which every run
+// without --few includes); --no-build-table skips the build timing. --bvh-ct / --bvh-ci / --bvh-block /
 // --bvh-leaf / --bvh-bins set its SAH constants (BvhBuildOptions); --build-threads N builds the
 // timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
 // children side by side (WideNodeOrder::sibling_blocks).
@@ -217,6 +218,8 @@ struct Options {
     std::string csv, only, set;  // --set: run one ray set (primary or incoherent)
     std::string solo;            // --solo glint|embree: trace with one of them only (profiling)
     unsigned build_threads = 1;  // --build-threads: the wide BVH rows' build threads
+    bool build_table = true;     // --no-build-table: skip the 1- and 2-thread build timing
+    bool quantized = false;      // --quantized: with --wide --few, also bvh8 with quantized boxes
     bool quick = false, generated = true, all = false, memory = false, few = false, wide = false, big = false;
     BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
@@ -471,6 +474,8 @@ Options parse(int argc, char** argv) {
         else if (a == "--set") o.set = value();
         else if (a == "--big") o.big = true;
         else if (a == "--solo") o.solo = value();
+        else if (a == "--no-build-table") o.build_table = false;
+        else if (a == "--quantized") o.quantized = true;
         else if (a == "--bvh-siblings") o.bvh.node_order = std::stoi(value()) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
         else if (a == "--build-threads") o.build_threads = unsigned(std::stoul(value()));
         else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
@@ -485,7 +490,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1]");
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -547,9 +552,9 @@ int main(int argc, char** argv) try {
             run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
             continue;
         }
-        wide_build_table(sc, peer.get(), opt);
+        if (opt.build_table) wide_build_table(sc, peer.get(), opt);
         run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
-        run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
+        if (!opt.wide || !opt.few || opt.quantized) run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
         if (!opt.quick && !opt.few) {
             run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);
