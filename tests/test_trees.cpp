@@ -328,8 +328,8 @@ void check_intersector() {
     }
 }
 
-/// The wide BVH, 8 and 4 wide, float and quantized child boxes, against brute force (the
-/// same rules and rays as the other trees; 10^6 rays per scene with GLINT_LONG_TESTS).
+/// The wide BVH (8 and 4 wide with float child boxes, 8 wide with quantized ones) against
+/// brute force: the same rules and rays as the other trees, 10^6 per scene with GLINT_LONG_TESTS.
 template <class P>
 void check_wide() {
     for (const Scene& sc : scenes()) {
@@ -339,8 +339,7 @@ void check_wide() {
         for (std::size_t i = 0; i < sc.rays.size(); ++i) found[i] = bf.closest_hit(sc.rays[i], ref[i]);
         check_agreement<MeshBvh<P, 8>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 4>, P>(sc, ref, found);
-        check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);
-        check_agreement<MeshBvh<P, 4, WideBoxes::quantized>, P>(sc, ref, found);
+        check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);  // 4 wide: the user-leaf test
     }
 }
 
@@ -423,7 +422,7 @@ TEST_CASE("agreement: MollerTrumbore, kd-tree and BIH, all layouts vs brute forc
 TEST_CASE("agreement: Wald, kd-tree and BIH, all layouts vs brute force") { check_intersector<Wald<float>>(); }
 TEST_CASE("agreement: Watertight, kd-tree and BIH, all layouts vs brute force") { check_intersector<Watertight<float>>(); }
 
-TEST_CASE("agreement: wide BVH (8, 4 wide; float, quantized boxes), every intersector vs brute force") {
+TEST_CASE("agreement: wide BVH (8, 4 wide; quantized 8 wide), every intersector vs brute force") {
     check_wide<Ivm<float>>();
     check_wide<MollerTrumbore<float>>();
     check_wide<Wald<float>>();
