@@ -20,11 +20,17 @@
 // thread; --wide runs only it (every intersector, 8 and 4 wide) and prints its build time
 // on 1 and 2 threads next to Embree's (threads=1) and its bytes per triangle next to
 // Embree's (from Embree's memory monitor); --cpu-time times trace passes by the thread's
-// CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore. --bvh-ct / --bvh-ci / --bvh-block / --bvh-leaf / --bvh-bins
-// set its SAH constants (BvhBuildOptions).
+// CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore
+// (float child boxes, layout soa; --quantized adds quantized boxes, soa-q8, which every run
+// without --few includes); --no-build-table skips the build timing. --bvh-ct / --bvh-ci / --bvh-block /
+// --bvh-leaf / --bvh-bins set its SAH constants (BvhBuildOptions); --build-threads N builds the
+// timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
+// children side by side (WideNodeOrder::sibling_blocks).
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63); --few: pointer and
 // compact-31 only (as --quick, with the full ray count).
+// --solo glint|embree: trace with bvh8 (Moller-Trumbore) or Embree alone, --reps passes, no
+// timing or build table (for valgrind --tool=cachegrind).
 // --set primary|incoherent: run one ray set. --big adds knot-2m, a 2,048,000-triangle torus knot.
 // --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
 // --memory: print only the node-memory table (pointer, havran-K, compact-K for K = 3 ... 63,
@@ -34,6 +40,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <sys/resource.h>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -209,6 +216,10 @@ struct Peer {  // no peer: never constructed
 struct Options {
     std::vector<std::string> meshes;
     std::string csv, only, set;  // --set: run one ray set (primary or incoherent)
+    std::string solo;            // --solo glint|embree: trace with one of them only (profiling)
+    unsigned build_threads = 1;  // --build-threads: the wide BVH rows' build threads
+    bool build_table = true;     // --no-build-table: skip the 1- and 2-thread build timing
+    bool quantized = false;      // --quantized: with --wide --few, also bvh8 with quantized boxes
     bool quick = false, generated = true, all = false, memory = false, few = false, wide = false, big = false;
     BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
@@ -239,6 +250,20 @@ void time_sets(const Scene& sc, const Accel& acc, const Peer* peer, const Option
         double best = infinity<double>, peer_best = infinity<double>;
         std::vector<double> ratios;  // per pass: peer time / our time, adjacent in time
         std::size_t agree = 0;
+        if (!opt.solo.empty()) {  // one tracer alone, for profilers: no timing, no pairing
+            std::size_t hits = 0;
+            for (int rep = 0; rep < opt.reps; ++rep) {
+                if (opt.solo == "embree" && peer) peer->trace(rays, peer_t);
+                if (opt.solo == "glint")
+                    for (const auto& r : rays) {
+                        StoreHit<float> h;
+                        hits += acc.closest_hit(r, h);
+                    }
+            }
+            std::printf("# solo %s: %s/%s, %d passes, %zu hits\n", opt.solo.c_str(), sc.name.c_str(),
+                        sc.sets[s].name.c_str(), opt.reps, hits);
+            continue;
+        }
         for (int rep = 0; rep < opt.reps; ++rep) {
             std::size_t hits = 0;
             const double t1 = pass_clock();
@@ -309,48 +334,62 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer*
     time_sets(sc, acc, peer, opt, base, rows);
 }
 
-/// The wide BVH over intersector P, N wide, built on one thread.
-template <class P, int N>
+/// The wide BVH over intersector P, N wide, child boxes as B, built on --build-threads threads.
+template <class P, int N, WideBoxes B = WideBoxes::floats>
 void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector<Row>& rows) {
     BvhBuildOptions bo = opt.bvh;
-    bo.threads = 1;
-    const MeshBvh<P, N> acc(sc.mesh, bo);
+    bo.threads = opt.build_threads;
+    const MeshBvh<P, N, B> acc(sc.mesh, bo);
     Row base;
     base.scene = sc.name;
-    base.tree = MeshBvh<P, N>::name;
-    base.layout = "soa";
+    base.tree = MeshBvh<P, N, B>::name;
+    base.layout = WideBvh<N, B>::boxes_label;
     base.intersector = P::name;
     base.build_s = acc.build_seconds();
     base.node_bytes = acc.bvh().stats().node_bytes;
     base.bytes_per_tri = double(base.node_bytes) / double(sc.mesh.size());
-    base.build_threads = 1;
+    base.build_threads = bo.threads;
     time_sets(sc, acc, peer, opt, base, rows);
 }
 
-/// Build time of the 8-wide BVH (Moller-Trumbore records) on 1 and 2 threads, median of 5
-/// alternating builds each, and its memory next to Embree's.
+/// CPU seconds used so far by this process (who = RUSAGE_SELF) or this thread (RUSAGE_THREAD).
+double cpu_seconds(int who) {
+    rusage u{};
+    getrusage(who, &u);
+    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+/// Build time of the 8-wide BVH (Moller-Trumbore records) on 1 and 2 threads, median of 7
+/// alternating builds each, and its memory next to Embree's. On a loaded machine the wall
+/// time of the 2-thread build says little (no core is free), so it also prints CPU time:
+/// the 1-thread build's, and the 2-thread build's split into the calling thread's and the
+/// others'; the larger part bounds the 2-thread wall time on an idle machine from below.
 void wide_build_table(const Scene& sc, const Peer* peer, const Options& opt) {
-    std::vector<double> t1, t2;
+    std::vector<double> t1, t2, cpu1, main2, other2;
     std::size_t total = 0, nodes = 0;
-    for (int rep = 0; rep < 5; ++rep)
+    for (int rep = 0; rep < 7; ++rep)
         for (unsigned threads : {1u, 2u}) {
             BvhBuildOptions bo = opt.bvh;
             bo.threads = threads;
+            const double p0 = cpu_seconds(RUSAGE_SELF), m0 = cpu_seconds(RUSAGE_THREAD);
             const MeshBvh<MollerTrumbore<float>, 8> acc(sc.mesh, bo);
+            const double p = cpu_seconds(RUSAGE_SELF) - p0, m = cpu_seconds(RUSAGE_THREAD) - m0;
             (threads == 1 ? t1 : t2).push_back(acc.build_seconds());
+            if (threads == 1) cpu1.push_back(p);
+            else main2.push_back(m), other2.push_back(p - m);
             total = acc.total_bytes();
             nodes = acc.bvh().stats().node_bytes;
         }
-    std::sort(t1.begin(), t1.end());
-    std::sort(t2.begin(), t2.end());
+    for (auto* v : {&t1, &t2, &cpu1, &main2, &other2}) std::sort(v->begin(), v->end());
     const double n = double(sc.mesh.size());
-    std::printf("# %s bvh8 build: 1 thread %.4f s, 2 threads %.4f s (x%.2f); %.1f B/tri (nodes %.1f, records %.1f)",
-                sc.name.c_str(), t1[2], t2[2], t1[2] / t2[2], double(total) / n, double(nodes) / n,
-                double(total - nodes) / n);
+    std::printf("# %s bvh8 build: 1 thread %.4f s, 2 threads %.4f s (x%.2f); CPU: 1 thread %.4f s, 2 threads "
+                "%.4f + %.4f s (x%.2f); %.1f B/tri (nodes %.1f, records %.1f)",
+                sc.name.c_str(), t1[3], t2[3], t1[3] / t2[3], cpu1[3], main2[3], other2[3],
+                cpu1[3] / std::max(main2[3], other2[3]), double(total) / n, double(nodes) / n, double(total - nodes) / n);
 #ifdef GLINT_HAVE_EMBREE
     if (peer)
         std::printf("; Embree threads=1 build %.4f s (bvh8 1 thread / Embree x%.2f), %.1f B/tri", peer->build_seconds,
-                    t1[2] / peer->build_seconds, double(peer->bytes) / n);
+                    t1[3] / peer->build_seconds, double(peer->bytes) / n);
 #else
     (void)peer;
 #endif
@@ -434,6 +473,11 @@ Options parse(int argc, char** argv) {
         else if (a == "--cpu-time") use_cpu_time = true;
         else if (a == "--set") o.set = value();
         else if (a == "--big") o.big = true;
+        else if (a == "--solo") o.solo = value();
+        else if (a == "--no-build-table") o.build_table = false;
+        else if (a == "--quantized") o.quantized = true;
+        else if (a == "--bvh-siblings") o.bvh.node_order = std::stoi(value()) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
+        else if (a == "--build-threads") o.build_threads = unsigned(std::stoul(value()));
         else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
         else if (a == "--bvh-ci") o.bvh.intersection_cost = std::stof(value());
         else if (a == "--bvh-block") o.bvh.leaf_block = std::uint32_t(std::stoul(value()));
@@ -446,7 +490,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big]");
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -504,8 +548,13 @@ int main(int argc, char** argv) try {
 #else
         std::puts("# Embree 3 not found: no peer comparison");
 #endif
-        wide_build_table(sc, peer.get(), opt);
+        if (!opt.solo.empty()) {
+            run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
+            continue;
+        }
+        if (opt.build_table) wide_build_table(sc, peer.get(), opt);
         run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
+        if (!opt.wide || !opt.few || opt.quantized) run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
         if (!opt.quick && !opt.few) {
             run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);

@@ -17,7 +17,8 @@
 // adversarial rays (axis-parallel through vertex coordinates) may have any number, but
 // every one must be an edge case. Nothing else is tolerated.
 //
-// CI runs 2 * 10^4 rays per scene and combination; -DGLINT_LONG_TESTS runs 10^6.
+// CI runs 2 * 10^4 rays per scene and combination; -DGLINT_LONG_TESTS runs 10^6 (for the wide
+// BVH alone: test_trees -tc="agreement: wide*").
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
@@ -293,7 +294,7 @@ void check_agreement(const Scene& sc, const std::vector<StoreHit<float>>& ref, c
     if constexpr (requires { Accel::layout_type::label(); })
         what += std::string(Accel::builder_type::name) + " " + Accel::layout_type::label();
     else
-        what += Accel::name;
+        what += std::string(Accel::name) + " " + Accel::boxes_label;
     INFO(what);
     INFO("closest: rays " << closest.rays << " hits " << closest.hits << " ties " << closest.ties << " edges "
                           << closest.edges << " (generic " << closest.generic_edges << " of " << closest.generic_rays
@@ -324,8 +325,21 @@ void check_intersector() {
         check_layouts<P, KdTree, PointerLayout, HavranSubtrees<7>, CompactSubtrees<3>, CompactSubtrees<31>,
                       HavranSubtrees<63>>(sc, ref, found);
         check_layouts<P, Bih, PointerLayout, HavranSubtrees<31>, CompactSubtrees<7>, CompactSubtrees<63>>(sc, ref, found);
+    }
+}
+
+/// The wide BVH (8 and 4 wide with float child boxes, 8 wide with quantized ones) against
+/// brute force: the same rules and rays as the other trees, 10^6 per scene with GLINT_LONG_TESTS.
+template <class P>
+void check_wide() {
+    for (const Scene& sc : scenes()) {
+        const BruteForce<P> bf(sc.mesh);
+        std::vector<StoreHit<float>> ref(sc.rays.size());
+        std::vector<char> found(sc.rays.size());
+        for (std::size_t i = 0; i < sc.rays.size(); ++i) found[i] = bf.closest_hit(sc.rays[i], ref[i]);
         check_agreement<MeshBvh<P, 8>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 4>, P>(sc, ref, found);
+        check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);  // 4 wide: the user-leaf test
     }
 }
 
@@ -403,10 +417,17 @@ TEST_CASE("errors: kd-tree cost constants out of range are rejected by name") {
     CHECK_THROWS_WITH_AS(build(o), doctest::Contains("max_depth"), Error);
 }
 
-TEST_CASE("agreement: Ivm, all trees and layouts vs brute force") { check_intersector<Ivm<float>>(); }
-TEST_CASE("agreement: MollerTrumbore, all trees and layouts vs brute force") { check_intersector<MollerTrumbore<float>>(); }
-TEST_CASE("agreement: Wald, all trees and layouts vs brute force") { check_intersector<Wald<float>>(); }
-TEST_CASE("agreement: Watertight, all trees and layouts vs brute force") { check_intersector<Watertight<float>>(); }
+TEST_CASE("agreement: Ivm, kd-tree and BIH, all layouts vs brute force") { check_intersector<Ivm<float>>(); }
+TEST_CASE("agreement: MollerTrumbore, kd-tree and BIH, all layouts vs brute force") { check_intersector<MollerTrumbore<float>>(); }
+TEST_CASE("agreement: Wald, kd-tree and BIH, all layouts vs brute force") { check_intersector<Wald<float>>(); }
+TEST_CASE("agreement: Watertight, kd-tree and BIH, all layouts vs brute force") { check_intersector<Watertight<float>>(); }
+
+TEST_CASE("agreement: wide BVH (8, 4 wide; quantized 8 wide), every intersector vs brute force") {
+    check_wide<Ivm<float>>();
+    check_wide<MollerTrumbore<float>>();
+    check_wide<Wald<float>>();
+    check_wide<Watertight<float>>();
+}
 
 TEST_CASE("agreement: double precision kd-tree and BIH") {
     const Mesh<float> mf = make_torus_knot<float>();
@@ -608,8 +629,8 @@ std::vector<AABB<float>> triangle_boxes(const Mesh<float>& m) {
 
 /// Closest hit through WideBvh::intersect with a user leaf callable (one Triangle per
 /// primitive): the traversal API a user with their own primitives calls.
-template <int N, bool Portable>
-bool user_leaf_closest(const WideBvh<N>& bvh, const std::vector<Triangle<MollerTrumbore<float>>>& tris,
+template <int N, bool Portable, WideBoxes B>
+bool user_leaf_closest(const WideBvh<N, B>& bvh, const std::vector<Triangle<MollerTrumbore<float>>>& tris,
                        Ray<float> r, StoreHit<float>& hit) {
     return bvh.template intersect<false, Portable>(r, [&](std::uint32_t first, std::uint32_t count) {
         bool found = false;
@@ -626,9 +647,9 @@ bool user_leaf_closest(const WideBvh<N>& bvh, const std::vector<Triangle<MollerT
     });
 }
 
-template <int N>
+template <int N, WideBoxes B>
 void check_portable_and_user_leaf(const Scene& sc) {
-    const WideBvh<N> bvh(triangle_boxes(sc.mesh));
+    const WideBvh<N, B> bvh(triangle_boxes(sc.mesh));
     std::vector<Triangle<MollerTrumbore<float>>> tris;
     for (const auto& t : sc.mesh) tris.emplace_back(t[0], t[1], t[2]);
     const BruteForce<MollerTrumbore<float>> bf(sc.mesh);
@@ -637,15 +658,15 @@ void check_portable_and_user_leaf(const Scene& sc) {
     for (std::size_t i = 0; i < sc.rays.size(); ++i) {
         const Ray<float>& r = sc.rays[i];
         StoreHit<float> a, b, ref;
-        const bool fa = user_leaf_closest<N, false>(bvh, tris, r, a);
-        const bool fb = user_leaf_closest<N, true>(bvh, tris, r, b);
+        const bool fa = user_leaf_closest<N, false, B>(bvh, tris, r, a);
+        const bool fb = user_leaf_closest<N, true, B>(bvh, tris, r, b);
         differ += fa != fb || a.t != b.t || a.id != b.id;  // SIMD and portable: the same floats
         // Against brute force (whose batch kernel may round differently from the scalar
         // test), by the agreement rules at the top of this file.
         const bool fr = bf.closest_hit(r, ref);
         compare(sc, i, a, fa, ref, fr, tally);
     }
-    INFO(sc.name << " width " << N << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
+    INFO(sc.name << " width " << N << " " << WideBvh<N, B>::boxes_label << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
                  << " (generic " << tally.generic_edges << ") errors " << tally.errors);
     CHECK(differ == 0);
     CHECK(tally.errors == 0);
@@ -657,9 +678,49 @@ void check_portable_and_user_leaf(const Scene& sc) {
 
 TEST_CASE("wide BVH: SIMD and portable box tests give the same hits; a user's leaf callable") {
     for (const Scene& sc : scenes()) {
-        check_portable_and_user_leaf<8>(sc);
-        check_portable_and_user_leaf<4>(sc);
+        check_portable_and_user_leaf<8, WideBoxes::floats>(sc);
+        check_portable_and_user_leaf<4, WideBoxes::floats>(sc);
+        check_portable_and_user_leaf<8, WideBoxes::quantized>(sc);
+        check_portable_and_user_leaf<4, WideBoxes::quantized>(sc);
     }
+}
+
+TEST_CASE("wide BVH: quantized child boxes contain the float boxes, extreme ranges included") {
+    Pcg32 rng(7);
+    auto u = [&] { return rng.uniform<float>(); };
+    std::size_t planes = 0, tight = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        // Node scales from 1e-30 to 1e30, offsets up to 1e6 node sizes, flat and point children.
+        const float size = std::pow(10.0f, 60 * u() - 30), offset = size * std::pow(10.0f, 6 * u()) * (u() - 0.5f);
+        WideBvhNode<8> f{};
+        const int k = 1 + int(rng.bounded(8));
+        for (int i = 0; i < 8; ++i) {
+            f.child[i] = i;
+            for (int a = 0; a < 3; ++a) {
+                float lo = offset + size * u(), hi = lo + size * u() * (u() < 0.2f ? 0.0f : 1.0f);
+                if (i >= k) lo = infinity<float>, hi = -infinity<float>;
+                f.bounds[2 * a][i] = lo;
+                f.bounds[2 * a + 1][i] = hi;
+            }
+        }
+        const WideBvhQNode<8> q = detail::wide_quantize(f);
+        REQUIRE(q.count == k);
+        for (int a = 0; a < 3; ++a) {
+            const float s = detail::wide_scale(q.exp[a]);
+            // Looseness allowed: one step plus the rounding of the decoded plane (one ulp of
+            // the largest decoded magnitude), twice (a loose box costs speed, not hits).
+            const float big = std::abs(q.origin[a]) + 256 * s, ulp = std::nextafter(big, infinity<float>) - big;
+            for (int i = 0; i < k; ++i) {
+                const float lo = detail::wide_plane(q.origin[a], q.q[2 * a][i], s);
+                const float hi = detail::wide_plane(q.origin[a], q.q[2 * a + 1][i], s);
+                CHECK(lo <= f.bounds[2 * a][i]);
+                CHECK(hi >= f.bounds[2 * a + 1][i]);
+                ++planes;
+                tight += f.bounds[2 * a][i] - lo <= 2 * (s + ulp) && hi - f.bounds[2 * a + 1][i] <= 2 * (s + ulp);
+            }
+        }
+    }
+    CHECK(tight == planes);
 }
 
 TEST_CASE("wide BVH: the tree does not depend on the thread count") {
@@ -672,6 +733,35 @@ TEST_CASE("wide BVH: the tree does not depend on the thread count") {
         CHECK(std::memcmp(other->nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
     }
     CHECK(one.stats().nodes > 100);
+}
+
+TEST_CASE("wide BVH: sibling blocks place a node's inner children side by side, with the same hits") {
+    const Scene& sc = scenes()[1];
+    const auto boxes = triangle_boxes(sc.mesh);
+    const WideBvh<8> depth(boxes), blocks(boxes, {.node_order = WideNodeOrder::sibling_blocks});
+    REQUIRE(blocks.nodes().size() == depth.nodes().size());
+    CHECK(blocks.prims() == depth.prims());
+    std::size_t runs = 0;
+    for (const auto& n : blocks.nodes()) {
+        std::uint32_t next = 0;
+        for (int i = 0; i < 8; ++i) {
+            if (n.child[i] == 0xffffffffu || detail::wide_is_leaf(n.child[i])) continue;
+            if (next != 0) CHECK(n.child[i] == next);  // consecutive
+            next = n.child[i] + 1;
+            ++runs;
+        }
+    }
+    CHECK(runs + 1 == blocks.nodes().size());  // every node but the root is someone's child
+    std::vector<Triangle<MollerTrumbore<float>>> tris;
+    for (const auto& t : sc.mesh) tris.emplace_back(t[0], t[1], t[2]);
+    std::size_t differ = 0;
+    for (const Ray<float>& r : sc.rays) {
+        StoreHit<float> a, b;
+        const bool fa = user_leaf_closest<8, false, WideBoxes::floats>(depth, tris, r, a);
+        const bool fb = user_leaf_closest<8, false, WideBoxes::floats>(blocks, tris, r, b);
+        differ += fa != fb || a.t != b.t || a.id != b.id;
+    }
+    CHECK(differ == 0);
 }
 
 TEST_CASE("wide BVH: the user's indexed mesh with a stride, hits report the user's triangle") {

@@ -33,6 +33,11 @@
 
 namespace glint {
 
+/// Where the wide collapse (wide_bvh.hpp) puts a node's children in the node array: each
+/// child's subtree right after it (depth first), or a node's inner children side by side in
+/// one block, then their subtrees (000 §4.4's idea of placing a node's children together).
+enum class WideNodeOrder { depth_first, sibling_blocks };
+
 /// Cost constants and limits of the binned SAH build (docs/trees.md: how they were chosen).
 struct BvhBuildOptions {
     float traversal_cost = 1.0f;     // C_T, per binary node
@@ -41,6 +46,7 @@ struct BvhBuildOptions {
     std::uint32_t max_leaf = 16;     // at most this many primitives per leaf (1 ... 16)
     std::uint32_t bins = 16;         // centre bins per axis (2 ... 64)
     unsigned threads = 1;            // build threads; 0: std::thread::hardware_concurrency()
+    WideNodeOrder node_order = WideNodeOrder::depth_first;  // the wide nodes' order in memory
 
     void check() const {
         auto bad = [](const std::string& what) { throw Error("BvhBuildOptions: " + what); };
@@ -143,15 +149,22 @@ private:
     }
 
     /// Runs the two children, the left one on a thread of its own when the subtree is
-    /// large and a thread is free (the tree does not depend on which runs where).
+    /// large and a thread is free (the tree does not depend on which runs where). A thread
+    /// gives its token back as soon as its subtree is done, and so does the waiting parent
+    /// until the join, so that the side still at work can split its own large subtrees off
+    /// again (uneven splits).
     void recurse(std::uint32_t ls, std::uint32_t b, std::uint32_t m, const AABB<float>& lb, std::uint32_t rs,
                  std::uint32_t e, const AABB<float>& rb) {
         constexpr std::uint32_t parallel_min = 4096;
         if (e - b >= parallel_min && tokens_.fetch_sub(1) > 0) {
-            std::thread left([&] { node(ls, b, m, lb); });
+            std::thread left([&] {
+                node(ls, b, m, lb);
+                tokens_.fetch_add(1);
+            });
             node(rs, m, e, rb);
+            tokens_.fetch_add(1);  // this thread waits: another may run meanwhile
             left.join();
-            tokens_.fetch_add(1);
+            tokens_.fetch_sub(1);
             return;
         }
         if (e - b >= parallel_min) tokens_.fetch_add(1);

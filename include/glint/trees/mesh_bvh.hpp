@@ -67,8 +67,9 @@ struct IndexedMesh {
     }
 };
 
-/// Wide BVH (N = 8 or 4 children per node) over triangles tested with intersector P.
-template <TriangleIntersector P, int N = 8>
+/// Wide BVH (N = 8 or 4 children per node, child boxes stored as B says) over triangles
+/// tested with intersector P.
+template <TriangleIntersector P, int N = 8, WideBoxes B = WideBoxes::floats>
     requires std::same_as<typename P::scalar_type, float>
 class MeshBvh {
 public:
@@ -76,6 +77,7 @@ public:
     using T = float;
     using intersector_type = P;
     static constexpr const char* name = N == 8 ? "bvh8" : "bvh4";
+    static constexpr const char* boxes_label = WideBvh<N, B>::boxes_label;
 
     /// From the user's indexed mesh (hits report the index of the user's triangle).
     explicit MeshBvh(const IndexedMesh<float>& mesh, const BvhBuildOptions& opt = {}) {
@@ -116,7 +118,7 @@ public:
         });
     }
 
-    const WideBvh<N>& bvh() const { return bvh_; }
+    const WideBvh<N, B>& bvh() const { return bvh_; }
     /// The triangle records of the leaves.
     const TriangleLeaves<P>& leaves() const { return leaves_; }
     /// Build time (boxes, tree, records), in seconds.
@@ -136,7 +138,7 @@ private:
             if (!detail::can_be_hit(t)) continue;  // an empty box: left out
             for (const auto& p : t) boxes[j].extend(p);
         }
-        bvh_ = WideBvh<N>(boxes, opt);
+        bvh_ = WideBvh<N, B>(boxes, opt);
         std::vector<TriangleVertices<float>> leaf_tris;
         bvh_.remap_leaves([&](std::uint32_t first, std::uint32_t count) {
             const std::span<const std::uint32_t> ids(bvh_.prims().data() + first, count);
@@ -147,7 +149,7 @@ private:
         build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
 
-    WideBvh<N> bvh_;
+    WideBvh<N, B> bvh_;
     TriangleLeaves<P> leaves_;
     double build_seconds_ = 0;
 };

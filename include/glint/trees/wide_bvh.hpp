@@ -33,6 +33,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #if defined(__SSE2__) || defined(__AVX__)
@@ -58,7 +59,82 @@ struct alignas(N * 4) WideBvhNode {
     std::uint32_t child[N];
 };
 
+/// How a wide node stores its child boxes: as floats, or quantized to 8 bits per plane
+/// relative to the node's own box (Ylitie, Karras, Laine, "Efficient incoherent ray traversal
+/// on GPUs through compressed wide BVHs", HPG 2017; Embree's compressed nodes).
+enum class WideBoxes { floats, quantized };
+
+/// One N-wide node with quantized child boxes: child i's low and high planes on axis a are
+/// origin[a] + q[2a][i] * s_a and origin[a] + q[2a + 1][i] * s_a, s_a = 2^(exp[a] - 127) (the
+/// float whose exponent bits are exp[a]); the product is exact, so the decoded plane is one
+/// rounded addition, which the build checks: the decoded box always contains the child's
+/// box (low planes rounded down, high planes up), so no hit is lost. Children 0 ... count - 1
+/// are in use. 96 bytes for N = 8 (two cache lines), 64 for N = 4.
+template <int N>
+struct alignas(32) WideBvhQNode {
+    float origin[3];
+    std::uint8_t exp[3];
+    std::uint8_t count;
+    std::uint8_t q[6][N];
+    std::uint32_t child[N];
+};
+
 namespace detail {
+
+/// The decoded plane of a quantized node (build and every traversal path compute it so).
+inline float wide_scale(std::uint8_t e) { return std::bit_cast<float>(std::uint32_t(e) << 23); }
+inline float wide_plane(float origin, std::uint8_t q, float scale) { return origin + float(q) * scale; }
+
+/// Quantizes one axis of a node: the scale (a power of two) is the smallest whose 255 steps
+/// from the node's low plane reach its high plane after rounding; each child plane is
+/// rounded outward, then moved a step further while the decoded plane falls inside the box.
+template <int N>
+void wide_quantize_axis(const WideBvhNode<N>& f, int a, WideBvhQNode<N>& q) {
+    const int k = q.count;
+    float lo = infinity<float>, hi = -infinity<float>;
+    for (int i = 0; i < k; ++i) {
+        lo = std::min(lo, f.bounds[2 * a][i]);
+        hi = std::max(hi, f.bounds[2 * a + 1][i]);
+    }
+    int ex = 0;  // (hi - lo) / 255 < 2^ex: start there, then fix the rounding up
+    std::frexp((hi - lo) / 255.0f, &ex);
+    int e = std::clamp(ex + 126, 27, 254);  // >= 2^-100: q * s stays a normal float, so the product is exact
+    while (e < 254 && wide_plane(lo, 255, wide_scale(std::uint8_t(e))) < hi) ++e;
+    const float s = wide_scale(std::uint8_t(e));
+    q.origin[a] = lo;
+    q.exp[a] = std::uint8_t(e);
+    for (int i = 0; i < k; ++i) {
+        const float bl = f.bounds[2 * a][i], bh = f.bounds[2 * a + 1][i];
+        int ql = int(std::clamp(std::floor((bl - lo) / s), 0.0f, 255.0f));
+        int qh = int(std::clamp(std::ceil((bh - lo) / s), 0.0f, 255.0f));
+        while (ql > 0 && wide_plane(lo, std::uint8_t(ql), s) > bl) --ql;
+        while (qh < 255 && wide_plane(lo, std::uint8_t(qh), s) < bh) ++qh;
+        q.q[2 * a][i] = std::uint8_t(ql);
+        q.q[2 * a + 1][i] = std::uint8_t(qh);
+    }
+}
+
+/// The quantized form of a float node whose used children come first.
+template <int N>
+WideBvhQNode<N> wide_quantize(const WideBvhNode<N>& f) {
+    WideBvhQNode<N> q{};
+    while (q.count < N && !(f.bounds[0][q.count] > f.bounds[1][q.count])) ++q.count;  // unused: low +inf, high -inf
+    for (int a = 0; a < 3; ++a) wide_quantize_axis(f, a, q);
+    for (int i = 0; i < N; ++i) q.child[i] = f.child[i];
+    return q;
+}
+
+/// The float node whose boxes a quantized node stands for (unused children: no box).
+template <int N>
+WideBvhNode<N> wide_decode(const WideBvhQNode<N>& n) {
+    WideBvhNode<N> f;
+    for (int r = 0; r < 6; ++r)
+        for (int i = 0; i < N; ++i)
+            f.bounds[r][i] = i < n.count ? wide_plane(n.origin[r / 2], n.q[r][i], wide_scale(n.exp[r / 2]))
+                                         : (r % 2 ? -infinity<float> : infinity<float>);
+    for (int i = 0; i < N; ++i) f.child[i] = n.child[i];
+    return f;
+}
 
 /// Leaf references: bit 31 set, 4 bits of count - 1 (1 ... 16), 27 bits of first index
 /// (all ones is no leaf: an unused child).
@@ -108,6 +184,10 @@ struct WideBoxTest {
         }
         return mask;
     }
+    /// Quantized nodes: the planes decoded (the AVX2 path computes the same floats).
+    unsigned test(const WideBvhQNode<N>& n, float tmin, float tmax, float* tn) const {
+        return test(wide_decode(n), tmin, tmax, tn);
+    }
 };
 
 #if defined(__AVX__)
@@ -142,6 +222,31 @@ struct WideBoxTest<8, false> {
         t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
         return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
     }
+#if defined(__AVX2__)
+    [[gnu::always_inline]] unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
+        __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
+        const char* rows = reinterpret_cast<const char*>(n.q);
+        auto plane = [&](std::size_t row_offset, __m256 origin, __m256 scale) {  // the float row offset / 4
+            const __m128i q = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows + row_offset / 4));
+            return _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(q)), scale));
+        };
+        for (int a = 0; a < 3; ++a) {
+            const __m256 org = _mm256_broadcast_ss(&n.origin[a]), s = _mm256_set1_ps(wide_scale(n.exp[a]));
+            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(plane(near[a], org, s), o[a]), inv[a]);
+            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(plane(far[a], org, s), o[a]), inv[a]);
+            t0 = _mm256_max_ps(tl, t0);
+            t1 = _mm256_min_ps(th, t1);
+        }
+        _mm256_storeu_ps(tn, t0);
+        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+        const unsigned used = (1u << n.count) - 1u;
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ))) & used;
+    }
+#else
+    unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
+        return test(wide_decode(n), tmin, tmax, tn);
+    }
+#endif
 };
 #endif
 
@@ -173,6 +278,9 @@ struct WideBoxTest<4, false> {
         t1 = _mm_mul_ps(t1, _mm_set1_ps(wide_exit_scale));
         return unsigned(_mm_movemask_ps(_mm_cmple_ps(t0, t1)));
     }
+    unsigned test(const WideBvhQNode<4>& n, float tmin, float tmax, float* tn) const {
+        return test(wide_decode(n), tmin, tmax, tn);
+    }
 };
 #endif
 
@@ -203,15 +311,18 @@ struct WideBvhStats {
     std::uint32_t depth = 0;  // wide levels on the longest path, leaves included
 };
 
-/// N-wide BVH (N = 4 or 8) over primitive boxes; leaves are ranges of prims(), or of
-/// whatever remap_leaves() made them.
-template <int N>
+/// N-wide BVH (N = 4 or 8) over primitive boxes, child boxes stored as B says; leaves are
+/// ranges of prims(), or of whatever remap_leaves() made them.
+template <int N, WideBoxes B = WideBoxes::floats>
 class WideBvh {
     static_assert(N == 4 || N == 8, "WideBvh: 4- or 8-wide nodes");
+    using FloatNodes = std::vector<WideBvhNode<N>, detail::CacheLineAllocator<WideBvhNode<N>>>;
 
 public:
-    using Node = WideBvhNode<N>;
+    using Node = std::conditional_t<B == WideBoxes::floats, WideBvhNode<N>, WideBvhQNode<N>>;
     static constexpr int width = N;
+    static constexpr WideBoxes box_format = B;
+    static constexpr const char* boxes_label = B == WideBoxes::floats ? "soa" : "soa-q8";
     /// Stack entries: a step pushes at most N - 1 more than it pops, so a tree of depth D
     /// needs (N - 1) D + 1; build() refuses deeper trees.
     static constexpr int max_stack = 512;
@@ -221,14 +332,22 @@ public:
     explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}) {
         const BinaryBvh bin = build_binary_bvh(boxes, opt);
         prims_ = bin.prims;
+        order_ = opt.node_order;
         if (bin.empty()) return;
-        nodes_.emplace_back(empty_node());
+        FloatNodes wide;
+        wide.emplace_back(empty_node());
         stats_.depth = 1;
         if (bin.nodes[0].leaf()) {  // a one-leaf tree: a root with one child
-            set_child(0, 0, bin.nodes[0], detail::wide_leaf(bin.nodes[0].begin, bin.nodes[0].count));
+            set_child(wide[0], 0, bin.nodes[0], detail::wide_leaf(bin.nodes[0].begin, bin.nodes[0].count));
             stats_.leaves = 1;
         } else {
-            fill(bin, 0, 0, 1);
+            fill(bin, wide, 0, 0, 1);
+        }
+        if constexpr (B == WideBoxes::floats) {
+            nodes_ = std::move(wide);
+        } else {
+            nodes_.reserve(wide.size());
+            for (const WideBvhNode<N>& f : wide) nodes_.push_back(detail::wide_quantize(f));
         }
         stats_.nodes = nodes_.size();
         stats_.node_bytes = nodes_.size() * sizeof(Node);
@@ -310,8 +429,8 @@ public:
 private:
     static constexpr std::uint32_t empty_ref = 0xffffffffu;
 
-    static Node empty_node() {
-        Node n;
+    static WideBvhNode<N> empty_node() {
+        WideBvhNode<N> n;
         for (int i = 0; i < N; ++i) {
             for (int a = 0; a < 3; ++a) {
                 n.bounds[2 * a][i] = infinity<float>;
@@ -321,16 +440,17 @@ private:
         }
         return n;
     }
-    void set_child(std::uint32_t node, int i, const BinaryBvhNode& b, std::uint32_t ref) {
+    static void set_child(WideBvhNode<N>& node, int i, const BinaryBvhNode& b, std::uint32_t ref) {
         for (int a = 0; a < 3; ++a) {
-            nodes_[node].bounds[2 * a][i] = b.box.lo[a];
-            nodes_[node].bounds[2 * a + 1][i] = b.box.hi[a];
+            node.bounds[2 * a][i] = b.box.lo[a];
+            node.bounds[2 * a + 1][i] = b.box.hi[a];
         }
-        nodes_[node].child[i] = ref;
+        node.child[i] = ref;
     }
 
-    /// Fills wide node `node` from binary inner node `slot` (depth: of this wide node).
-    void fill(const BinaryBvh& bin, std::uint32_t slot, std::uint32_t node, std::uint32_t depth) {
+    /// Fills wide node `node` of `wide` from binary inner node `slot` (depth: of this wide
+    /// node); children take slots 0 ... k - 1.
+    void fill(const BinaryBvh& bin, FloatNodes& wide, std::uint32_t slot, std::uint32_t node, std::uint32_t depth) {
         std::uint32_t kids[N] = {slot + 1, bin.nodes[slot].right};
         int k = 2;
         while (k < N) {  // open the inner child of largest area
@@ -349,22 +469,28 @@ private:
             kids[k++] = bin.nodes[s].right;
         }
         stats_.depth = std::max(stats_.depth, depth + 1);  // its leaves, at least
+        std::uint32_t first_child = 0;
         for (int i = 0; i < k; ++i) {
             const BinaryBvhNode& c = bin.nodes[kids[i]];
             if (c.leaf()) {
-                set_child(node, i, c, detail::wide_leaf(c.begin, c.count));
+                set_child(wide[node], i, c, detail::wide_leaf(c.begin, c.count));
                 ++stats_.leaves;
                 continue;
             }
-            const std::uint32_t child = std::uint32_t(nodes_.size());
-            nodes_.emplace_back(empty_node());
-            set_child(node, i, c, child);
-            fill(bin, kids[i], child, depth + 1);
+            const std::uint32_t child = std::uint32_t(wide.size());
+            if (first_child == 0) first_child = child;
+            wide.emplace_back(empty_node());
+            set_child(wide[node], i, c, child);
+            if (order_ == WideNodeOrder::depth_first) fill(bin, wide, kids[i], child, depth + 1);
         }
+        if (order_ == WideNodeOrder::sibling_blocks)  // the inner children were placed side by side
+            for (int i = 0; i < k; ++i)
+                if (!bin.nodes[kids[i]].leaf()) fill(bin, wide, kids[i], first_child++, depth + 1);
     }
 
     std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
     std::vector<std::uint32_t> prims_;
+    WideNodeOrder order_ = WideNodeOrder::depth_first;
     WideBvhStats stats_;
 };
 
