@@ -31,6 +31,7 @@
 #include <vector>
 
 #include <glint/core/math.hpp>
+#include <glint/core/optics.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/intersection/triangle.hpp>
@@ -45,27 +46,20 @@
 
 namespace glint {
 
-/// Dielectric: Fresnel reflectance (unpolarized, the mean of the s and p terms) chooses
-/// reflection or refraction by u; ior is relative to the side ng points away from.
+/// Dielectric: Fresnel reflectance (core/optics.hpp) chooses reflection or refraction by u;
+/// ior is relative to the side ng points away from.
 template <Scalar T>
 Vec3<T> fresnel_refract_or_reflect(const Vec3<T>& d, const Vec3<T>& ng, T ior, T u) {
     const Vec3<T> dn = safe_normalize(d);
-    T cos_i = -glm::dot(dn, ng);
-    Vec3<T> n = ng;
-    T eta = T(1) / ior;
-    if (cos_i < T(0)) {
-        cos_i = -cos_i;
-        n = -ng;
-        eta = ior;
-    }
-    const T sin2_t = eta * eta * std::max(T(0), T(1) - cos_i * cos_i);
+    const bool inside = glm::dot(dn, ng) > T(0);
+    const Vec3<T> n = inside ? -ng : ng;
+    const T eta = inside ? ior : T(1) / ior;
+    const T cos_i = -glm::dot(dn, n);
     const Vec3<T> reflected = dn + n * (T(2) * cos_i);
-    if (sin2_t >= T(1)) return reflected;
-    const T cos_t = std::sqrt(T(1) - sin2_t);
-    const T rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t), rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    const T fresnel = T(0.5) * (rs * rs + rp * rp);
-    if (u < fresnel) return reflected;
-    return dn * eta + n * (eta * cos_i - cos_t);
+    Vec3<T> refracted;
+    const T cos_t = refract(dn, n, eta, refracted);
+    if (cos_t < T(0) || u < fresnel_dielectric(cos_i, cos_t, eta)) return reflected;
+    return refracted;
 }
 
 template <class Accel, class S, class R, class D, class E, bool Points, Scalar T = float>
