@@ -22,6 +22,7 @@
 
 #include <glint/core/spectrum.hpp>
 #include <glint/sampling/correlated.hpp>
+#include <glint/sampling/sampler.hpp>
 #include <glint/tracer/lighting.hpp>
 
 namespace glint {
@@ -57,6 +58,7 @@ public:
     DirectEstimator estimator() const { return estimator_; }
 
     template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record* rec) const {
         Rgb<T> L(T(0));
         if (lights_.empty()) return L;
@@ -117,6 +119,7 @@ public:
 private:
     /// f/p alone (lambda = 0): no main part, so no form factor is computed.
     template <class Q>
+        requires ShadowQueries<Q, T>
     Rgb<T> importance(const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, std::span<const Vec2<T>> u,
                       Q& queries) const {
         Rgb<T> L(T(0));
@@ -130,8 +133,7 @@ private:
         return L;
     }
 
-    template <class Res>
-    static void keep(vertex_record& rec, const Res& res) {
+    static void keep(vertex_record& rec, const CorrelatedResult<T, 3>& res) {
         for (std::size_t c = 0; c < 3; ++c) {
             rec.a[c] += res.importance[c];
             rec.b[c] += res.main_part[c] - res.stats[c].mean_g;

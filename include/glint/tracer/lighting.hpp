@@ -29,6 +29,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/sampling/correlated.hpp>
+#include <glint/sampling/sampler.hpp>
 #include <glint/tracer/environment.hpp>
 #include <glint/tracer/renderer.hpp>
 #include <glint/tracer/scene.hpp>
@@ -124,6 +125,7 @@ struct BrdfOnlyDirect : NoPixelStatistics<T> {
     BrdfOnlyDirect() = default;
     BrdfOnlyDirect(const Scene<T>&, const RenderSettings&) {}
     template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>&, S&, Q&, typename NoPixelStatistics<T>::vertex_record*) const {
         return Rgb<T>(T(0));
     }
@@ -142,6 +144,7 @@ public:
         : scene_(&scene), lights_(scene), k_(std::max(1, s.light_samples)) {}
 
     template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record*) const {
         Rgb<T> L(T(0));
         for (int i = 0; i < k_; ++i) L += light_sample(sp, sampler, queries);
@@ -163,6 +166,7 @@ public:
 private:
     /// One light sample (light by power, then uniform on it): f Le cos / (k p_light + p_brdf).
     template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> light_sample(const ShadingPoint<T>& sp, S& sampler, Q& queries) const {
         const T u_light = sampler.get_1d();
         const Vec2<T> u_point = sampler.get_2d();
@@ -193,6 +197,7 @@ struct NoEnvironment {
     NoEnvironment() = default;
     explicit NoEnvironment(const Scene<T>&) {}
     template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>&, S&, Q&) const {
         return Rgb<T>(T(0));
     }
@@ -209,6 +214,7 @@ public:
     }
 
     template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries) const {
         const Vec2<T> u_env = sampler.get_2d();
         T pdf_env;

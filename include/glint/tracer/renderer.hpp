@@ -185,6 +185,7 @@ private:
 
     /// The pixel's samples, their mean and the variance of the mean (Welford's update).
     template <class I, class S>
+        requires Integrator<I, S> && CameraPolicy<C, S>
     Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Film& film) const {
         using T = typename I::scalar_type;
         Rgb<T> mean(T(0)), m2(T(0));

@@ -107,6 +107,15 @@ Ray<T> spawn(const ShadingPoint<T>& sp, const Vec3<T>& dir) {
     return Ray<T>{offset_origin(sp.x, sp.err, sp.n, dir), dir, T(0), infinity<T>};
 }
 
+/// What a lighting policy asks of a sample's ray queries: shadow rays to a point of a polygon
+/// light and along a ray of infinite length.
+template <class Q, class T>
+concept ShadowQueries = requires(Q& q, const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, const Vec3<T>& y,
+                                 const Ray<T>& ray) {
+    { q.visible(sp, light, y) } -> std::convertible_to<bool>;
+    { q.unoccluded(ray) } -> std::convertible_to<bool>;
+};
+
 /// The rays of one path sample through accelerator A, counted.
 template <class A, Scalar T>
     requires TracerAccelerator<A, T>
