@@ -58,10 +58,12 @@
 #include <vector>
 
 #include <glint/io/exr.hpp>
-#include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
 
+#include "dispatch_impl.hpp"
+
 using namespace glint;
+using namespace glint_cli;
 
 namespace {
 
@@ -308,6 +310,17 @@ void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* w
     std::printf("\n");
 }
 
+/// Renders with `roulette` and the direct lighting named by o.direct (the analysis's own
+/// tracers, instantiated here: glint_render_policies names roulettes, not roulette objects).
+template <class R>
+RenderResult render_direct(const Scene<float>& scene, const RenderAccel& accel, const R& roulette, const RenderOptions& o,
+                           const RandomSampler<float>& sampler) {
+    return with_direct(o.direct, scene, o.settings, [&]<class D>(const D& direct) {
+        return steps::render_with<RenderAccel, RandomSampler<float>, R, D>(scene, accel, roulette, direct, o.settings,
+                                                                            sampler);
+    });
+}
+
 /// --analysis (roulette scenes): what bounds the radiance-estimate roulette of 000 section
 /// 2.3. The goodness d = E[(X - a L~)^2] / E[X^2] of the closed-scene and the pilot-fitted L~,
 /// the floor no estimate can go below (the ideal per-vertex L~, from runs of 8 samples at
@@ -322,9 +335,10 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
     using R = RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>;
     const R roulette{ClassicRoulette<float, 3>{H}, {}};
     const std::size_t repeats = 8;
-    const auto samples = detail::with_direct(o.direct, o.settings, [&]<class D>(const RenderSettings& st) {
-        return detail::with_features(scene, [&]<bool Env, bool Points>() {
-            return PathTracer<RenderAccel, RandomSampler<float>, R, D, Env, Points>(scene, accel, roulette, st)
+    const auto samples = with_direct(o.direct, scene, o.settings, [&]<class D>(const D& direct) {
+        return steps::with_features(scene, [&]<class E, bool Points>() {
+            return PathTracer<RenderAccel, RandomSampler<float>, R, D, E, Points>(scene, accel, roulette, direct, E(scene),
+                                                                                  o.settings)
                 .pilot_samples(RandomSampler<float>(7), 2048, int(repeats));
         });
     });
@@ -346,8 +360,8 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
     for (int seed = 0; seed < seeds; ++seed)
         for (int k = 0; k < 2; ++k) {
             const RandomSampler<float> sampler(std::uint64_t(1000 + seed));
-            const RenderResult r = k == 0 ? detail::render_direct(scene, accel, ClassicRoulette<float, 3>{H}, o.settings, o.direct, sampler)
-                                          : detail::render_direct(scene, accel, NoRoulette<float, 3>{}, o.settings, o.direct, sampler);
+            const RenderResult r = k == 0 ? render_direct(scene, accel, ClassicRoulette<float, 3>{H}, o, sampler)
+                                          : render_direct(scene, accel, NoRoulette<float, 3>{}, o, sampler);
             mse[k] += mean_variance(r) / seeds;
             if (k == 0 && seed == 0) top_share = top_pixel_share(r, 0.01);
             seconds[k] += r.seconds / seeds;

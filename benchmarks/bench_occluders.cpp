@@ -40,7 +40,7 @@
 #include <glint/sampling/roulette.hpp>
 #include <glint/tracer/vpl.hpp>
 #include <glint/trees/mesh_bvh.hpp>
-#include <glint/trees/scenes.hpp>
+#include "tree_scenes.hpp"
 
 using namespace glint;
 

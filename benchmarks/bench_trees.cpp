@@ -54,7 +54,7 @@
 #include <glint/intersection/watertight.hpp>
 #include <glint/trees/layouts.hpp>
 #include <glint/trees/mesh_bvh.hpp>
-#include <glint/trees/scenes.hpp>
+#include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 
 #ifdef GLINT_HAVE_EMBREE

@@ -31,7 +31,7 @@
 #include <glint/cones/ray_tiles.hpp>
 #include <glint/core/error.hpp>
 #include <glint/intersection/ivm.hpp>
-#include <glint/trees/scenes.hpp>
+#include "tree_scenes.hpp"
 
 using namespace glint;
 

@@ -9,11 +9,13 @@
 // the ray throughput. Policies are chosen by flags; see --help.
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -24,12 +26,13 @@
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
-#include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
 
 #include "vpl_cli.hpp"
+#include "render_policies/render_options.hpp"
 
 using namespace glint;
+using namespace glint_cli;
 
 namespace {
 
@@ -56,6 +59,9 @@ void usage() {
         "  --direct NAME       brdf, mis, importance, correlated, combined (default mis)\n"
         "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"
         "  --light-samples N   light samples per vertex (default 1; at most 1024)\n"
+        "  --accel NAME        ray accelerator: bvh8 (8-wide BVH, the fastest), bvh4 (4-wide BVH),\n"
+        "                      kd-compact (kd-tree in 000's compact-subtree layout), bvh8-virtual (bvh8\n"
+        "                      behind a virtual call) (default bvh8)\n"
         "  --sampler NAME      random, halton (random digit permutations; also halton-perm), halton-owen\n"
         "                      (Owen-scrambled), halton-cp (Cranley-Patterson) (default halton)\n"
         "  --threads N         worker threads (default: all cores)\n"
@@ -170,6 +176,7 @@ void check_writable(const std::string& path) {
 struct Args {
     std::string scene_name, mesh, env, out = "out.exr";
     std::string insert, export_json;  // --insert-mesh, --export-scene
+    std::string accel = "bvh8";
     float exposure = 0;
     bool reinhard = false;
     std::optional<Vec3f> eye, look_at, up;
@@ -202,6 +209,7 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
         else if (a == "--selection") o.settings.selection = parse_selection(value());
         else if (a == "--light-samples") o.settings.light_samples = int(to_int(a, value(), 1, 1024));
         else if (a == "--sampler") o.sampler = value();
+        else if (a == "--accel") g.accel = value();
         else if (a == "--threads") o.settings.threads = int(to_int(a, value(), 1, 4096));
         else if (a == "--weights") o.roulette_weights = value();
         else if (a == "--estimate") o.radiance_estimate = value();
@@ -231,6 +239,8 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
     if (g.integrator != "path" && g.integrator != "vpl") throw Error("--integrator expects path or vpl, not '" + g.integrator + "'");
     if (g.vpl.visibility != "rays" && g.vpl.visibility != "spheres")
         throw Error("--visibility expects rays or spheres, not '" + g.vpl.visibility + "'");
+    if (std::find(accel_names().begin(), accel_names().end(), g.accel) == accel_names().end())
+        throw Error("unknown accelerator '" + g.accel + "' (see --help)");
     if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
     if (std::uint64_t(o.settings.width) * std::uint64_t(o.settings.height) > (std::uint64_t(1) << 26))
         throw Error("--width x --height = " + std::to_string(o.settings.width) + " x " + std::to_string(o.settings.height) +
@@ -299,8 +309,13 @@ int main(int argc, char** argv) {
                      scene.name.c_str(), scene.triangles.size(), scene.area_lights.size(),
                      scene.environment ? ", environment map" : "", o.settings.width, o.settings.height,
                      o.settings.spp, o.roulette.c_str(), o.direct.c_str());
-        const RenderAccel accel(scene.triangles);
-        const RenderResult r = render(scene, accel, o);
+        const auto build_start = std::chrono::steady_clock::now();
+        std::optional<RenderAccel> fast;
+        std::unique_ptr<AnyAccel> other;
+        if (g.accel == accel_names().front()) fast.emplace(scene.triangles);
+        else other = make_accel(g.accel, scene.triangles);
+        const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
+        const RenderResult r = fast ? render(scene, *fast, o) : render(scene, *other, o);
 
         std::vector<ExrLayer> layers;
         ExrLayer var{"variance", {"R", "G", "B"}, {}};
@@ -311,8 +326,8 @@ int main(int argc, char** argv) {
         const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
         write_exr(exr, r.image, layers);
         write_png(png, r.image, g.exposure, g.reinhard);
-        std::printf("rendered %s in %.3f s (build %.3f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
-                    scene.name.c_str(), r.seconds, accel.build_seconds(), double(r.rays) / r.seconds * 1e-6,
+        std::printf("rendered %s in %.3f s (build %s %.3f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
+                    scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, double(r.rays) / r.seconds * 1e-6,
                     (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), exr.c_str(),
                     png.c_str());
         if (r.capped_walks > 0)

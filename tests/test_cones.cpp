@@ -27,7 +27,7 @@
 #include <glint/intersection/ivm.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/trees/brute_force.hpp>
-#include <glint/trees/scenes.hpp>
+#include "tree_scenes.hpp"
 
 using namespace glint;
 

@@ -15,7 +15,7 @@
 #include <glint/occluders/spheres.hpp>
 #include <glint/occluders/visibility.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
-#include <glint/trees/scenes.hpp>
+#include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 #include <glint/tracer/vpl.hpp>
 

@@ -23,11 +23,14 @@
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
-#include <glint/tracer/render.hpp>
 #include <glint/tracer/scenes.hpp>
+#include <glint/intersection/ivm.hpp>
 #include <glint/trees/brute_force.hpp>
 
+#include "render_options.hpp"
+
 using namespace glint;
+using namespace glint_cli;
 
 namespace {
 
@@ -221,15 +224,15 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
         // The BRDF sample of the MIS pair is the continuation ray: a second vertex (on the
         // light, which reflects nothing) is where its share of the direct light is counted.
         settings.max_depth = 2;
-        PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>, MisDirect, false, false> pt(
-            s, accel, {}, settings);
+        PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>, MisDirect<float>,
+                   NoEnvironment<float>, false>
+            pt(s, accel, {}, settings);
         RandomSampler<float> sampler(1);
         double sum = 0, sum2 = 0;
         const int n_samples = 100000;
-        PathCounters count;
         for (int i = 0; i < n_samples; ++i) {
             sampler.start_pixel_sample(0, 0, std::uint64_t(i));
-            const double L = pt.radiance(down, sampler, count)[0];
+            const double L = pt.radiance(down, sampler).L[0];
             sum += L;
             sum2 += L * L;
         }
@@ -240,19 +243,110 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
     }
     SUBCASE("combined correlated sampling: exact, zero variance, lambda = 1") {
         settings.light_samples = 10;
-        settings.estimator = DirectEstimator::combined;
-        PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>, CorrelatedDirect, false, false>
-            pt(s, accel, {}, settings);
+        using Tracer = PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>,
+                                  CorrelatedDirect<float>, NoEnvironment<float>, false>;
         RandomSampler<float> sampler(2);
-        PathCounters count;
+        // lambda per vertex: the combined estimate is part of the walk's radiance.
+        settings.lambda_filter_radius = -1;
+        const Tracer pt(s, accel, {}, CorrelatedDirect<float>(s, settings, DirectEstimator::combined), NoEnvironment<float>{},
+                        settings);
+        Tracer::pixel_state state;
         for (int i = 0; i < 100; ++i) {
             sampler.start_pixel_sample(0, 0, std::uint64_t(i));
-            float lambda = 0;
-            const Rgb<float> L = pt.radiance(down, sampler, count, &lambda);
+            const Rgb<float> L = pt.radiance(down, sampler, state).L;
             CHECK(L[0] == doctest::Approx(expected).epsilon(1e-4));
-            CHECK(lambda == doctest::Approx(1.0f).epsilon(1e-4));
         }
+        REQUIRE(state.lambda_count == 100);
+        CHECK(state.lambda_sum / 100.0 == doctest::Approx(1.0).epsilon(1e-4));
+        // lambda pooled over pixels (radius 1, the default): the primary vertex's parts are kept
+        // in the pixel's statistics, and finish() forms the pixel once (000 section 3.1.1).
+        settings.lambda_filter_radius = 1;
+        const Tracer pooled(s, accel, {}, settings);
+        std::vector<Tracer::pixel_state> states(1);
+        for (int i = 0; i < 100; ++i) {
+            sampler.start_pixel_sample(0, 0, std::uint64_t(i));
+            CHECK(pooled.radiance(down, sampler, states[0]).L[0] == 0.0f);
+        }
+        Film film{Image<Rgb<float>>(1, 1), Image<Rgb<float>>(1, 1), Image<float>(1, 1)};
+        pooled.finish(film, std::span<const Tracer::pixel_state>(states));
+        CHECK(film.image.at(0, 0)[0] == doctest::Approx(expected).epsilon(1e-4));
+        CHECK(film.variance.at(0, 0)[0] <= 1e-6 * expected * expected);
+        CHECK(film.lambda.at(0, 0) == doctest::Approx(1.0f).epsilon(1e-4));
     }
+}
+
+namespace {
+
+/// A direct-lighting policy written here, outside the library: next-event estimation only,
+/// one point uniform on each area light per vertex, no MIS (emission the BRDF sample meets
+/// counts 0, since the light samples estimate the lights whole). It keeps no per-pixel
+/// statistics. Unbiased, as MisDirect is, with another variance.
+struct UniformAreaDirect : NoPixelStatistics<float> {
+    static constexpr bool collects_emission = false;
+    explicit UniformAreaDirect(const Scene<float>& scene) : lights(scene) {}
+
+    template <class Q, class S>
+    Rgb<float> estimate(const ShadingPoint<float>& sp, S& sampler, Q& queries, vertex_record*) const {
+        Rgb<float> L(0.0f);
+        for (const auto& light : lights.lights()) {
+            const Vec3f y = light.sampler().sample(sampler.get_2d());
+            const float G = light.geometry(sp.x, sp.n, y) * light.sampler().area();  // G / p
+            if (G > 0.0f && queries.visible(sp, light, y))
+                L += light.radiance() * sp.brdf->f(sp.frame.to_local(safe_normalize(y - sp.x))) * G;
+        }
+        return L;
+    }
+    float emission_weight(float, const Ray<float>&, const StoreHit<float>&) const { return 0.0f; }
+
+    SceneLights<float> lights;
+};
+
+}  // namespace
+
+TEST_CASE("policies: a direct-lighting policy defined outside the library renders what MisDirect renders") {
+    const Scene<float> s = builtin_scene<float>("cornell");
+    REQUIRE(!s.features().environment);
+    REQUIRE(!s.features().point_lights);
+    const RenderAccel accel(s.triangles);
+    RenderSettings settings;
+    settings.width = settings.height = 24;
+    settings.spp = 128;
+    settings.threads = 2;
+    using Roulette = ClassicRoulette<float, 3>;
+    const Roulette roulette(Rgb<float>::default_luminance_weights());
+    static_assert(DirectLighting<UniformAreaDirect, float, RayQueries<RenderAccel, float>, RandomSampler<float>>);
+    const PathTracer<RenderAccel, RandomSampler<float>, Roulette, UniformAreaDirect, NoEnvironment<float>, false> own(
+        s, accel, roulette, UniformAreaDirect(s), NoEnvironment<float>{}, settings);
+    const PathTracer<RenderAccel, RandomSampler<float>, Roulette, MisDirect<float>, NoEnvironment<float>, false> mis(
+        s, accel, roulette, settings);
+    const RenderResult a = render_image(s, settings, own, RandomSampler<float>(11));
+    const RenderResult b = render_image(s, settings, mis, RandomSampler<float>(12));
+    CHECK(a.rays > 0);
+    // The image means per band agree within 4 standard errors (from the variance layers).
+    Rgb<double> ma, sa, mb, sb;
+    image_mean(a, ma, sa);
+    image_mean(b, mb, sb);
+    for (std::size_t c = 0; c < 3; ++c) {
+        const double z = (ma[c] - mb[c]) / std::sqrt(sa[c] * sa[c] + sb[c] * sb[c]);
+        CAPTURE(c);
+        CAPTURE(ma[c]);
+        CAPTURE(mb[c]);
+        CHECK(ma[c] > 0.01);
+        CHECK(std::abs(z) < 4.0);
+    }
+    // Per pixel: few pixels more than 4 standard errors apart (for Gaussian errors 0.006%;
+    // heavy-tailed pixels with underestimated variances make some more).
+    int far = 0, counted = 0;
+    for (std::size_t i = 0; i < a.image.size(); ++i)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double v = double(a.variance.pixels[i][c]) + double(b.variance.pixels[i][c]);
+            if (!(v > 0.0)) continue;
+            ++counted;
+            far += std::abs(double(a.image.pixels[i][c]) - double(b.image.pixels[i][c])) / std::sqrt(v) > 4.0 ? 1 : 0;
+        }
+    CAPTURE(far);
+    CHECK(counted > 1000);
+    CHECK(far <= counted / 100);
 }
 
 TEST_CASE("convergence: the Cornell box's RMSE falls as 1/sqrt(spp)") {

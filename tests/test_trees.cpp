@@ -36,7 +36,7 @@
 #include <glint/trees/brute_force.hpp>
 #include <glint/trees/layouts.hpp>
 #include <glint/trees/mesh_bvh.hpp>
-#include <glint/trees/scenes.hpp>
+#include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 
 using namespace glint;

@@ -55,8 +55,9 @@ void path_traced(const Scene<float>& s, const Accel& accel, int size, int spp, s
     st.spp = spp;
     st.threads = 2;
     st.pixel_jitter = false;
-    const PathTracer<Accel, RandomSampler<float>, Roulette, MisDirect, false, Points> pt(s, accel, Roulette{}, st);
-    const RenderResult r = pt.render(RandomSampler<float>(7));
+    const PathTracer<Accel, RandomSampler<float>, Roulette, MisDirect<float>, NoEnvironment<float>, Points> pt(
+        s, accel, Roulette{}, st);
+    const RenderResult r = render_image(s, st, pt, RandomSampler<float>(7));
     mean = quadrant_means(r.image);
     const std::vector<double> var = quadrant_means(r.variance);  // mean pixel variance of the mean
     se.resize(12);

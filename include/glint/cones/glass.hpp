@@ -19,6 +19,7 @@
 #include <vector>
 
 #include <glint/core/math.hpp>
+#include <glint/core/optics.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
 
@@ -29,20 +30,15 @@ namespace glint {
 /// gives the mirror direction. Returns whether the ray was refracted.
 template <Scalar T>
 bool refract_or_reflect(const Vec3<T>& d, const Vec3<T>& n, T ior_outside, T ior_inside, Vec3<T>& out) {
-    T cosi = glm::dot(d, n);
-    Vec3<T> nn = n;
-    T eta = ior_outside / ior_inside;
-    if (cosi > T(0)) {  // leaving: flip the normal to face the ray
-        nn = -n;
-        cosi = -cosi;
-        eta = ior_inside / ior_outside;
-    }
-    const T k = T(1) - eta * eta * (T(1) - cosi * cosi);
-    if (k < T(0)) {
-        out = safe_normalize(d - T(2) * cosi * nn, d);
+    const bool leaving = glm::dot(d, n) > T(0);
+    const Vec3<T> nn = leaving ? -n : n;  // facing the ray
+    const T eta = leaving ? ior_inside / ior_outside : ior_outside / ior_inside;
+    Vec3<T> refracted;
+    if (refract(d, nn, eta, refracted) < T(0)) {
+        out = safe_normalize(d - T(2) * glm::dot(d, nn) * nn, d);
         return false;
     }
-    out = safe_normalize(eta * d - (eta * cosi + std::sqrt(k)) * nn, d);
+    out = safe_normalize(refracted, d);
     return true;
 }
 

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 #include <glint/core/math.hpp>
 #include <glint/core/spectrum.hpp>
@@ -64,13 +65,30 @@ public:
         }
         return out;
     }
-    /// Density of BRDF sampling (lobe i chosen with probability proportional to the
-    /// luminance of its albedo), for multiple importance sampling with light sampling.
+    /// Probability of choosing lobe 0 when sampling a direction without a roulette: in
+    /// proportion to the luminance of the lobes' albedos (1 with one lobe or none reflecting).
+    T lobe0_probability() const {
+        if (lobes_ == 1) return T(1);
+        const T a0 = kd_.luminance(), a1 = ks_.luminance();
+        return a0 + a1 > T(0) ? a0 / (a0 + a1) : T(1);
+    }
+    /// A direction by the lobe choice of lobe0_probability (u.x picks the lobe and is reused).
+    Vec3<T> sample_by_albedo(Vec2<T> u) const {
+        const T p0 = lobe0_probability();
+        if (u.x < p0) {
+            u.x = std::min(u.x / p0, T(1) - std::numeric_limits<T>::epsilon());
+            return sample(0, u);
+        }
+        u.x = std::min((u.x - p0) / (T(1) - p0), T(1) - std::numeric_limits<T>::epsilon());
+        return sample(1, u);
+    }
+    /// Density of sample_by_albedo, for multiple importance sampling with light sampling.
     T sampling_pdf(const Vec3<T>& wi) const {
         if (lobes_ == 1) return pdf(0, wi);
-        const T a0 = kd_.luminance(), a1 = ks_.luminance(), s = a0 + a1;
-        if (!(s > T(0))) return T(0);
-        return (a0 * pdf(0, wi) + a1 * pdf(1, wi)) / s;
+        const T a0 = kd_.luminance(), a1 = ks_.luminance();
+        if (!(a0 + a1 > T(0))) return T(0);
+        const T p0 = lobe0_probability();
+        return p0 * pdf(0, wi) + (T(1) - p0) * pdf(1, wi);
     }
     bool diffuse_only() const { return lobes_ == 1; }
     const Rgb<T>& kd() const { return kd_; }

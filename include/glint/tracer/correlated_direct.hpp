@@ -1,0 +1,178 @@
+// glint/tracer/correlated_direct.hpp: CorrelatedDirect, 000 section 3.2's multiple correlated
+// sampling of polygon lights as a direct-lighting policy (tracer/lighting.hpp), with the
+// per-pixel statistics of 000 section 3.1.1's lambda pooling.
+//
+// Per area light and vertex, K points uniform on the polygon: f = Le fr G V, main part
+// g = Le fr~ G (V dropped, fr~ = kd / pi) with J from the point-to-polygon form factor
+// (eq. 3.4). The combined estimate f/p + lambda (J - g/p) is linear in lambda: at the primary
+// vertices its parts a = mean f/p and b = J - mean g/p are kept per sample instead of added to
+// the walk, and finish() forms each pixel once with lambda = sum fg / sum gg over the pixel's
+// (2r + 1)^2 neighbourhood. The pixel's mean and its variance (the variance layer) are those
+// of the pooled estimator: the sample values X + a + lambda b (X the rest of the path) have,
+// for the pooled lambda, mean and second moment from the per-pixel sums of X, a, b and their
+// products.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <span>
+
+#include <glint/core/spectrum.hpp>
+#include <glint/sampling/correlated.hpp>
+#include <glint/sampling/sampler.hpp>
+#include <glint/tracer/lighting.hpp>
+
+namespace glint {
+
+/// Which estimator CorrelatedDirect returns (000 section 3.2): lambda = 0, lambda = 1, or
+/// lambda estimated from the samples (eq. 3.3).
+enum class DirectEstimator { importance, correlated, combined };
+
+template <Scalar T = float>
+class CorrelatedDirect {
+public:
+    static constexpr bool collects_emission = false;
+    using D3 = Spectrum<double, 3>;
+
+    /// The primary vertex's quantities of one pixel sample.
+    struct vertex_record {
+        Rgb<T> a{T(0)}, b{T(0)};    // kept (pooled) parts: a = sum mean f/p, b = sum (J - mean g/p)
+        Rgb<T> fg{T(0)}, gg{T(0)};  // within-vertex co-moments
+        T lambda = std::numeric_limits<T>::quiet_NaN();  // mean per-vertex lambda over the lights
+    };
+    /// Per-pixel sums over its samples (X: the sample's radiance without the kept parts).
+    struct pixel_state {
+        D3 x{0.0}, a{0.0}, b{0.0}, xx{0.0}, aa{0.0}, bb{0.0}, xa{0.0}, xb{0.0}, ab{0.0}, fg{0.0}, gg{0.0};
+        double lambda_sum = 0;
+        int lambda_count = 0, n = 0;
+    };
+
+    CorrelatedDirect(const Scene<T>& scene, const RenderSettings& s, DirectEstimator estimator = DirectEstimator::combined)
+        : lights_(scene), k_(std::size_t(std::clamp(s.light_samples, 1, 64))), estimator_(estimator),
+          radius_(s.lambda_filter_radius),
+          pooled_(estimator == DirectEstimator::combined && s.lambda_filter_radius >= 0 && !lights_.empty()) {}
+
+    DirectEstimator estimator() const { return estimator_; }
+
+    template <class Q, class S>
+        requires ShadowQueries<Q, T> && Sampler<S, T>
+    Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record* rec) const {
+        Rgb<T> L(T(0));
+        if (lights_.empty()) return L;
+        std::array<Vec2<T>, 64> u;
+        T lambda_sum = 0;
+        for (const auto& light : lights_.lights()) {
+            for (std::size_t i = 0; i < k_; ++i) u[i] = sampler.get_2d();
+            const std::span<const Vec2<T>> us(u.data(), k_);
+            if (estimator_ == DirectEstimator::importance) {
+                L += importance(sp, light, us, queries);
+                continue;
+            }
+            const auto res = correlated_direct(
+                light, sp.x, sp.n, [&](const Vec3<T>& wi) { return sp.brdf->f(sp.frame.to_local(wi)); },
+                sp.brdf->kd() / pi<T>, [&](const Vec3<T>&, const Vec3<T>& y) { return queries.visible(sp, light, y); }, us);
+            if (rec && pooled_) keep(*rec, res);
+            else L += estimator_ == DirectEstimator::correlated ? res.correlated : res.combined;
+            lambda_sum += res.lambda.mean();
+        }
+        if (rec) rec->lambda = lambda_sum / T(lights_.lights().size());
+        return L;
+    }
+
+    /// Light samples estimate the area lights whole: emission the BRDF sample meets counts 0.
+    T emission_weight(T, const Ray<T>&, const StoreHit<T>&) const { return T(0); }
+
+    void record(pixel_state& st, const vertex_record& rec, const Rgb<T>& L) const {
+        ++st.n;
+        if (!std::isnan(rec.lambda)) {
+            st.lambda_sum += double(rec.lambda);
+            ++st.lambda_count;
+        }
+        // A non-finite sample counts as 0, as the renderer counts it.
+        if (!(L.is_finite() && rec.a.is_finite() && rec.b.is_finite())) return;
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double x = L[c], a = rec.a[c], b = rec.b[c];
+            st.x[c] += x, st.a[c] += a, st.b[c] += b;
+            st.xx[c] += x * x, st.aa[c] += a * a, st.bb[c] += b * b;
+            st.xa[c] += x * a, st.xb[c] += x * b, st.ab[c] += a * b;
+            st.fg[c] += rec.fg[c], st.gg[c] += rec.gg[c];
+        }
+    }
+
+    /// The lambda layer; with pooling, each pixel's mean and variance of the pooled estimator.
+    void finish(Film& film, std::span<const pixel_state> states) const {
+        const int w = film.image.width, h = film.image.height;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const pixel_state& p = states[std::size_t(y) * std::size_t(w) + std::size_t(x)];
+                if (pooled_) {
+                    finish_pooled(film, x, y, p, pooled_lambda(states, w, h, x, y));
+                } else {
+                    film.lambda.at(x, y) = p.lambda_count ? float(p.lambda_sum / p.lambda_count) : 0.0f;
+                }
+            }
+    }
+
+private:
+    /// f/p alone (lambda = 0): no main part, so no form factor is computed.
+    template <class Q>
+        requires ShadowQueries<Q, T>
+    Rgb<T> importance(const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, std::span<const Vec2<T>> u,
+                      Q& queries) const {
+        Rgb<T> L(T(0));
+        const T area = light.sampler().area();
+        for (const Vec2<T>& ui : u) {
+            const Vec3<T> y = light.sampler().sample(ui);
+            const T G = light.geometry(sp.x, sp.n, y) * area;
+            if (G > T(0) && queries.visible(sp, light, y))
+                L += light.radiance() * sp.brdf->f(sp.frame.to_local(safe_normalize(y - sp.x))) * (G / T(u.size()));
+        }
+        return L;
+    }
+
+    static void keep(vertex_record& rec, const CorrelatedResult<T, 3>& res) {
+        for (std::size_t c = 0; c < 3; ++c) {
+            rec.a[c] += res.importance[c];
+            rec.b[c] += res.main_part[c] - res.stats[c].mean_g;
+            rec.fg[c] += res.stats[c].comoment_fg;
+            rec.gg[c] += res.stats[c].comoment_gg;
+        }
+    }
+
+    /// lambda = sum fg / sum gg over the (2r + 1)^2 neighbourhood of (x, y), per band.
+    D3 pooled_lambda(std::span<const pixel_state> states, int w, int h, int x, int y) const {
+        D3 fg(0.0), gg(0.0), lambda(0.0);
+        for (int yy = std::max(0, y - radius_); yy <= std::min(h - 1, y + radius_); ++yy)
+            for (int xx = std::max(0, x - radius_); xx <= std::min(w - 1, x + radius_); ++xx) {
+                const pixel_state& q = states[std::size_t(yy) * std::size_t(w) + std::size_t(xx)];
+                fg += q.fg;
+                gg += q.gg;
+            }
+        for (std::size_t c = 0; c < 3; ++c) lambda[c] = gg[c] > 0.0 ? fg[c] / gg[c] : 0.0;
+        return lambda;
+    }
+
+    /// The pixel's samples X + a + lambda b: mean and variance of the mean.
+    static void finish_pooled(Film& film, int x, int y, const pixel_state& p, const D3& lambda) {
+        const double n = std::max(p.n, 1);
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double l = lambda[c];
+            const double s1 = p.x[c] + p.a[c] + l * p.b[c];
+            const double s2 = p.xx[c] + p.aa[c] + l * l * p.bb[c] + 2.0 * (p.xa[c] + l * p.xb[c] + l * p.ab[c]);
+            film.image.at(x, y)[c] = float(s1 / n);
+            film.variance.at(x, y)[c] = n > 1 ? float(std::max(0.0, (s2 - s1 * s1 / n) / (n - 1.0) / n)) : 0.0f;
+        }
+        film.lambda.at(x, y) = float(lambda.mean());
+    }
+
+    SceneLights<T> lights_;
+    std::size_t k_;
+    DirectEstimator estimator_;
+    int radius_;
+    bool pooled_;
+};
+
+}  // namespace glint

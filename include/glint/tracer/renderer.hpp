@@ -1,0 +1,231 @@
+// glint/tracer/renderer.hpp: the renderer around an integrator.
+//
+// The renderer owns what every image needs whatever the light transport: the film and its
+// layers, 16x16 tiles over std::thread workers, the progress bar and the statistics (rays,
+// paths, capped walks, seconds). For each pixel sample it asks its camera policy for a ray and
+// the integrator (PathTracer, or any type that satisfies Integrator) for the radiance along
+// it; after all samples it lets the integrator finish the film once (correlated direct
+// lighting pools its lambda there, 000 section 3.1.1). Every pixel sample draws from the
+// sampler's stream for (x, y, sample index), so the image does not depend on the thread count
+// or the order tiles are rendered in.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <concepts>
+#include <cstdint>
+#include <cstdio>
+#include <mutex>
+#include <span>
+#include <thread>
+#include <vector>
+
+#include <glint/core/image.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/sampling/sampler.hpp>
+#include <glint/tracer/scene.hpp>
+
+namespace glint {
+
+struct RenderSettings {
+    // The renderer's settings.
+    int width = 256, height = 256;
+    int spp = 16;
+    int threads = 0;             // 0: std::thread::hardware_concurrency()
+    bool progress = false;       // progress bar on stderr
+    /// Camera rays through uniformly jittered points of each pixel (the pixel's area average,
+    /// the default) or through its centre only. With centres, an image estimates the radiance
+    /// along fixed rays, so that its error against a reference of the same rays is light
+    /// transport's alone: comparisons of estimators (bench_convergence) are not diluted by
+    /// the pixel-footprint noise at silhouettes and light edges that every method shares.
+    bool pixel_jitter = true;
+    // The path tracer's settings.
+    /// Cap on a walk's vertices, far beyond where roulette stops walks (a grey furnace of
+    /// albedo 0.99 continues past 1024 vertices with probability about 3e-5); walks that reach
+    /// it are counted in RenderResult::capped_walks, since a cap truncates (biases) them.
+    int max_depth = 1024;
+    int light_samples = 1;       // per area light and vertex (CorrelatedDirect, MisDirect)
+    BrdfSelection selection = BrdfSelection::mis;
+    /// Combined correlated estimator at the primary vertices: lambda from the statistics
+    /// pooled over the (2r + 1)^2 pixel neighbourhood (000 section 3.1.1); -1 estimates it
+    /// per vertex.
+    int lambda_filter_radius = 1;
+};
+
+/// The layers of an image.
+struct Film {
+    Image<Rgb<float>> image;     // mean radiance per pixel
+    Image<Rgb<float>> variance;  // variance of that mean (sample variance / spp)
+    Image<float> lambda;         // mean lambda of the primary vertices (CorrelatedDirect)
+};
+
+struct RenderResult : Film {
+    double seconds = 0;
+    std::uint64_t rays = 0;          // closest-hit plus shadow rays
+    std::uint64_t paths = 0;         // camera paths (pixel samples)
+    std::uint64_t capped_walks = 0;  // walks cut at RenderSettings::max_depth (biased)
+};
+
+/// What an integrator returns for one camera ray: the radiance, the rays it traced and
+/// whether its walk was cut by a depth cap.
+template <Scalar T>
+struct PathSample {
+    Rgb<T> L{T(0)};
+    std::uint64_t rays = 0;
+    bool capped = false;
+};
+
+/// A camera policy: the ray of sample `index` of pixel (x, y), drawn from `sampler` (which it
+/// starts at that pixel sample).
+template <class C, class S>
+concept CameraPolicy = requires(const C& c, S& sampler, int x, std::uint64_t index) {
+    typename C::scalar_type;
+    { c.ray(x, x, index, sampler) } -> std::same_as<Ray<typename C::scalar_type>>;
+};
+
+/// The scene's pinhole camera over a width x height image: rays through a jittered point of
+/// each pixel, or through its centre when pixel_jitter is off (the pixel sample is drawn
+/// either way, so the sampler's later dimensions stay the same).
+template <Scalar T>
+class PixelCamera {
+public:
+    using scalar_type = T;
+    PixelCamera(const Camera<T>& camera, const RenderSettings& s)
+        : camera_(camera), width_(s.width), height_(s.height), jitter_(s.pixel_jitter) {}
+
+    template <class S>
+        requires Sampler<S, T>
+    Ray<T> ray(int x, int y, std::uint64_t index, S& sampler) const {
+        sampler.start_pixel_sample(x, y, index);
+        Vec2<T> p = sampler.get_pixel_2d();
+        if (!jitter_) p = Vec2<T>(T(0.5));
+        const T aspect = T(width_) / T(height_);
+        return camera_.ray((T(x) + p.x) / T(width_), (T(y) + p.y) / T(height_), aspect);
+    }
+
+private:
+    Camera<T> camera_;
+    int width_, height_;
+    bool jitter_;
+};
+
+/// An integrator: the radiance along a camera ray, with statistics of its own per pixel
+/// (`pixel_state`, an empty struct when it keeps none) that it turns into film values once,
+/// in finish(), after every sample is taken. `states` holds one pixel_state per pixel, row by
+/// row; `state` is its pixel's.
+template <class I, class S>
+concept Integrator =
+    std::default_initializable<typename I::pixel_state> &&
+    requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state, Film& film,
+             std::span<const typename I::pixel_state> states) {
+        { in.radiance(ray, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
+        in.finish(film, states);
+    };
+
+template <class C>
+class Renderer {
+public:
+    Renderer(const C& camera, const RenderSettings& settings) : camera_(camera), settings_(settings) {}
+
+    /// Renders with `integrator` and one sampler per thread, copied from `prototype`.
+    template <class I, class S>
+        requires Integrator<I, S> && CameraPolicy<C, S>
+    RenderResult render(const I& integrator, const S& prototype) const {
+        const int w = settings_.width, h = settings_.height, tile = 16, tx = (w + tile - 1) / tile;
+        const int tiles = tx * ((h + tile - 1) / tile);
+        RenderResult out;
+        out.image = Image<Rgb<float>>(w, h);
+        out.variance = Image<Rgb<float>>(w, h);
+        out.lambda = Image<float>(w, h);
+        std::vector<typename I::pixel_state> states(std::size_t(w) * std::size_t(h));
+        std::atomic<int> next{0}, done{0};
+        std::atomic<std::uint64_t> rays{0}, capped{0};
+        const auto start = std::chrono::steady_clock::now();
+        auto worker = [&] {
+            S sampler = prototype;
+            Tally tally;
+            for (int t = next++; t < tiles; t = next++) {
+                const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
+                for (int y = y0; y < std::min(y0 + tile, h); ++y)
+                    for (int x = x0; x < std::min(x0 + tile, w); ++x)
+                        tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)], out);
+                progress(++done, tiles);
+            }
+            rays += tally.rays;
+            capped += tally.capped;
+        };
+        const int threads = std::clamp(settings_.threads > 0 ? settings_.threads : int(std::thread::hardware_concurrency()), 1, tiles);
+        std::vector<std::thread> pool;
+        for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+        worker();
+        for (auto& th : pool) th.join();
+        integrator.finish(out, std::span<const typename I::pixel_state>(states));
+        out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        out.rays = rays;
+        out.capped_walks = capped;
+        out.paths = std::uint64_t(w) * std::uint64_t(h) * std::uint64_t(spp());
+        return out;
+    }
+
+private:
+    struct Tally {
+        std::uint64_t rays = 0, capped = 0;
+        Tally& operator+=(const Tally& o) {
+            rays += o.rays;
+            capped += o.capped;
+            return *this;
+        }
+    };
+
+    int spp() const { return std::max(1, settings_.spp); }
+
+    /// The pixel's samples, their mean and the variance of the mean (Welford's update).
+    template <class I, class S>
+        requires Integrator<I, S> && CameraPolicy<C, S>
+    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Film& film) const {
+        using T = typename I::scalar_type;
+        Rgb<T> mean(T(0)), m2(T(0));
+        Tally tally;
+        const int n = spp();
+        for (int i = 0; i < n; ++i) {
+            const PathSample<T> s = integrator.radiance(camera_.ray(x, y, std::uint64_t(i), sampler), sampler, state);
+            tally.rays += s.rays;
+            tally.capped += s.capped ? 1 : 0;
+            const Rgb<T> L = s.L.is_finite() ? s.L : Rgb<T>(T(0));  // never let one sample poison a pixel
+            const Rgb<T> delta = L - mean;
+            mean += delta / T(i + 1);
+            m2 += delta * (L - mean);
+        }
+        for (std::size_t c = 0; c < 3; ++c) {
+            film.image.at(x, y)[c] = float(mean[c]);
+            film.variance.at(x, y)[c] = n > 1 ? float(m2[c] / T(n - 1) / T(n)) : 0.0f;
+        }
+        return tally;
+    }
+
+    void progress(int done, int tiles) const {
+        if (!settings_.progress) return;
+        std::lock_guard lock(progress_mutex_);
+        const int bar = 40 * done / tiles;
+        std::fprintf(stderr, "\r[%.*s%.*s] %3d%%", bar, "########################################", 40 - bar,
+                     "                                        ", 100 * done / tiles);
+        if (done == tiles) std::fprintf(stderr, "\n");
+    }
+
+    C camera_;
+    RenderSettings settings_;
+    mutable std::mutex progress_mutex_;
+};
+
+/// Renders `integrator` through the scene's camera (PixelCamera) with the renderer's settings.
+template <Scalar T, class I, class S>
+    requires Integrator<I, S> && CameraPolicy<PixelCamera<T>, S>
+RenderResult render_image(const Scene<T>& scene, const RenderSettings& settings, const I& integrator, const S& sampler) {
+    return Renderer<PixelCamera<T>>(PixelCamera<T>(scene.camera, settings), settings).render(integrator, sampler);
+}
+
+}  // namespace glint

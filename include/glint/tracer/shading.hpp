@@ -1,0 +1,155 @@
+// glint/tracer/shading.hpp: what light transport knows about a surface point, and the rays
+// one path sample traces from it.
+//
+// ShadingPoint is a vertex's position (with its rounding-error bound), normal, local frame and
+// BRDF; RayQueries<Accel> traces a sample's rays through an accelerator and counts them (the
+// count is the sample's result, PathSample::rays, so no function takes a counter to update).
+// Ray origins are offset past the point's error bound (Pharr, Jakob, Humphreys 2023, sections
+// 6.8.5-6.8.6), so that the same scene renders the same image at any translation and scale
+// float resolves.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <limits>
+
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/intersection/triangle.hpp>
+#include <glint/sampling/correlated.hpp>
+#include <glint/tracer/brdf.hpp>
+#include <glint/tracer/scene.hpp>
+#include <glint/trees/tree.hpp>
+
+namespace glint {
+
+/// What the tracer needs of an accelerator: trees/tree.hpp's RayAccelerator (closest hit
+/// and any hit) on rays of scalar T.
+template <class A, class T>
+concept TracerAccelerator = RayAccelerator<A> && std::same_as<typename A::scalar_type, T>;
+
+/// The per-vertex inputs of a lighting policy.
+template <Scalar T>
+struct ShadingPoint {
+    Vec3<T> x;          // position
+    Vec3<T> err;        // bound on x's rounding error, per axis
+    Vec3<T> n;          // normal on the side of the outgoing direction
+    Frame<T> frame;     // local frame about n
+    const SurfaceBrdf<T>* brdf;
+};
+
+/// How emission found at the end of a ray is weighted, given the vertex the ray left: whole
+/// (camera rays, specular bounces, no light sampling), or, where lights were also sampled
+/// there, by the lighting policies' weight for a BRDF sample of density `pdf`.
+template <Scalar T>
+struct Arrival {
+    bool lights_sampled = false;
+    T pdf = T(0);
+};
+
+/// A hit point and the bound on its rounding error, per axis.
+template <Scalar T>
+struct SurfacePoint {
+    Vec3<T> x, err;
+};
+
+/// gamma(n) = n u / (1 - n u), u = unit roundoff: the relative error bound of n roundings.
+template <Scalar T>
+constexpr T rounding_gamma(int n) {
+    const T u = std::numeric_limits<T>::epsilon() / T(2);
+    return T(n) * u / (T(1) - T(n) * u);
+}
+
+/// Bound on the rounding error, per axis, of a point computed from vertices whose largest
+/// coordinate is m, and of the triangle tests' distances to their planes: gamma(16) m on
+/// every axis. Interpolation alone errs by gamma(7) sum |b_i v_i| per axis (Pharr, Jakob,
+/// Humphreys 2023, section 6.8.5), but an intersector mixes the axes (cross products), so
+/// the floor at y = 0 of a box 1 wide still has distance errors of ulps of 1, not of 0.
+template <Scalar T>
+Vec3<T> coordinate_error(T m) {
+    return Vec3<T>(rounding_gamma<T>(16) * m);
+}
+
+/// The hit point interpolated from the triangle's vertices by the hit's barycentrics, and
+/// its error bound. Unlike o + t d, whose error grows with the ray's length and origin, the
+/// bound depends only on the triangle's own coordinates.
+template <Scalar T>
+SurfacePoint<T> surface_point(const Scene<T>& scene, const StoreHit<T>& hit) {
+    const auto& v = scene.triangles[hit.id];
+    const T b0 = T(1) - hit.u - hit.v;
+    const Vec3<T> p = v[0] * b0 + v[1] * hit.u + v[2] * hit.v;
+    const Vec3<T> m = glm::max(glm::max(glm::abs(v[0]), glm::abs(v[1])), glm::abs(v[2]));
+    return {p, coordinate_error(std::max({m.x, m.y, m.z}))};
+}
+
+/// Origin of a ray leaving point p (rounding error `err` per axis) of a surface with normal
+/// n towards `dir`: p moved along n, to the side dir leaves to, past its error bound, and
+/// each coordinate then rounded away from the surface (Pharr, Jakob, Humphreys 2023, section
+/// 6.8.6). The offset scales with the coordinates' own rounding.
+template <Scalar T>
+Vec3<T> offset_origin(const Vec3<T>& p, const Vec3<T>& err, const Vec3<T>& n, const Vec3<T>& dir) {
+    const T d = glm::dot(glm::abs(n), err) * T(2);
+    const Vec3<T> offset = glm::dot(dir, n) >= T(0) ? n * d : -n * d;
+    Vec3<T> po = p + offset;
+    for (int i = 0; i < 3; ++i) {
+        if (offset[i] > T(0)) po[i] = std::nextafter(po[i], infinity<T>);
+        else if (offset[i] < T(0)) po[i] = std::nextafter(po[i], -infinity<T>);
+    }
+    return po;
+}
+
+/// A ray leaving shading point sp in direction dir.
+template <Scalar T>
+Ray<T> spawn(const ShadingPoint<T>& sp, const Vec3<T>& dir) {
+    return Ray<T>{offset_origin(sp.x, sp.err, sp.n, dir), dir, T(0), infinity<T>};
+}
+
+/// What a lighting policy asks of a sample's ray queries: shadow rays to a point of a polygon
+/// light and along a ray of infinite length.
+template <class Q, class T>
+concept ShadowQueries = requires(Q& q, const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, const Vec3<T>& y,
+                                 const Ray<T>& ray) {
+    { q.visible(sp, light, y) } -> std::convertible_to<bool>;
+    { q.unoccluded(ray) } -> std::convertible_to<bool>;
+};
+
+/// The rays of one path sample through accelerator A, counted.
+template <class A, Scalar T>
+    requires TracerAccelerator<A, T>
+class RayQueries {
+public:
+    explicit RayQueries(const A& accel) : accel_(accel) {}
+
+    bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) {
+        ++rays_;
+        return accel_.closest_hit(ray, hit);
+    }
+    /// Whether nothing blocks `ray` (a shadow ray of infinite length, e.g. to the environment).
+    bool unoccluded(const Ray<T>& ray) {
+        ++rays_;
+        return !accel_.any_hit(ray);
+    }
+    /// Shadow ray from sp to point y (rounding error y_err, on a surface of normal ny; zero
+    /// for a point light), both ends offset off their surfaces, stopping just short of y.
+    bool visible(const ShadingPoint<T>& sp, const Vec3<T>& y, const Vec3<T>& y_err, const Vec3<T>& ny) {
+        const Vec3<T> xo = offset_origin(sp.x, sp.err, sp.n, y - sp.x);
+        const Vec3<T> yo = offset_origin(y, y_err, ny, xo - y);
+        return unoccluded(Ray<T>{xo, yo - xo, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)});
+    }
+    /// Shadow ray from sp to point y of a polygon light.
+    bool visible(const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, const Vec3<T>& y) {
+        // A point of the light polygon is a convex combination of its vertices.
+        T m = 0;
+        for (const auto& v : light.sampler().vertices()) m = std::max({m, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+        return visible(sp, y, coordinate_error(m), light.sampler().normal());
+    }
+    std::uint64_t rays() const { return rays_; }
+
+private:
+    const A& accel_;
+    std::uint64_t rays_ = 0;
+};
+
+}  // namespace glint
