@@ -218,7 +218,7 @@ concept NodeLayout = requires(const BuiltTree<float>& t, std::vector<KdNode<floa
 /// (no caches, no counters in the object): any number of threads may query one accelerator
 /// at once, as the renderers do.
 template <class A>
-concept RayAccelerator = requires(const A a, const Ray<typename A::scalar_type>& r,
+concept RayAccelerator = requires(const A& a, const Ray<typename A::scalar_type>& r,
                                   StoreHit<typename A::scalar_type>& h) {
     { a.closest_hit(r, h) } -> std::same_as<bool>;
     { a.any_hit(r) } -> std::same_as<bool>;
