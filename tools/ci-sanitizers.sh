@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${CI_JOBS:-$(nproc)}
-suites=(core intersection sampling occluders cones trees tracer)
+suites=(core intersection sampling occluders cones trees tracer vpl)
 
 t0=$SECONDS
 mkdir -p build-asan build-tsan
