@@ -27,6 +27,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glint/intersection/ivm.hpp>
@@ -315,13 +316,34 @@ void check_layouts(const Scene& sc, const std::vector<StoreHit<float>>& ref, con
     (check_agreement<Tree<float, P, Layouts>, P>(sc, ref, found), ...);
 }
 
+/// Brute force's closest hits of every scene's rays with intersector P, computed once and
+/// shared by the kd-tree/BIH and the wide-BVH agreement tests.
+struct BruteReference {
+    std::vector<StoreHit<float>> hits;
+    std::vector<char> found;
+};
+
+template <class P>
+const BruteReference& brute_reference(std::size_t scene) {
+    static const std::vector<BruteReference> refs = [] {
+        std::vector<BruteReference> out;
+        for (const Scene& sc : scenes()) {
+            const BruteForce<P> bf(sc.mesh);
+            BruteReference r{std::vector<StoreHit<float>>(sc.rays.size()), std::vector<char>(sc.rays.size())};
+            for (std::size_t i = 0; i < sc.rays.size(); ++i) r.found[i] = bf.closest_hit(sc.rays[i], r.hits[i]);
+            out.push_back(std::move(r));
+        }
+        return out;
+    }();
+    return refs[scene];
+}
+
 template <class P>
 void check_intersector() {
-    for (const Scene& sc : scenes()) {
-        const BruteForce<P> bf(sc.mesh);
-        std::vector<StoreHit<float>> ref(sc.rays.size());
-        std::vector<char> found(sc.rays.size());
-        for (std::size_t i = 0; i < sc.rays.size(); ++i) found[i] = bf.closest_hit(sc.rays[i], ref[i]);
+    for (std::size_t s = 0; s < scenes().size(); ++s) {
+        const Scene& sc = scenes()[s];
+        const std::vector<StoreHit<float>>& ref = brute_reference<P>(s).hits;
+        const std::vector<char>& found = brute_reference<P>(s).found;
         check_layouts<P, KdTree, PointerLayout, HavranSubtrees<7>, CompactSubtrees<3>, CompactSubtrees<31>,
                       HavranSubtrees<63>>(sc, ref, found);
         check_layouts<P, Bih, PointerLayout, HavranSubtrees<31>, CompactSubtrees<7>, CompactSubtrees<63>>(sc, ref, found);
@@ -332,11 +354,10 @@ void check_intersector() {
 /// brute force: the same rules and rays as the other trees, 10^6 per scene with GLINT_LONG_TESTS.
 template <class P>
 void check_wide() {
-    for (const Scene& sc : scenes()) {
-        const BruteForce<P> bf(sc.mesh);
-        std::vector<StoreHit<float>> ref(sc.rays.size());
-        std::vector<char> found(sc.rays.size());
-        for (std::size_t i = 0; i < sc.rays.size(); ++i) found[i] = bf.closest_hit(sc.rays[i], ref[i]);
+    for (std::size_t s = 0; s < scenes().size(); ++s) {
+        const Scene& sc = scenes()[s];
+        const std::vector<StoreHit<float>>& ref = brute_reference<P>(s).hits;
+        const std::vector<char>& found = brute_reference<P>(s).found;
         check_agreement<MeshBvh<P, 8>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 4>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);  // 4 wide: the user-leaf test
