@@ -14,7 +14,6 @@
 //   bench_occluders --fit-gssa    re-measure A(1, r/R, d/R) by Monte Carlo and fit it (gssa.hpp)
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
