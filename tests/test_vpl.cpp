@@ -346,6 +346,7 @@ TEST_CASE("exact: the reference grid holds each triangle's lattice points, and e
             }
     }
     CHECK_THROWS_WITH_AS(ReferenceGrid<float>(s, 0), doctest::Contains("grid 0"), Error);
+    CHECK_THROWS_WITH_AS(ReferenceGrid<float>(s, 4, 0.6f), doctest::Contains("inset 0.6"), Error);
 }
 
 TEST_CASE("exact: interpolating a linear function of position recorded at the lattice reproduces it everywhere") {
@@ -354,30 +355,33 @@ TEST_CASE("exact: interpolating a linear function of position recorded at the la
     const auto f = [](const Vec3<float>& x) {
         return Rgb<float>(0.5f + 0.3f * x.x - 0.2f * x.y + 0.1f * x.z, 1.0f - 0.4f * x.x + 0.25f * x.z, 0.7f * x.y + 0.2f);
     };
-    for (const int g : {1, 3, 8}) {
-        const ReferenceGrid<float> grid(s, g);
-        std::vector<Rgb<float>> values(grid.size());
-        for (std::size_t r = 0; r < grid.size(); ++r) values[r] = f(grid.x[r]);
-        Pcg32 rng(11, std::uint64_t(g));
-        for (int n = 0; n < 400; ++n) {
-            const std::uint32_t t = std::uint32_t(rng.uniform<float>() * float(s.triangles.size())) % std::uint32_t(s.triangles.size());
-            float u = rng.uniform<float>(), v = rng.uniform<float>();
-            if (u + v > 1) u = 1 - u, v = 1 - v;
-            if (n % 10 == 0) v = 1 - u;  // on the edge opposite vertex 0
-            if (n % 10 == 1) u = 0;      // on an edge through vertex 0
-            const auto& p = s.triangles[t];
-            const Rgb<float> want = f(p[0] * (1 - u - v) + p[1] * u + p[2] * v);
-            const Rgb<float> got = grid.interpolate(std::span<const Rgb<float>>(values), t, u, v);
-            const ReferenceGrid<float>::Stencil st = grid.stencil(t, u, v);
-            CAPTURE(g);
-            CAPTURE(t);
-            CAPTURE(u);
-            CAPTURE(v);
-            CHECK(std::abs(st.weight[0] + st.weight[1] + st.weight[2] - 1.0f) < 1e-6f);
-            for (int k = 0; k < 3; ++k) CHECK(st.weight[k] > -1e-6f);
-            for (std::size_t c = 0; c < 3; ++c) CHECK(std::abs(got[c] - want[c]) < 4e-6f * (1.0f + std::abs(want[c])));
+    // Inset 0: interpolation, weights in [0, 1]; inset 0.1: extrapolation near the edges.
+    for (const float inset : {0.0f, 0.1f})
+        for (const int g : {1, 3, 8}) {
+            const ReferenceGrid<float> grid(s, g, inset);
+            std::vector<Rgb<float>> values(grid.size());
+            for (std::size_t r = 0; r < grid.size(); ++r) values[r] = f(grid.x[r]);
+            Pcg32 rng(11, std::uint64_t(g));
+            for (int n = 0; n < 400; ++n) {
+                const std::uint32_t t = std::uint32_t(rng.uniform<float>() * float(s.triangles.size())) % std::uint32_t(s.triangles.size());
+                float u = rng.uniform<float>(), v = rng.uniform<float>();
+                if (u + v > 1) u = 1 - u, v = 1 - v;
+                if (n % 10 == 0) v = 1 - u;  // on the edge opposite vertex 0
+                if (n % 10 == 1) u = 0;      // on an edge through vertex 0
+                const auto& p = s.triangles[t];
+                const Rgb<float> want = f(p[0] * (1 - u - v) + p[1] * u + p[2] * v);
+                const Rgb<float> got = grid.interpolate(std::span<const Rgb<float>>(values), t, u, v);
+                const ReferenceGrid<float>::Stencil st = grid.stencil(t, u, v);
+                CAPTURE(inset);
+                CAPTURE(g);
+                CAPTURE(t);
+                CAPTURE(u);
+                CAPTURE(v);
+                CHECK(std::abs(st.weight[0] + st.weight[1] + st.weight[2] - 1.0f) < 1e-5f);
+                for (int k = 0; k < 3; ++k) CHECK((inset > 0 || st.weight[k] > -1e-6f));
+                for (std::size_t c = 0; c < 3; ++c) CHECK(std::abs(got[c] - want[c]) < 4e-6f * (1.0f + std::abs(want[c])));
+            }
         }
-    }
     // Through the renderer's pixel points: their (u, v) follow the same vertex convention.
     const Accel accel(s.triangles);
     const ReferenceGrid<float> grid(s, 4);

@@ -51,9 +51,13 @@ namespace glint {
 /// barycentrics (i / g, j / g), i, j >= 0, i + j <= g ((g + 1) (g + 2) / 2 per triangle, in
 /// triangle order; points on an edge are repeated in each triangle that has it). A value
 /// recorded at the points is read back linearly interpolated inside each sub-triangle.
+/// With inset s > 0 the lattice is shrunk by 1 - s toward the triangle's centroid (no point
+/// on an edge, where a wall meeting the triangle contributes nothing) and read back with
+/// linear extrapolation in the band between the lattice and the edges.
 template <Scalar T>
 struct ReferenceGrid {
     int g = 4;
+    T inset = 0;
     std::vector<Vec3<T>> x;          // positions
     std::vector<std::uint32_t> tri;  // triangle of each point
 
@@ -63,12 +67,15 @@ struct ReferenceGrid {
         T weight[3];
     };
 
-    ReferenceGrid(const Scene<T>& s, int grid) : g(grid) {
+    ReferenceGrid(const Scene<T>& s, int grid, T shrink = T(0)) : g(grid), inset(shrink) {
         if (grid < 1 || grid > 256) throw Error("glint::ReferenceGrid: grid " + std::to_string(grid) + " outside [1, 256]");
+        if (!(shrink >= T(0) && shrink <= T(0.5)))
+            throw Error("glint::ReferenceGrid: inset " + std::to_string(double(shrink)) + " outside [0, 0.5]");
+        const T c = T(1) / T(3);
         for (std::size_t t = 0; t < s.triangles.size(); ++t)
             for (int j = 0; j <= g; ++j)
                 for (int i = 0; i + j <= g; ++i) {
-                    const T u = T(i) / T(g), v = T(j) / T(g);
+                    const T u = c + (T(i) / T(g) - c) * (T(1) - inset), v = c + (T(j) / T(g) - c) * (T(1) - inset);
                     const auto& p = s.triangles[t];
                     x.push_back(p[0] * (T(1) - u - v) + p[1] * u + p[2] * v);
                     tri.push_back(std::uint32_t(t));
@@ -83,12 +90,14 @@ struct ReferenceGrid {
     /// triangle t and the point's barycentrics in it: cell (i, j) is split by its diagonal
     /// into a lower sub-triangle (i, j), (i + 1, j), (i, j + 1) and, when i + j < g - 1, an
     /// upper one (i + 1, j + 1), (i, j + 1), (i + 1, j). (u, v) outside the triangle are
-    /// first clamped onto it.
+    /// first clamped onto it; with an inset, a point outside the shrunk lattice takes the
+    /// nearest cell's sub-triangle and weights that extrapolate (some negative).
     Stencil stencil(std::uint32_t t, T u, T v) const {
         u = std::clamp(u, T(0), T(1)), v = std::clamp(v, T(0), T(1));
         if (u + v > T(1)) u /= u + v, v = T(1) - u;
-        const T a = u * T(g), b = v * T(g);
-        const int j = std::min(int(b), g - 1), i = std::min(int(a), g - 1 - j);
+        const T c = T(1) / T(3), k = T(1) / (T(1) - inset);
+        const T a = (c + (u - c) * k) * T(g), b = (c + (v - c) * k) * T(g);  // lattice coordinates
+        const int j = std::clamp(int(std::floor(b)), 0, g - 1), i = std::clamp(int(std::floor(a)), 0, g - 1 - j);
         const T fa = a - T(i), fb = b - T(j);
         if (fa + fb > T(1) && i + j < g - 1)
             return {{index(t, i + 1, j + 1), index(t, i, j + 1), index(t, i + 1, j)}, {fa + fb - T(1), T(1) - fa, T(1) - fb}};
@@ -108,6 +117,7 @@ struct LightPathMapOptions {
     std::size_t entry_points = 256;
     int branches = 4;          // walks per entry point (000's splitting factor N_s)
     int grid = 4;              // reference grid per triangle (g x g sub-triangles)
+    double inset = 0;          // the grid's lattice shrunk by 1 - inset toward each centroid
     std::size_t clusters = 0;  // 0: no clustering
     double min_distance = 0;   // geometry-term clamp of the gathering (0: unclamped)
     int threads = 0;
@@ -224,7 +234,7 @@ LightPathMap<T> build_light_path_map(const Scene<T>& s, const A& accel, const R&
     if (opt.entry_points == 0 || opt.branches < 1)
         throw Error("glint::build_light_path_map: entry_points " + std::to_string(opt.entry_points) + " and branches " +
                     std::to_string(opt.branches) + " must be positive");
-    LightPathMap<T> map{ReferenceGrid<T>(s, opt.grid), {}, {}, {}, {}};
+    LightPathMap<T> map{ReferenceGrid<T>(s, opt.grid, T(opt.inset)), {}, {}, {}, {}};
     Pcg32 rng(opt.seed, 0x19a7);
     T area = 0;
     map.entries = sample_entry_points(s, opt.entry_points, rng, area);
