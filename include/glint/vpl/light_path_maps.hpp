@@ -21,7 +21,9 @@
 // a pixel interpolates the irradiance of the three points of the sub-triangle containing its
 // hit by its barycentrics there (linear per sub-triangle, continuous inside a triangle: 000
 // section 8.1.2's "linear interpolation between the reference points", lines 4070-4073,
-// which 000 gets from texture filtering). A reference point is shaded on the side of its
+// which 000 gets from texture filtering). Optionally the lattice is shrunk toward each
+// triangle's centroid (ReferenceGrid's inset: no point on an edge, linear extrapolation
+// between the lattice and the edges). A reference point is shaded on the side of its
 // triangle that faces the scene camera's eye (glint's LPM is two-sided only through that
 // choice).
 // Glossy materials are shaded with their diffuse part kd / pi (000's LPM is for diffuse
