@@ -2,7 +2,7 @@
 // point light that moves under the ceiling: preprocessing once, then every frame costs one
 // shadow ray per entry point and a weighted sum of panes.
 //
-//   light_path_maps [--entries E] [--clusters C] [--grid G] [--branches B] [--frames F]
+//   light_path_maps [--entries E] [--clusters C] [--grid G] [--inset S] [--branches B] [--frames F]
 //                   [--size S] [--clamp D] [--ref-walks R] [--out DIR]
 //
 // Prints the preprocessing time, the map's memory, the mean time per frame, and for each
@@ -54,6 +54,7 @@ int main(int argc, char** argv) try {
         if (a == "--entries") opt.entry_points = std::stoul(v);
         else if (a == "--clusters") opt.clusters = std::stoul(v);
         else if (a == "--grid") opt.grid = std::stoi(v);
+        else if (a == "--inset") opt.inset = std::stod(v);
         else if (a == "--branches") opt.branches = std::stoi(v);
         else if (a == "--frames") frames = std::stoul(v);
         else if (a == "--size") size = std::stoi(v);

@@ -319,20 +319,86 @@ TEST_CASE("agreement: each frame of the path-reuse animation equals independent 
     }
 }
 
-TEST_CASE("exact: the reference grid's lookup finds the sub-triangle of every centroid") {
+TEST_CASE("exact: the reference grid holds each triangle's lattice points, and each point's stencil is itself") {
     const Scene<float> s = point_box();
     for (const int g : {1, 2, 5}) {
         const ReferenceGrid<float> grid(s, g);
-        CHECK(grid.size() == s.triangles.size() * std::size_t(g * g));
-        for (int k = 0; k < g * g; ++k) {
-            const Vec2<float> b = grid.centroid(k);
-            CAPTURE(g);
-            CAPTURE(k);
-            CHECK(b.x + b.y < 1.0f);
-            CHECK(grid.lookup(3, b.x, b.y) == 3 * std::size_t(g * g) + std::size_t(k));
-        }
+        CHECK(grid.per_triangle() == std::size_t((g + 1) * (g + 2) / 2));
+        CHECK(grid.size() == s.triangles.size() * grid.per_triangle());
+        const auto& v = s.triangles[3];
+        for (int j = 0; j <= g; ++j)
+            for (int i = 0; i + j <= g; ++i) {
+                CAPTURE(g);
+                CAPTURE(i);
+                CAPTURE(j);
+                const float u = float(i) / float(g), w = float(j) / float(g);
+                const std::size_t r = grid.index(3, i, j);
+                CHECK(grid.tri[r] == 3);
+                CHECK(glm::length(grid.x[r] - (v[0] * (1 - u - w) + v[1] * u + v[2] * w)) < 1e-6f);
+                const ReferenceGrid<float>::Stencil st = grid.stencil(3, u, w);
+                for (int k = 0; k < 3; ++k) {
+                    if (st.index[k] == r) {
+                        CHECK(std::abs(st.weight[k] - 1.0f) < 1e-6f);
+                    } else {
+                        CHECK(std::abs(st.weight[k]) < 1e-6f);
+                    }
+                }
+            }
     }
     CHECK_THROWS_WITH_AS(ReferenceGrid<float>(s, 0), doctest::Contains("grid 0"), Error);
+    CHECK_THROWS_WITH_AS(ReferenceGrid<float>(s, 4, 0.6f), doctest::Contains("inset 0.6"), Error);
+}
+
+TEST_CASE("exact: interpolating a linear function of position recorded at the lattice reproduces it everywhere") {
+    const Scene<float> s = point_box();
+    // Three linear functions of position, one per band.
+    const auto f = [](const Vec3<float>& x) {
+        return Rgb<float>(0.5f + 0.3f * x.x - 0.2f * x.y + 0.1f * x.z, 1.0f - 0.4f * x.x + 0.25f * x.z, 0.7f * x.y + 0.2f);
+    };
+    // Inset 0: interpolation, weights in [0, 1]; inset 0.1: extrapolation near the edges.
+    for (const float inset : {0.0f, 0.1f})
+        for (const int g : {1, 3, 8}) {
+            const ReferenceGrid<float> grid(s, g, inset);
+            std::vector<Rgb<float>> values(grid.size());
+            for (std::size_t r = 0; r < grid.size(); ++r) values[r] = f(grid.x[r]);
+            Pcg32 rng(11, std::uint64_t(g));
+            for (int n = 0; n < 400; ++n) {
+                const std::uint32_t t = std::uint32_t(rng.uniform<float>() * float(s.triangles.size())) % std::uint32_t(s.triangles.size());
+                float u = rng.uniform<float>(), v = rng.uniform<float>();
+                if (u + v > 1) u = 1 - u, v = 1 - v;
+                if (n % 10 == 0) v = 1 - u;  // on the edge opposite vertex 0
+                if (n % 10 == 1) u = 0;      // on an edge through vertex 0
+                const auto& p = s.triangles[t];
+                const Rgb<float> want = f(p[0] * (1 - u - v) + p[1] * u + p[2] * v);
+                const Rgb<float> got = grid.interpolate(std::span<const Rgb<float>>(values), t, u, v);
+                const ReferenceGrid<float>::Stencil st = grid.stencil(t, u, v);
+                CAPTURE(inset);
+                CAPTURE(g);
+                CAPTURE(t);
+                CAPTURE(u);
+                CAPTURE(v);
+                CHECK(std::abs(st.weight[0] + st.weight[1] + st.weight[2] - 1.0f) < 1e-5f);
+                for (int k = 0; k < 3; ++k) CHECK((inset > 0 || st.weight[k] > -1e-6f));
+                for (std::size_t c = 0; c < 3; ++c) CHECK(std::abs(got[c] - want[c]) < 4e-6f * (1.0f + std::abs(want[c])));
+            }
+        }
+    // Through the renderer's pixel points: their (u, v) follow the same vertex convention.
+    const Accel accel(s.triangles);
+    const ReferenceGrid<float> grid(s, 4);
+    std::vector<Rgb<float>> values(grid.size());
+    for (std::size_t r = 0; r < grid.size(); ++r) values[r] = f(grid.x[r]);
+    const LightPathMap<float> map{grid, {}, {}, {}, {}};
+    const auto points = primary_points(s, accel, small_settings(16, 1, 1));
+    const auto img = light_path_map_image(map, s, std::span<const PixelPoint<float>>(points), std::span<const Rgb<float>>(values));
+    int hits = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        if (!points[i].hit) continue;
+        ++hits;
+        const Rgb<float> want = points[i].weight * s.materials[points[i].material].kd * f(points[i].x) / pi<float>;
+        CAPTURE(i);
+        for (std::size_t c = 0; c < 3; ++c) CHECK(std::abs(img[i][c] - want[c]) < 1e-5f * (1.0f + std::abs(want[c])));
+    }
+    CHECK(hits > 200);
 }
 
 TEST_CASE("agreement: the light path map's indirect irradiance equals VPL gathering at the reference points") {

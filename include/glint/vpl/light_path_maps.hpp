@@ -16,11 +16,16 @@
 // is kd(x) / pi sum_k E_k S^(k)(x). Area lights: E_k is estimated from light samples
 // (EmitterSet::sample_point, the same shadow-ray test per sample), in place of 000's
 // point-to-disc form-factor approximation.
-// Reference points (glint has no texture atlas): stratified surface points, every triangle
-// cut into g x g sub-triangles with one point at each sub-triangle's centroid; a pixel takes
-// the value of the point whose sub-triangle contains its hit (constant per sub-triangle, a
-// nearest-texel lookup). A reference point is shaded on the side of its triangle that faces
-// the scene camera's eye (glint's LPM is two-sided only through that choice).
+// Reference points (glint has no texture atlas): stratified surface points, the vertices of
+// every triangle's subdivision into g x g sub-triangles ((g + 1) (g + 2) / 2 per triangle);
+// a pixel interpolates the irradiance of the three points of the sub-triangle containing its
+// hit by its barycentrics there (linear per sub-triangle, continuous inside a triangle: 000
+// section 8.1.2's "linear interpolation between the reference points", lines 4070-4073,
+// which 000 gets from texture filtering). Optionally the lattice is shrunk toward each
+// triangle's centroid (ReferenceGrid's inset: no point on an edge, linear extrapolation
+// between the lattice and the edges). A reference point is shaded on the side of its
+// triangle that faces the scene camera's eye (glint's LPM is two-sided only through that
+// choice).
 // Glossy materials are shaded with their diffuse part kd / pi (000's LPM is for diffuse
 // scenes); entry points and the paths' vertices follow shooting.hpp.
 // Clustering (000 section 8.2.1): entry points are grouped by k-means on their position and
@@ -44,46 +49,68 @@
 
 namespace glint {
 
-/// Reference points: every triangle cut into g x g sub-triangles, one point at each
-/// sub-triangle's centroid (g^2 points per triangle), in triangle order.
+/// Reference points: the lattice of every triangle's g x g subdivision, the points with
+/// barycentrics (i / g, j / g), i, j >= 0, i + j <= g ((g + 1) (g + 2) / 2 per triangle, in
+/// triangle order; points on an edge are repeated in each triangle that has it). A value
+/// recorded at the points is read back linearly interpolated inside each sub-triangle.
+/// With inset s > 0 the lattice is shrunk by 1 - s toward the triangle's centroid (no point
+/// on an edge, where a wall meeting the triangle contributes nothing) and read back with
+/// linear extrapolation in the band between the lattice and the edges.
 template <Scalar T>
 struct ReferenceGrid {
     int g = 4;
+    T inset = 0;
     std::vector<Vec3<T>> x;          // positions
     std::vector<std::uint32_t> tri;  // triangle of each point
 
-    ReferenceGrid(const Scene<T>& s, int grid) : g(grid) {
+    /// The lattice's points and the interpolation weights of one surface point.
+    struct Stencil {
+        std::size_t index[3];
+        T weight[3];
+    };
+
+    ReferenceGrid(const Scene<T>& s, int grid, T shrink = T(0)) : g(grid), inset(shrink) {
         if (grid < 1 || grid > 256) throw Error("glint::ReferenceGrid: grid " + std::to_string(grid) + " outside [1, 256]");
+        if (!(shrink >= T(0) && shrink <= T(0.5)))
+            throw Error("glint::ReferenceGrid: inset " + std::to_string(double(shrink)) + " outside [0, 0.5]");
+        const T c = T(1) / T(3);
         for (std::size_t t = 0; t < s.triangles.size(); ++t)
-            for (int k = 0; k < g * g; ++k) {
-                const Vec2<T> b = centroid(k);
-                const auto& v = s.triangles[t];
-                x.push_back(v[0] * (T(1) - b.x - b.y) + v[1] * b.x + v[2] * b.y);
-                tri.push_back(std::uint32_t(t));
-            }
+            for (int j = 0; j <= g; ++j)
+                for (int i = 0; i + j <= g; ++i) {
+                    const T u = c + (T(i) / T(g) - c) * (T(1) - inset), v = c + (T(j) / T(g) - c) * (T(1) - inset);
+                    const auto& p = s.triangles[t];
+                    x.push_back(p[0] * (T(1) - u - v) + p[1] * u + p[2] * v);
+                    tri.push_back(std::uint32_t(t));
+                }
     }
-    /// Barycentric (u, v) of sub-triangle k's centroid: the g (g + 1) / 2 "lower" cells
-    /// (i, j), i + j < g, row by row in j, then the g (g - 1) / 2 "upper" cells, i + j < g - 1.
-    Vec2<T> centroid(int k) const {
-        const int lower = g * (g + 1) / 2;
-        const bool up = k >= lower;
-        int r = up ? k - lower : k, j = 0;
-        const int n = up ? g - 1 : g;
-        while (r >= n - j) r -= n - j, ++j;
-        const T i = T(r), jj = T(j);
-        return up ? Vec2<T>((i + T(2) / 3) / T(g), (jj + T(2) / 3) / T(g)) : Vec2<T>((i + T(1) / 3) / T(g), (jj + T(1) / 3) / T(g));
+    std::size_t per_triangle() const { return std::size_t((g + 1) * (g + 2) / 2); }
+    /// Index of lattice point (i, j) of triangle t: rows of constant j, g + 1 - j points each.
+    std::size_t index(std::uint32_t t, int i, int j) const {
+        return std::size_t(t) * per_triangle() + std::size_t(j * (g + 1) - j * (j - 1) / 2 + i);
     }
-    /// Index of the point whose sub-triangle contains barycentrics (u, v) of triangle t.
-    std::size_t lookup(std::uint32_t t, T u, T v) const {
-        const T a = std::clamp(u, T(0), T(1)) * T(g), b = std::clamp(v, T(0), T(1)) * T(g);
-        int i = std::min(int(a), g - 1), j = std::min(int(b), g - 1);
-        if (i + j > g - 1) i = g - 1 - j;
-        const bool up = (a - T(i)) + (b - T(j)) > T(1) && i + j < g - 1;
-        int k = 0;
-        const int n = up ? g - 1 : g;
-        for (int jj = 0; jj < j; ++jj) k += n - jj;
-        k += i + (up ? g * (g + 1) / 2 : 0);
-        return std::size_t(t) * std::size_t(g * g) + std::size_t(k);
+    /// The three lattice points of the sub-triangle containing barycentrics (u, v) of
+    /// triangle t and the point's barycentrics in it: cell (i, j) is split by its diagonal
+    /// into a lower sub-triangle (i, j), (i + 1, j), (i, j + 1) and, when i + j < g - 1, an
+    /// upper one (i + 1, j + 1), (i, j + 1), (i + 1, j). (u, v) outside the triangle are
+    /// first clamped onto it; with an inset, a point outside the shrunk lattice takes the
+    /// nearest cell's sub-triangle and weights that extrapolate (some negative).
+    Stencil stencil(std::uint32_t t, T u, T v) const {
+        u = std::clamp(u, T(0), T(1)), v = std::clamp(v, T(0), T(1));
+        if (u + v > T(1)) u /= u + v, v = T(1) - u;
+        const T c = T(1) / T(3), k = T(1) / (T(1) - inset);
+        const T a = (c + (u - c) * k) * T(g), b = (c + (v - c) * k) * T(g);  // lattice coordinates
+        const int j = std::clamp(int(std::floor(b)), 0, g - 1), i = std::clamp(int(std::floor(a)), 0, g - 1 - j);
+        const T fa = a - T(i), fb = b - T(j);
+        if (fa + fb > T(1) && i + j < g - 1)
+            return {{index(t, i + 1, j + 1), index(t, i, j + 1), index(t, i + 1, j)}, {fa + fb - T(1), T(1) - fa, T(1) - fb}};
+        return {{index(t, i, j), index(t, i + 1, j), index(t, i, j + 1)}, {T(1) - fa - fb, fa, fb}};
+    }
+    /// Values recorded at the points, interpolated linearly at (u, v) of triangle t.
+    Rgb<T> interpolate(std::span<const Rgb<T>> values, std::uint32_t t, T u, T v) const {
+        const Stencil st = stencil(t, u, v);
+        Rgb<T> out(T(0));
+        for (int k = 0; k < 3; ++k) out += values[st.index[k]] * st.weight[k];
+        return out;
     }
     std::size_t size() const { return x.size(); }
 };
@@ -92,6 +119,7 @@ struct LightPathMapOptions {
     std::size_t entry_points = 256;
     int branches = 4;          // walks per entry point (000's splitting factor N_s)
     int grid = 4;              // reference grid per triangle (g x g sub-triangles)
+    double inset = 0;          // the grid's lattice shrunk by 1 - inset toward each centroid
     std::size_t clusters = 0;  // 0: no clustering
     double min_distance = 0;   // geometry-term clamp of the gathering (0: unclamped)
     int threads = 0;
@@ -208,7 +236,7 @@ LightPathMap<T> build_light_path_map(const Scene<T>& s, const A& accel, const R&
     if (opt.entry_points == 0 || opt.branches < 1)
         throw Error("glint::build_light_path_map: entry_points " + std::to_string(opt.entry_points) + " and branches " +
                     std::to_string(opt.branches) + " must be positive");
-    LightPathMap<T> map{ReferenceGrid<T>(s, opt.grid), {}, {}, {}, {}};
+    LightPathMap<T> map{ReferenceGrid<T>(s, opt.grid, T(opt.inset)), {}, {}, {}, {}};
     Pcg32 rng(opt.seed, 0x19a7);
     T area = 0;
     map.entries = sample_entry_points(s, opt.entry_points, rng, area);
@@ -269,8 +297,8 @@ std::vector<Rgb<T>> reference_irradiance(const LightPathMap<T>& map, std::span<c
     return out;
 }
 
-/// Indirect radiance per pixel point: kd / pi times the reference irradiance of the
-/// sub-triangle the point lies in (times the camera path's weight).
+/// Indirect radiance per pixel point: kd / pi times the reference irradiance interpolated
+/// at the point's barycentrics (times the camera path's weight).
 template <Scalar T>
 std::vector<Rgb<T>> light_path_map_image(const LightPathMap<T>& map, const Scene<T>& s, std::span<const PixelPoint<T>> points,
                                          std::span<const Rgb<T>> ref_e) {
@@ -279,7 +307,7 @@ std::vector<Rgb<T>> light_path_map_image(const LightPathMap<T>& map, const Scene
         const PixelPoint<T>& p = points[i];
         if (!p.hit) continue;
         const Rgb<T> kd = s.materials[p.material].kd;
-        out[i] = p.weight * kd * ref_e[map.grid.lookup(p.triangle, p.u, p.v)] / pi<T>;
+        out[i] = p.weight * kd * map.grid.interpolate(ref_e, p.triangle, p.u, p.v) / pi<T>;
     }
     return out;
 }
