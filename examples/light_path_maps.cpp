@@ -3,7 +3,7 @@
 // shadow ray per entry point and a weighted sum of panes.
 //
 //   light_path_maps [--entries E] [--clusters C] [--grid G] [--inset S] [--branches B] [--frames F]
-//                   [--size S] [--clamp D] [--ref-walks R] [--out DIR]
+//                   [--size S] [--clamp D] [--ref-walks R] [--seed N] [--out DIR]
 //
 // Prints the preprocessing time, the map's memory, the mean time per frame, and for each
 // frame the relative RMSE of the indirect illumination against a VPL reference of R walks
@@ -60,6 +60,7 @@ int main(int argc, char** argv) try {
         else if (a == "--size") size = std::stoi(v);
         else if (a == "--clamp") opt.min_distance = std::stod(v);
         else if (a == "--ref-walks") ref_walks = std::stoul(v);
+        else if (a == "--seed") opt.seed = std::stoull(v);
         else if (a == "--out") dir = v;
         else throw Error("light_path_maps: unknown flag '" + a + "'");
     }
