@@ -1,7 +1,7 @@
 // bench_cones: the hierarchical ray engine (000 chapter 6) against brute force and glint's
 // fastest tree, the wide BVH, on the refracted-ray passes of a glass torus knot, versus triangle count.
 //
-// 000 section 6.4 (lines 3458-3490): 256 x 256 rays in 16 x 16 tiles, maximum path length 5;
+// 000 section 6.4: 256 x 256 rays in 16 x 16 tiles, maximum path length 5;
 // the primary refracted rays come from rasterization (section 6.3.2), and the timed work is
 // the passes that trace them on. Here the primary hits are found once (untimed) with the
 // wide BVH, shaded into the primary refracted rays, and then every method runs the same

@@ -1,6 +1,6 @@
 // glint/cones/cone.hpp: infinite cones that enclose bundles of rays, built incrementally.
 //
-// 000 section 6.2 (lines 3244-3330): a bundle of coherent rays is enclosed in an infinite
+// 000 section 6.2: a bundle of coherent rays is enclosed in an infinite
 // cone (apex a, unit axis x, half opening angle phi). Starting from the zero-angle cone of
 // the first ray, every ray is added in two steps:
 //   (a) if its direction r is outside the cone's solid angle (x . r < cos phi), the cone is
@@ -11,7 +11,7 @@
 // Repairs and derivations (the extracted formulas are garbled; each was derived again in
 // the plane spanned by the axis x and the unit vector p perpendicular to x towards the new
 // direction or point, and is checked by tests/test_cones.cpp):
-//   (a) lines 3283-3297 give q = ((x.r) x - r) / |(x.r) x - r| (= -p), the far generator
+//   (a) the cone-widening step gives q = ((x.r) x - r) / |(x.r) x - r| (= -p), the far generator
 //       e = x cos phi + q sin phi, x_new = (e + r) / |e + r| and cos phi_new = x_new . r. With
 //       theta the angle from x to r, e lies at angle -phi and r at +theta in that plane, so
 //       the new cone is the bisector: phi_new = (theta + phi) / 2 and the axis rotates by
@@ -22,7 +22,7 @@
 //       180 degrees the old cone contains -r and no cone of opening below 180 degrees holds
 //       both (e + r then bisects the wrong arc). glint then falls back to the cone that
 //       admits every ray (see below).
-//   (b) lines 3300-3322 give c = o - a, the same q with c for r, n = x cos phi - q sin phi,
+//   (b) the apex-translation step gives c = o - a, the same q with c for r, n = x cos phi - q sin phi,
 //       g = c - (n.c) n, t = g^2 / (e.g) and a_new = a - e t. Here e.g < 0 (g points out of
 //       the cone, e's part across n points in), so the printed t is negative and a - e t
 //       would move the apex forwards: a minus sign was lost. Derived: with h = c.x and
@@ -170,7 +170,7 @@ struct ConeState {
     }
 };
 
-/// Step (a): widen the opening to hold the unit direction r (000 lines 3280-3297, repaired
+/// Step (a): widen the opening to hold the unit direction r (000 section 6.2, repaired
 /// as described in the header comment).
 template <class T>
 void extend_to_direction(ConeState<T>& s, const Vec3<T>& r, const ConeOptions& opt) {
@@ -188,7 +188,7 @@ void extend_to_direction(ConeState<T>& s, const Vec3<T>& r, const ConeOptions& o
     s.set_phi(phi_new);
 }
 
-/// Step (b): translate the apex so that the cone holds the point o (000 lines 3298-3322,
+/// Step (b): translate the apex so that the cone holds the point o (000 section 6.2,
 /// repaired as described in the header comment).
 template <class T>
 void translate_to_point(ConeState<T>& s, const Vec3<T>& o, const ConeOptions& opt) {

@@ -1,9 +1,9 @@
 // glint/cones/glass.hpp: the shader of 000's refraction passes: a ray that hits the glass
 // continues as its refracted ray, or as its reflected ray under total internal reflection;
-// a ray that misses ends (and reads the environment map, 000 lines 3382-3384, 3438-3441).
+// a ray that misses ends (and reads the environment map, 000 sections 6.3 and 6.4).
 //
-// 000 section 6.3 (lines 3333-3390): "the pixel shader performing the intersection tests
-// outputs the refracted ray", and section 6.4 (lines 3463-3466) also computes a refracted
+// 000 section 6.3: "the pixel shader performing the intersection tests
+// outputs the refracted ray", and section 6.4 also computes a refracted
 // direction for every hit. Snell's law with the geometric normal of the hit triangle: with
 // unit direction d, unit normal n facing the incoming ray (d . n < 0) and eta = n_from / n_to,
 //     k = 1 - eta^2 (1 - (d . n)^2);  refracted = eta d - (eta (d . n) + sqrt(k)) n  (k >= 0),

@@ -1,14 +1,14 @@
 // glint/cones/ray_tiles.hpp: the hierarchical ray engine on the CPU: a hierarchy over rays
 // (tiles of an image, one enclosing cone each) instead of over objects.
 //
-// 000 chapter 6 (lines 3105-3530). The ray engine (lines 3128-3160) tests every ray against
-// every triangle. Section 6.1 (lines 3163-3238) splits the ray array into tiles and, for
+// 000 chapter 6. The ray engine tests every ray against
+// every triangle. Section 6.1 splits the ray array into tiles and, for
 // every triangle and tile, first tests the triangle's enclosing sphere against the tile's
 // enclosing cone; only tiles that pass run the ray-triangle tests. Section 6.3 (lines
 // 3333-3390, 3438-3455) iterates passes for multiple refractions and reflections: in every
 // pass the cones are rebuilt for the new generation of rays, and rays whose path has
-// terminated (no hit, or the shader ends it) drop out (000 uses the stencil buffer for this,
-// lines 3444-3455; here an active flag per ray). Per 000 section 6.3.1 the triangle record
+// terminated (no hit, or the shader ends it) drop out (000 section 6.4 uses the stencil buffer
+// for this; here an active flag per ray). Per 000 section 6.3.1 the triangle record
 // is the IVM (any TriangleIntersector policy works) plus its bounding sphere (sphere.hpp).
 //
 // CPU form of the GPU passes: the loop is tile-major (for every tile: its cone, then every
@@ -64,7 +64,7 @@ struct TileGrid {
 /// Options of the ray-tile engine.
 ///
 /// 000's hierarchy has two levels (rays and tiles). Adaptive split is an extension in the
-/// direction of 000 section 6.7 (lines 3512-3529, multi-level ray hierarchies of Roger et
+/// direction of 000 section 6.7 (multi-level ray hierarchies of Roger et
 /// al.): a tile of m rays whose cone passes P of the N triangles' spheres is split into
 /// quadrants (recursively, down to `min_tile` rays on a side) when the tests a split may
 /// save exceed its cost, all in units of one ray-triangle test:
@@ -128,7 +128,7 @@ struct TileWorkspace {
 
 /// A shader for trace_passes: `shade(i, ray, hit, found)` is called after every pass for
 /// every active ray i (rays that cannot hit anything are never active); it may replace `ray` with the next segment of the path and returns
-/// whether the path goes on (a ray without a hit normally ends: 000 line 3440).
+/// whether the path goes on (a ray without a hit normally ends: 000 section 6.4).
 template <class S, class T>
 concept PassShader = requires(S s, std::size_t i, Ray<T>& r, const StoreHit<T>& h, bool f) {
     { s(i, r, h, f) } -> std::convertible_to<bool>;
@@ -143,7 +143,7 @@ PassStats run_passes(std::span<Ray<T>> rays, int max_passes, TileWorkspace<T>& w
                      Shade&& shade) {
     if (max_passes < 0) throw Error("trace_passes: max_passes must be >= 0, got " + std::to_string(max_passes));
     // Rays that cannot hit anything (ray_can_hit: NaN, infinite or zero) are inactive from
-    // the start, like pixels where no refractive surface is visible (000 line 3443).
+    // the start, like pixels where no refractive surface is visible (000 section 6.4).
     ws.active.resize(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) ws.active[i] = ray_can_hit(rays[i]) ? 1 : 0;
     ws.hits.resize(rays.size());

@@ -1,14 +1,14 @@
 // glint/cones/sphere.hpp: bounding spheres of triangles and the cone-sphere test.
 //
-// 000 section 6.3.1 (lines 3391-3400) stores, for every triangle, the centre and radius of an
-// enclosing sphere next to its IVM; 000 section 6.3.3 (lines 3416-3427) says they are
+// 000 section 6.3.1 stores, for every triangle, the centre and radius of an
+// enclosing sphere next to its IVM; 000 section 6.3.3 says they are
 // computed when the mesh is loaded. glint uses the *minimal* enclosing sphere: for a
 // triangle with an angle of 90 degrees or more it is the sphere on the longest edge as
 // diameter; otherwise the circumsphere (centre in the triangle's plane, equidistant from the
 // three vertices). It is computed in double and rounded outwards, so that the stored
 // sphere holds the triangle exactly.
 //
-// 000 section 6.3.4 (lines 3431-3437): the cone meets the sphere if
+// 000 section 6.3.4: the cone meets the sphere if
 //     phi > arccos[(v - a) . x] - arcsin[r / |v - a|].
 // Repair: the arccos argument must be divided by |v - a| (as printed it is not a cosine).
 // With theta the angle from the axis to the centre and beta = arcsin(r / d) (d = |v - a|) the

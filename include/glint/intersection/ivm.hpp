@@ -1,6 +1,6 @@
 // glint/intersection/ivm.hpp: ray-triangle intersection with the inverse vertex matrix.
 //
-// 000 section 4.1 (lines 2331-2470), Szecsi's IVM test. With the triangle's vertices as the
+// 000 section 4.1, Szecsi's IVM test. With the triangle's vertices as the
 // columns of V = [v0, v1, v2], the record is exactly the 9 scalars of M = V^-1 (the IVM):
 //   - barycentrics of a point x are b = M x (eq. 4.8);
 //   - every vertex satisfies [1,1,1] M v_i = 1, so the plane is q' . x = 1 with the row

@@ -2,7 +2,7 @@
 //
 // Moller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection" (JGT 1997): solve
 // o + t d = (1 - u - v) v0 + u v1 + v v2 by Cramer's rule with two cross products and no
-// precomputed plane. 000 section 4.1.1 (lines 2486-2520) compares the IVM test against it as
+// precomputed plane. 000 section 4.1.1 compares the IVM test against it as
 // "the fastest known ... working without precomputed values". Our record keeps v0 and the
 // two edges e1 = v1 - v0, e2 = v2 - v0 (9 scalars, the same footprint as the IVM), which is
 // how it is usually deployed and the strongest version of this baseline.

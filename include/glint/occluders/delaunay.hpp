@@ -1,6 +1,6 @@
 // glint/occluders/delaunay.hpp: 3D Delaunay tetrahedralization by Bowyer-Watson.
 //
-// 000 section 5.2 (lines 2780-2800): "A Delaunay mesh is a decomposition of space into
+// 000 section 5.2: "A Delaunay mesh is a decomposition of space into
 // tetrahedra, the circumspheres of which cannot contain any node of the mesh. Using the
 // Bowyer-Watson algorithm [Bow81, Wat81] ... an incremental algorithm, starting off from an
 // initial enclosing tessellation, adding points sequentially."

@@ -1,7 +1,7 @@
 // glint/occluders/gssa.hpp: generalized shadowing surface area (GSSA) of the union of two
 // spheres, the quantity sphere merging preserves.
 //
-// 000 section 5.2.3 (lines 2905-3005). A(R, r, d) for radii R >= r and centre distance d is
+// 000 section 5.2.3. A(R, r, d) for radii R >= r and centre distance d is
 // the surface area of an enclosing convex body times the probability that a random line
 // hitting that body hits the union; the merged sphere gets R_new = sqrt(A / (4 pi)).
 // Estimators, all upper bounds of the true A:
@@ -17,7 +17,7 @@
 //                     S_C = pi l (R + r) sin alpha, A_c = S_R + S_C + S_r;
 //   minimum           min(A_P, A_u, A_c);
 //   fitted            000 fitted a closed form to Monte Carlo measurements of
-//                     A(1, r/R, d/R) / (4 pi) (lines 2985-3000, garbled: it reads
+//                     A(1, r/R, d/R) / (4 pi) (garbled: it reads
 //                     "1.1824 * 0.42615R/d * r/R1.972 + 0.991", i.e. 1.1824 * 0.42615^(R/d) *
 //                     (r/R)^1.972 + 0.991). glint measured A again (gssa_monte_carlo below, 4e5
 //                     isotropic lines per point on a 24 x 40 grid: r/R = 1/24 .. 1, and

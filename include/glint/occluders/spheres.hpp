@@ -1,15 +1,15 @@
 // glint/occluders/spheres.hpp: occluder-sphere generation from a triangle mesh.
 //
-// 000 section 5.2 (lines 2760-2800): sample points on the surface, tetrahedralize them
+// 000 section 5.2: sample points on the surface, tetrahedralize them
 // (delaunay.hpp), and take the circumspheres of the inner tetrahedra as a tight initial set;
 // then merge pairs until the target count is reached.
-// - Inner tetrahedra, section 5.2.1 (lines 2802-2826): a tetrahedron is inner when at each of
+// - Inner tetrahedra, section 5.2.1: a tetrahedron is inner when at each of
 //   its four vertices the angle between the sphere normal (vertex - circumcentre) and the
 //   surface normal is below pi/2. Surface normals are the sampled triangles' geometric
 //   normals, oriented outward by the sign of the mesh's signed volume. glint also drops
 //   circumspheres that are not finite or larger than the mesh's bounding sphere (slivers
 //   of flat regions when sampling is sparse).
-// - Merging, section 5.2.2 (lines 2828-2874): repeatedly merge the closest pair under
+// - Merging, section 5.2.2: repeatedly merge the closest pair under
 //   D1 = d or D2 = d + r - R (R >= r). Every sphere remembers its best partner; a merge
 //   recomputes partners only for the new sphere and for spheres whose partner was merged.
 //   This still finds the globally closest pair: for the closest pair (i, j) the younger of
@@ -17,7 +17,7 @@
 //   Partners are found in a uniform grid of sphere centres (000 suggests a kd-tree; the issue
 //   allows a grid) that is updated by each merge and rebuilt whenever the live count halves.
 // - New radius, section 5.2.3: R_new = sqrt(A(R, r, d) / 4 pi), A from gssa.hpp (GssaModel).
-// - New centre, section 5.2.4 (lines 3007-3013): the centres weighted by the hull caps
+// - New centre, section 5.2.4: the centres weighted by the hull caps
 //   S_R and S_r of section 5.2.3.
 #pragma once
 
@@ -396,10 +396,9 @@ double mesh_hit_fraction(std::span<const TriangleVertices<T>> mesh, const Vec3<T
     return lines ? double(hits) / double(lines) : 0.0;
 }
 
-/// Radius calibration (a glint addition; 000 section 5.2.3, line 2960, rejects "correct[ing]
+/// Radius calibration (a glint addition; 000 section 5.2.3, rejects "correct[ing]
 /// the radii by some arbitrary factor", and this factor is not arbitrary: it is the one that
-/// makes the set's hit probability equal the target, 000's stated goal in section 5.2,
-/// lines 2772-2778). Pairwise GSSA preservation assumes the rest of the set shadows both
+/// makes the set's hit probability equal the target, 000's stated goal in section 5.2). Pairwise GSSA preservation assumes the rest of the set shadows both
 /// predecessors alike; on long thin objects it overestimates the set's shadow more with every
 /// merge (docs/occluders.md lists both numbers). For each line the smallest scale at which it
 /// hits a sphere is min_i dist(line, c_i) / r_i; the factor is the target quantile of these.

@@ -1,18 +1,18 @@
 // glint/occluders/visibility.hpp: approximate point-to-point visibility against occluder
 // spheres.
 //
-// 000 section 5.1 (lines 2722-2757): for a shading point x, each sphere (c, R) is
+// 000 section 5.1: for a shading point x, each sphere (c, R) is
 // pre-processed into the unit direction u = (c - x) / t, t = |c - x|, and
 // cos gamma = sqrt(t^2 - R^2) / t (the half-angle of the cone from x that contains the
 // sphere). A point light y at distance q = |y - x| in direction l is occluded by the sphere
 // when cos delta = u . l > cos gamma and q > t ("slightly bent, view-dependent occluder
 // disks": the light is compared with the centre's distance, not the sphere's surface).
-// 000 section 5.3.1 (lines 3040-3062): spheres entirely behind the tangent plane of x
+// 000 section 5.3.1: spheres entirely behind the tangent plane of x
 // (u . n t <= -R) are culled, and so are spheres farther than the light (t >= q, the same
 // comparison); the rest are scanned linearly (SphereVisibilityLinear) or searched in a
 // kd-tree (SphereVisibilityKdTree) built by object-median splits, which 000 found to
 // overtake the linear scan at about 800 spheres.
-// 000 section 5.3.2 (lines 3064-3090): the self-shadowing heuristic excludes spheres whose
+// 000 section 5.3.2: the self-shadowing heuristic excludes spheres whose
 // centre is closer to x than twice their radius (t < 2R; factor configurable).
 // A point x inside a sphere (t <= R, only without the heuristic) is occluded from every
 // light farther than the centre.

@@ -1,9 +1,9 @@
 // glint/sampling/warps.hpp: maps from the unit square to directions and surface points, each
 // with the density it produces.
 //
-// 000 section 1.3 (lines 200-735) samples directions by BRDF (cosine-weighted hemisphere) and
+// 000 section 1.3 samples directions by BRDF (cosine-weighted hemisphere) and
 // light sources by area (uniform point on a triangle or polygon, density 1/area); 000 section 3.2
-// (lines 1978-2119) samples points uniformly on a polygon light. Standard constructions:
+// samples points uniformly on a polygon light. Standard constructions:
 // Shirley-Chiu concentric disk + Malley's method for the cosine hemisphere (pdf cos(theta)/pi),
 // Archimedes' projection for the uniform sphere (1/4pi) and hemisphere (1/2pi), the square-root
 // warp for triangles (barycentrics b0 = 1 - sqrt(u0), b1 = u1 sqrt(u0)), and area-weighted fan

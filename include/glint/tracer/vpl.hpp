@@ -1,15 +1,15 @@
 // glint/tracer/vpl.hpp: the virtual point light (instant radiosity) renderer of 000 section
 // 1.4, with a pluggable visibility policy for the gathering phase (000 chapter 5).
 //
-// 000 section 1.4 (lines 736-945). Shooting: random walks start at a light sample z_0 with
-// direction omega_0 and, with the reindexing of lines 790-800, leave at every hit
+// 000 section 1.4. Shooting: random walks start at a light sample z_0 with
+// direction omega_0 and, with 000's reindexing of the walk, leave at every hit
 // y = z_{n-1} a photon hit (virtual point light) of incoming power
 //   dPhi_vpl = Le(z_0, omega_0) / p_light(z_0, omega_0) * prod_{i=1}^{n-2} w(omega_i, z_i, omega_{i-1}) / (p(omega_i, z_i) s(z_i))
 // (the extraction lost the fraction bars and product limits; repaired from Fig. 1.5 and the
 // definitions below the formula: p_light and p are the light-sample and direction densities,
 // s(z_i) the continuation probability, w = f_r cos). Walks continue by a roulette policy of
 // sampling/roulette.hpp (RoulettePolicy) through scatter() with a diffuse lobe, so
-// w / (p s) = albedo / s. Gathering (lines 860-945): a shading point x seen through a pixel
+// w / (p s) = albedo / s. Gathering: a shading point x seen through a pixel
 // is connected deterministically to every VPL y; for diffuse surfaces
 //   L(x) = sum_vpl f_r(x) dPhi f_r(y) cos(theta_x) cos(theta_y) / |x - y|^2 * V(x, y)
 // with f_r = albedo / pi. The squared distance is clamped below by min_distance^2 (the usual

@@ -3,7 +3,7 @@
 // paths are reused in every frame by connecting their first hit z_1 to that frame's light
 // (Sbert, Szécsi and Szirmay-Kalos 2004; the balance heuristic of Veach and Guibas 1995).
 //
-// 000 section 7.1 (eq. 7.1, lines 3640-3700). The path z^(f) = (z^(f), z_1, z_2, ...) shot
+// 000 section 7.1 (eq. 7.1). The path z^(f) = (z^(f), z_1, z_2, ...) shot
 // in frame f is, in frame i, the path (z^(i), z_1, z_2, ...). With N paths per frame and the
 // balance heuristic over the F frames' sampling techniques, its weight in frame i is
 //   alpha^(i) = p^(i)(z^(i), z_1, z_2, ...) / sum_{j=1..F} p^(j)(z^(j), z_1, z_2, ...),
@@ -11,14 +11,14 @@
 // bar and put the summation limits and superscripts on separate lines; repaired from the
 // surrounding text: "the weight ... proportional to this probability", normalized over the
 // frames.) Only the first segment differs between the frames, so every later factor cancels
-// (lines 3760-3775): p^(j) reduces to the density of z_1 as a first hit from z^(j),
+// (000 section 7.2): p^(j) reduces to the density of z_1 as a first hit from z^(j),
 //   q_j = p_light(omega_{z^(j) -> z_1}) xi(z^(j) -> z_1),  xi = V cos(theta_{z_1}) / |z^(j) - z_1|^2
 // (the repaired second formula of section 7.2; p(omega_1, z_1) is common to all frames and
 // cancels). glint's point light emits uniformly (p_light = 1 / 4 pi). The frame-i estimate of
 // the path's contribution f^(i) / (N sum_j p^(j)) then equals alpha^(i) times the path's own
 // estimate in frame f with first-hit power 4 pi I / N (same intensity I in every frame), so the
 // image of each path is computed once and frame i's indirect illumination is the
-// alpha^(i)-weighted sum of all paths' images (lines 3780-3800). For every path the weights
+// alpha^(i)-weighted sum of all paths' images. For every path the weights
 // sum to 1 over the frames (the own frame has q_f > 0), which makes the combination unbiased.
 // Reuse needs the continuation from z_1 to be independent of where the light is: glint reuses
 // a path only when z_1 is Lambertian (VPL reflection and the continuation's w / p = kd do not

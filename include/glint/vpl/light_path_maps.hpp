@@ -20,7 +20,7 @@
 // every triangle's subdivision into g x g sub-triangles ((g + 1) (g + 2) / 2 per triangle);
 // a pixel interpolates the irradiance of the three points of the sub-triangle containing its
 // hit by its barycentrics there (linear per sub-triangle, continuous inside a triangle: 000
-// section 8.1.2's "linear interpolation between the reference points", lines 4070-4073,
+// section 8.1.2's "linear interpolation between the reference points",
 // which 000 gets from texture filtering). By default the lattice is shrunk by 10 % toward
 // each triangle's centroid (LightPathMapOptions::inset: no point on an edge, linear
 // extrapolation between the lattice and the edges; lower error than the plain lattice,
@@ -31,7 +31,7 @@
 // scenes); entry points and the paths' vertices follow shooting.hpp.
 // Clustering (000 section 8.2.1): entry points are grouped by k-means on their position and
 // normal; a cluster's pane is the sum of its members' items and its run-time weight is the
-// mean of its members' irradiances (lines 4463-4466).
+// mean of its members' irradiances.
 #pragma once
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 // glint/vpl/shooting.hpp: the shooting phase of the virtual light sources method over the
 // ordinary Scene (area and point lights, the path tracer's materials); Keller 1997, instant radiosity.
 //
-// 000 section 1.4 (lines 736-945). A shooting walk starts at a light sample z_0 with
+// 000 section 1.4. A shooting walk starts at a light sample z_0 with
 // direction omega_0 and leaves at every non-specular hit y a virtual point light (VPL) of
 // incoming power dPhi = Le(z_0, omega_0) / p_light(z_0, omega_0) * prod w / (p s) (the
 // formula's fraction bars and product limits were lost in the extraction; repaired from
@@ -11,8 +11,8 @@
 // on through scatter() with the hit material's own BRDF (SurfaceBrdf: diffuse and Phong
 // lobes) under a roulette policy; mirrors and dielectrics are followed deterministically
 // (Fresnel choice for dielectrics) and leave no VPL. A VPL reflects diffusely towards the
-// gathering point (f_r(y) = kd / pi: 000's diffuse estimator, lines 876-880; its general
-// form, lines 850-870, would evaluate f_r(y) with the stored incoming direction, which
+// gathering point (f_r(y) = kd / pi: 000's diffuse estimator; its general
+// form would evaluate f_r(y) with the stored incoming direction, which
 // glint does not), so glossy light transport through a VPL is the method's approximation;
 // for Lambertian scenes the method is unbiased.
 #pragma once
