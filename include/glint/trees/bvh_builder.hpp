@@ -10,9 +10,18 @@
 // SIMD batch at a time (Embree counts its Triangle4 blocks the same way). A node becomes a
 // leaf when that is not dearer and it holds at most `max_leaf` primitives.
 //
-// The result is a binary tree whose node slots are assigned from the primitive ranges, not
-// from the order of work: a node over n primitives at slot s has its left child at s + 1
-// and its right child at s + 2 n_L (a subtree over n primitives needs at most 2n - 1 slots).
+// Spatial splits (optional; Stich, Friedrich, Dietrich, "Spatial splits in bounding volume
+// hierarchies", HPG 2009): where the best object split's two boxes overlap by more than
+// alpha times the root's area, the node's box is also binned by position, each reference
+// chopped into the bins it spans and clipped exactly to them (clip_triangle: the triangle
+// polygon against the bin's planes), and a plane that cuts references in two wins when its
+// SAH cost is lower; a reference then sits on both sides, each piece bounded by its part
+// of the primitive. The references grow to at most spatial_budget times the primitives.
+//
+// The result is a binary tree whose node slots are assigned from the reference ranges, not
+// from the order of work: a node over n references at slot s has its left child at s + 1
+// and its right child at s + 2 n_L (a subtree over n references needs at most 2n - 1 slots;
+// with spatial splits n counts the room a subtree has for references, see BinnedSah).
 // So subtrees built by different threads never share an allocator, and the tree (every
 // slot, every primitive order) is the same for any thread count. The wide collapse
 // (wide_bvh.hpp) reads it from the root.
@@ -20,8 +29,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <thread>
@@ -47,6 +59,12 @@ struct BvhBuildOptions {
     std::uint32_t bins = 16;         // centre bins per axis (2 ... 64)
     unsigned threads = 1;            // build threads; 0: std::thread::hardware_concurrency()
     WideNodeOrder node_order = WideNodeOrder::depth_first;  // the wide nodes' order in memory
+    // Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
+    // where the best object split's two boxes overlap by more than spatial_alpha times the
+    // root's surface area; references stay at most spatial_budget times the primitives.
+    bool spatial_splits = false;
+    float spatial_alpha = 1e-5f;
+    float spatial_budget = 1.5f;
 
     void check() const {
         auto bad = [](const std::string& what) { throw Error("BvhBuildOptions: " + what); };
@@ -58,6 +76,9 @@ struct BvhBuildOptions {
             bad("leaf_block >= 1 and max_leaf in 1 ... 16 (got " + std::to_string(leaf_block) + ", " +
                 std::to_string(max_leaf) + ")");
         if (bins < 2 || bins > 64) bad("bins in 2 ... 64 (got " + std::to_string(bins) + ")");
+        if (!(spatial_alpha >= 0 && spatial_alpha <= 1) || !(spatial_budget >= 1 && spatial_budget <= 4))
+            bad("spatial_alpha in 0 ... 1 and spatial_budget in 1 ... 4 (got " + std::to_string(spatial_alpha) + ", " +
+                std::to_string(spatial_budget) + ")");
     }
     unsigned thread_count() const {
         return threads ? threads : std::max(1u, std::thread::hardware_concurrency());
@@ -80,26 +101,100 @@ struct BinaryBvh {
     bool empty() const { return prims.empty(); }
 };
 
+/// What spatial splits need from a primitive: clip(p, axis, region) is a box holding every
+/// point of primitive p that lies in `region`'s slab on `axis`, within `region` (empty when
+/// there is none). `region` is a box already holding p's part in the node.
+template <class C>
+concept PrimitiveClipper = requires(const C& clip, std::uint32_t p, int axis, const AABB<float>& region) {
+    { clip(p, axis, region) } -> std::convertible_to<AABB<float>>;
+};
+
+/// No clipper: the build makes object splits only (BvhBuildOptions::spatial_splits refused).
+struct NoClipper {
+    AABB<float> operator()(std::uint32_t, int, const AABB<float>&) const { return {}; }
+};
+
+namespace detail {
+/// The next float after finite x toward +infinity (dir = 1) or -infinity (dir = -1).
+inline float float_step(float x, int dir) {
+    if (x == 0.0f) return dir > 0 ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+    const auto bits = std::bit_cast<std::uint32_t>(x);
+    return std::bit_cast<float>((x > 0) == (dir > 0) ? bits + 1 : bits - 1);
+}
+}  // namespace detail
+
+/// The box of the part of triangle (a, b, c) between the planes of `region` on `axis`, within
+/// `region`, never smaller than that part (Stich et al. 2009 §3: a chopped reference is
+/// bounded by the triangle's part, not by its box's). That part's corners lie on the edges:
+/// each edge's piece between the two planes is found in double precision, the box of the
+/// pieces' ends rounded two floats outward (one for the rounding to float; the double's own
+/// error is far below the other), then intersected with `region` (whose planes are exact).
+inline AABB<float> clip_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, int axis, const AABB<float>& region) {
+    const Vec3d v[3] = {Vec3d(a), Vec3d(b), Vec3d(c)};
+    const double w0 = region.lo[axis], w1 = region.hi[axis];
+    Vec3d lo(infinity<double>), hi(-infinity<double>);
+    for (int i = 0; i < 3; ++i) {
+        Vec3d p = v[i], q = v[i == 2 ? 0 : i + 1];
+        if (p[axis] > q[axis]) std::swap(p, q);
+        if (q[axis] < w0 || p[axis] > w1) continue;  // the edge misses the slab
+        const Vec3d d = q - p;
+        const double inv = d[axis] > 0 ? 1.0 / d[axis] : 0.0;
+        const Vec3d e0 = p + d * std::max(0.0, (w0 - p[axis]) * inv);
+        const Vec3d e1 = d[axis] > 0 ? p + d * std::min(1.0, (w1 - p[axis]) * inv) : q;
+        lo = glm::min(lo, glm::min(e0, e1));
+        hi = glm::max(hi, glm::max(e0, e1));
+    }
+    AABB<float> out;
+    if (!(lo[axis] <= hi[axis])) return out;  // no point of the triangle between the planes
+    for (int ax = 0; ax < 3; ++ax) {  // two ulps out: one for rounding to float, one for the double's error
+        out.lo[ax] = std::max(region.lo[ax], detail::float_step(detail::float_step(float(lo[ax]), -1), -1));
+        out.hi[ax] = std::min(region.hi[ax], detail::float_step(detail::float_step(float(hi[ax]), 1), 1));
+    }
+    return out;
+}
+
 namespace detail {
 
-/// The cheapest bin boundary found at a node: axis (-1: none, all centres coincide), the
-/// first bin of the right side, the normalized cost and the two sides' boxes.
+/// A reference: a primitive and the box of its part in the node that holds it (the whole
+/// primitive's box unless spatial splits chopped it). `left`: its side in a spatial split.
+struct BvhRef {
+    AABB<float> box;
+    std::uint32_t prim = 0;
+    std::uint32_t left = 0;
+};
+
+/// The cheapest bin boundary found at a node: axis (-1: none), the first bin of the right
+/// side, the normalized cost, the two sides' boxes and reference counts.
 struct SahSplit {
     int axis = -1;
     std::uint32_t bin = 0;
     float cost = infinity<float>;
     AABB<float> left, right;
+    std::uint32_t n_left = 0, n_right = 0;
 };
 
-/// The recursive build (Wald 2007); one object per build, shared by its threads. Each
-/// node reads and permutes only its own range of `prims` and writes only its own slots.
+/// The recursive build (Wald 2007), with spatial splits (Stich, Friedrich, Dietrich,
+/// "Spatial splits in bounding volume hierarchies", HPG 2009) when a clipper is given and
+/// the options ask for them. One object per build, shared by its threads.
+///
+/// A node owns a range [b, cap) of the reference array: its references are [b, e), and
+/// [e, cap) is room for the references its spatial splits add. A split gives each child the
+/// room in proportion to its references (as Embree's spatial-split builder does) and moves
+/// the right child's references to the start of its room; a subtree whose room is c
+/// references has at most 2c - 1 nodes, so the right child's slot is s + 2 (its first
+/// reference - b), fixed before either child is built. Each node reads and writes only its
+/// own range and slots, so the tree does not depend on the thread count. Without spatial
+/// splits the room is the references (cap = e) and this is the object-split build alone.
+template <class Clip>
 class BinnedSah {
 public:
-    BinnedSah(std::span<const AABB<float>> boxes, std::span<const Vec3f> centres, const BvhBuildOptions& opt,
-              BinaryBvh& out)
-        : boxes_(boxes), centres_(centres), opt_(opt), out_(out), tokens_(int(opt.thread_count()) - 1) {}
+    BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, BinaryBvh& out)
+        : refs_(refs), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
+          spatial_(opt.spatial_splits && !std::same_as<Clip, NoClipper>),
+          min_overlap_(opt.spatial_alpha * root_area) {}
 
-    void node(std::uint32_t slot, std::uint32_t b, std::uint32_t e, const AABB<float>& box) {
+    void node(std::uint32_t slot, std::uint32_t b, std::uint32_t e, std::uint32_t cap, const AABB<float>& box,
+              bool spatial = true) {
         BinaryBvhNode& nd = out_.nodes[slot];
         nd.box = box;
         nd.begin = b;
@@ -107,32 +202,44 @@ public:
         const std::uint32_t n = e - b;
         if (n == 1) return;
         AABB<float> cbox;
-        for (std::uint32_t i = b; i < e; ++i) cbox.extend(centre(prims()[i]));
+        for (std::uint32_t i = b; i < e; ++i) cbox.extend(centre(i));
         const Vec3f k = scales(cbox);
-        const SahSplit s = find_split(b, e, cbox, k, box.surface_area());
-        if (n <= opt_.max_leaf && !(s.cost < opt_.intersection_cost * float(blocks(n)))) return;
+        const float inv_area = 1.0f / std::max(box.surface_area(), std::numeric_limits<float>::min());
+        const SahSplit s = find_split(b, e, cbox, k, inv_area);
+        SahSplit sp;  // Stich et al. §4: spatial splits only where the object split's boxes overlap
+        if (spatial && spatial_ && cap > e && (s.axis < 0 || overlap_area(s.left, s.right) > min_overlap_))
+            sp = find_spatial(b, e, cap - e, box, inv_area);
+        if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(blocks(n)))) return;
+        if (sp.cost < s.cost) {
+            if (!split_spatial(slot, b, e, cap, box, sp)) node(slot, b, e, cap, box, false);  // a side came out empty
+            return;
+        }
         std::uint32_t m = b + n / 2;
         AABB<float> lb, rb;
         if (s.axis >= 0) {
             const float lo = cbox.lo[s.axis], ka = k[s.axis];
-            const auto mid = std::partition(prims().begin() + b, prims().begin() + e, [&](std::uint32_t p) {
-                return bin_of(centre(p)[s.axis], lo, ka) < s.bin;
+            const auto mid = std::partition(refs_.begin() + b, refs_.begin() + e, [&](const BvhRef& r) {
+                return bin_of(r.box.center()[s.axis], lo, ka) < s.bin;
             });
-            m = std::uint32_t(mid - prims().begin());
+            m = std::uint32_t(mid - refs_.begin());
             lb = s.left;
             rb = s.right;
         } else {  // every centre is the same point: any halving is as good
-            for (std::uint32_t i = b; i < m; ++i) lb.extend(boxes_[prims()[i]]);
-            for (std::uint32_t i = m; i < e; ++i) rb.extend(boxes_[prims()[i]]);
+            for (std::uint32_t i = b; i < m; ++i) lb.extend(refs_[i].box);
+            for (std::uint32_t i = m; i < e; ++i) rb.extend(refs_[i].box);
         }
-        nd.right = slot + 2 * (m - b);
-        recurse(slot + 1, b, m, lb, nd.right, e, rb);
+        children(slot, b, m, e, cap, lb, rb);
     }
 
 private:
-    std::vector<std::uint32_t>& prims() { return out_.prims; }
-    Vec3f centre(std::uint32_t p) const { return centres_[p]; }
+    Vec3f centre(std::uint32_t i) const { return refs_[i].box.center(); }
     std::uint32_t blocks(std::uint32_t n) const { return (n + opt_.leaf_block - 1) / opt_.leaf_block; }
+    static float overlap_area(const AABB<float>& a, const AABB<float>& b) {
+        AABB<float> o;
+        o.lo = glm::max(a.lo, b.lo);
+        o.hi = glm::min(a.hi, b.hi);
+        return o.surface_area();  // 0 when they do not overlap
+    }
     /// Bins per unit of centre coordinate on each axis (0 where all centres coincide).
     Vec3f scales(const AABB<float>& cbox) const {
         Vec3f k;
@@ -148,62 +255,80 @@ private:
         return std::uint32_t(std::min(float(opt_.bins - 1), std::max(0.0f, (c - lo) * k)));
     }
 
+    /// The children of a node whose references are split into [b, m) and [m, e) (e <= cap):
+    /// the room [e, cap) is shared in proportion to the references, the right child's
+    /// references move to the start of its room, and its slot follows from the left room.
+    void children(std::uint32_t slot, std::uint32_t b, std::uint32_t m, std::uint32_t e, std::uint32_t cap,
+                  const AABB<float>& lb, const AABB<float>& rb) {
+        const auto room_l = std::uint32_t(std::uint64_t(cap - e) * (m - b) / (e - b));
+        if (room_l) std::move_backward(refs_.begin() + m, refs_.begin() + e, refs_.begin() + e + room_l);
+        const std::uint32_t mid = m + room_l;  // the left room's end, the right child's first reference
+        const std::uint32_t right = slot + 2 * (mid - b);
+        out_.nodes[slot].right = right;
+        recurse({slot + 1, b, m, mid}, lb, {right, mid, e + room_l, cap}, rb);
+    }
+
+    struct Range {
+        std::uint32_t slot, b, e, cap;
+    };
     /// Runs the two children, the left one on a thread of its own when the subtree is
     /// large and a thread is free (the tree does not depend on which runs where). A thread
     /// gives its token back as soon as its subtree is done, and so does the waiting parent
     /// until the join, so that the side still at work can split its own large subtrees off
     /// again (uneven splits).
-    void recurse(std::uint32_t ls, std::uint32_t b, std::uint32_t m, const AABB<float>& lb, std::uint32_t rs,
-                 std::uint32_t e, const AABB<float>& rb) {
+    void recurse(const Range& l, const AABB<float>& lb, const Range& r, const AABB<float>& rb) {
         constexpr std::uint32_t parallel_min = 4096;
-        if (e - b >= parallel_min && tokens_.fetch_sub(1) > 0) {
+        const bool large = (l.e - l.b) + (r.e - r.b) >= parallel_min;
+        if (large && tokens_.fetch_sub(1) > 0) {
             std::thread left([&] {
-                node(ls, b, m, lb);
+                node(l.slot, l.b, l.e, l.cap, lb);
                 tokens_.fetch_add(1);
             });
-            node(rs, m, e, rb);
+            node(r.slot, r.b, r.e, r.cap, rb);
             tokens_.fetch_add(1);  // this thread waits: another may run meanwhile
             left.join();
             tokens_.fetch_sub(1);
             return;
         }
-        if (e - b >= parallel_min) tokens_.fetch_add(1);
-        node(ls, b, m, lb);
-        node(rs, m, e, rb);
+        if (large) tokens_.fetch_add(1);
+        node(l.slot, l.b, l.e, l.cap, lb);
+        node(r.slot, r.b, r.e, r.cap, rb);
     }
 
-    /// Bins every primitive of the range on the three axes in one pass, then sweeps each
+    /// Bins every reference of the range on the three axes in one pass, then sweeps each
     /// axis for its cheapest boundary (Wald 2007).
-    SahSplit find_split(std::uint32_t b, std::uint32_t e, const AABB<float>& cbox, const Vec3f& k, float area) const {
+    SahSplit find_split(std::uint32_t b, std::uint32_t e, const AABB<float>& cbox, const Vec3f& k, float inv_area) const {
         constexpr int max_bins = 64;
         AABB<float> bin_box[3][max_bins];
         std::uint32_t bin_n[3][max_bins] = {};
         for (std::uint32_t i = b; i < e; ++i) {
-            const std::uint32_t p = out_.prims[i];
-            const Vec3f c = centre(p);
+            const Vec3f c = centre(i);
             for (int a = 0; a < 3; ++a) {
                 const std::uint32_t j = bin_of(c[a], cbox.lo[a], k[a]);
-                bin_box[a][j].extend(boxes_[p]);
+                bin_box[a][j].extend(refs_[i].box);
                 ++bin_n[a][j];
             }
         }
         SahSplit best;
-        const float inv_area = 1.0f / std::max(area, std::numeric_limits<float>::min());
         for (int a = 0; a < 3; ++a)
-            if (k[a] != 0.0f) sweep(a, bin_box[a], bin_n[a], e - b, inv_area, best);
+            if (k[a] != 0.0f) sweep(a, bin_box[a], bin_n[a], bin_n[a], e - b, 0, inv_area, best);
         return best;
     }
 
     /// The cheapest boundary on axis a, if cheaper than `best`: suffix costs right to left,
-    /// then prefixes left to right.
-    void sweep(int a, const AABB<float>* bin_box, const std::uint32_t* bin_n, std::uint32_t n, float inv_area,
-               SahSplit& best) const {
+    /// then prefixes left to right. A reference counts on the left of boundary j if its first
+    /// bin (enter) is below j, on the right if its last bin (leave) is j or above: an object
+    /// split passes the same counts twice; a spatial split may add at most `room` references.
+    void sweep(int a, const AABB<float>* bin_box, const std::uint32_t* enter, const std::uint32_t* leave,
+               std::uint32_t n, std::uint32_t room, float inv_area, SahSplit& best) const {
         float right_cost[64];
+        std::uint32_t right_n[64];
         AABB<float> acc;
         std::uint32_t cnt = 0;
         for (std::uint32_t j = opt_.bins - 1; j > 0; --j) {
             acc.extend(bin_box[j]);
-            cnt += bin_n[j];
+            cnt += leave[j];
+            right_n[j] = cnt;
             right_cost[j] = cnt ? acc.surface_area() * float(blocks(cnt)) : infinity<float>;
         }
         acc = AABB<float>{};
@@ -211,12 +336,12 @@ private:
         bool improved = false;
         for (std::uint32_t j = 1; j < opt_.bins; ++j) {
             acc.extend(bin_box[j - 1]);
-            cnt += bin_n[j - 1];
-            if (cnt == 0 || cnt == n) continue;
+            cnt += enter[j - 1];
+            if (cnt == 0 || right_n[j] == 0 || cnt + right_n[j] > n + room) continue;
             const float c = opt_.traversal_cost +
                             opt_.intersection_cost * (acc.surface_area() * float(blocks(cnt)) + right_cost[j]) * inv_area;
             if (c < best.cost) {
-                best = SahSplit{a, j, c, acc, {}};
+                best = SahSplit{a, j, c, acc, {}, cnt, right_n[j]};
                 improved = true;
             }
         }
@@ -224,32 +349,172 @@ private:
             for (std::uint32_t j = best.bin; j < opt_.bins; ++j) best.right.extend(bin_box[j]);
     }
 
-    std::span<const AABB<float>> boxes_;
-    std::span<const Vec3f> centres_;
+    /// Spatial bin boundary j of the node box on axis a (0: its low plane, bins: its high
+    /// one); non-decreasing in j. The binning and the partition use these same floats.
+    float plane(const AABB<float>& box, int a, std::uint32_t j) const {
+        if (j >= opt_.bins) return box.hi[a];
+        return std::min(box.hi[a], box.lo[a] + (box.hi[a] - box.lo[a]) * (float(j) / float(opt_.bins)));
+    }
+    /// The last bin whose low plane is <= x (a reference with lo = x starts there).
+    std::uint32_t bin_from(const AABB<float>& box, int a, float x) const {
+        std::uint32_t j = bin_guess(box, a, x);
+        while (j > 0 && plane(box, a, j) > x) --j;
+        while (j + 1 < opt_.bins && plane(box, a, j + 1) <= x) ++j;
+        return j;
+    }
+    /// The first bin whose high plane is >= x (a reference with hi = x ends there).
+    std::uint32_t bin_to(const AABB<float>& box, int a, float x) const {
+        std::uint32_t j = bin_guess(box, a, x);
+        while (j + 1 < opt_.bins && plane(box, a, j + 1) < x) ++j;
+        while (j > 0 && plane(box, a, j) >= x) --j;
+        return j;
+    }
+    std::uint32_t bin_guess(const AABB<float>& box, int a, float x) const {
+        const float f = (x - box.lo[a]) / (box.hi[a] - box.lo[a]) * float(opt_.bins);
+        return std::uint32_t(std::min(float(opt_.bins - 1), std::max(0.0f, f)));
+    }
+
+    /// Spatial split search (Stich et al. 2009 §3): bins of equal width over the node box;
+    /// each reference is chopped into the bins it spans, each piece clipped to its bin, and
+    /// counted as entering its first bin and leaving its last.
+    SahSplit find_spatial(std::uint32_t b, std::uint32_t e, std::uint32_t room, const AABB<float>& box,
+                          float inv_area) const {
+        SahSplit best;
+        for (int a = 0; a < 3; ++a) {
+            if (!(box.hi[a] > box.lo[a])) continue;
+            AABB<float> bin_box[64];
+            std::uint32_t enter[64] = {}, leave[64] = {};
+            for (std::uint32_t i = b; i < e; ++i) {
+                const BvhRef& r = refs_[i];
+                const std::uint32_t last = bin_to(box, a, r.box.hi[a]);
+                const std::uint32_t first = std::min(last, bin_from(box, a, r.box.lo[a]));  // min: flat on a plane
+                ++enter[first];
+                ++leave[last];
+                if (first == last) {
+                    bin_box[first].extend(r.box);
+                    continue;
+                }
+                for (std::uint32_t j = first; j <= last; ++j) {
+                    AABB<float> region = r.box;
+                    if (j > first) region.lo[a] = plane(box, a, j);
+                    if (j < last) region.hi[a] = plane(box, a, j + 1);
+                    bin_box[j].extend(clip_(r.prim, a, region));
+                }
+            }
+            sweep(a, bin_box, enter, leave, e - b, room, inv_area, best);
+        }
+        return best;
+    }
+
+    /// Sides of one straddling reference r at plane pos of axis a: both pieces (true: the
+    /// right one was written at refs_[spare]), or the whole reference on one side where Stich
+    /// et al.'s reference unsplitting (§4) finds that cheaper or no room is left (spare == cap).
+    bool straddle(BvhRef& r, int a, float pos, const SahSplit& s, std::uint32_t spare, std::uint32_t cap) {
+        AABB<float> lp = r.box, rp = r.box;
+        lp.hi[a] = pos;
+        rp.lo[a] = pos;
+        lp = clip_(r.prim, a, lp);
+        rp = clip_(r.prim, a, rp);
+        if (lp.empty() || rp.empty()) {  // the primitive's part lies on one side only
+            r.left = !lp.empty() || rp.empty();
+            if (!(lp.empty() && rp.empty())) r.box = lp.empty() ? rp : lp;
+            return false;
+        }
+        AABB<float> wl = s.left, wr = s.right;
+        wl.extend(r.box);
+        wr.extend(r.box);
+        const float nl = float(s.n_left), nr = float(s.n_right), al = s.left.surface_area(), ar = s.right.surface_area();
+        const float both = al * nl + ar * nr, to_left = wl.surface_area() * nl + ar * (nr - 1),
+                    to_right = al * (nl - 1) + wr.surface_area() * nr;
+        if (spare == cap || to_left < both || to_right < both) {
+            r.left = to_left <= to_right;
+            return false;
+        }
+        r.box = lp;
+        r.left = 1;
+        refs_[spare] = BvhRef{rp, r.prim, 0};
+        return true;
+    }
+
+    /// Makes the spatial split s: references left of, right of and across the plane, the
+    /// children's boxes from the pieces themselves; false (nothing but boxes clipped closer
+    /// changed) when one side came out empty.
+    bool split_spatial(std::uint32_t slot, std::uint32_t b, std::uint32_t e, std::uint32_t cap, const AABB<float>& box,
+                       const SahSplit& s) {
+        const int a = s.axis;
+        const float pos = plane(box, a, s.bin);
+        std::uint32_t end = e;
+        for (std::uint32_t i = b; i < e; ++i) {
+            BvhRef& r = refs_[i];
+            r.left = r.box.hi[a] <= pos;
+            if (!r.left && r.box.lo[a] < pos && straddle(r, a, pos, s, end, cap)) ++end;
+        }
+        const auto mid = std::partition(refs_.begin() + b, refs_.begin() + end, [](const BvhRef& r) { return r.left != 0; });
+        const auto m = std::uint32_t(mid - refs_.begin());
+        if (m == b || m == end) return false;  // only when nothing was appended
+        AABB<float> lb, rb;
+        for (std::uint32_t i = b; i < m; ++i) lb.extend(refs_[i].box);
+        for (std::uint32_t i = m; i < end; ++i) rb.extend(refs_[i].box);
+        children(slot, b, m, end, cap, lb, rb);
+        return true;
+    }
+
+    std::vector<BvhRef>& refs_;
     const BvhBuildOptions& opt_;
+    const Clip& clip_;
     BinaryBvh& out_;
     std::atomic<int> tokens_;  // threads that may still be started
+    const bool spatial_;
+    const float min_overlap_;
 };
+
+/// The leaves' references, in tree order, become `prims`; every node's range is renumbered
+/// to match (the room spatial splits left unused disappears).
+inline void bvh_compact(BinaryBvh& out, const std::vector<BvhRef>& refs, std::uint32_t slot) {
+    BinaryBvhNode& nd = out.nodes[slot];
+    const auto begin = std::uint32_t(out.prims.size());
+    if (nd.leaf()) {
+        for (std::uint32_t i = nd.begin; i < nd.begin + nd.count; ++i) out.prims.push_back(refs[i].prim);
+    } else {
+        bvh_compact(out, refs, slot + 1);
+        bvh_compact(out, refs, nd.right);
+    }
+    nd.begin = begin;
+    nd.count = std::uint32_t(out.prims.size()) - begin;
+}
 
 }  // namespace detail
 
 /// Builds the binned SAH tree over the primitives whose box is not empty and finite
-/// (others are left out: they can never be hit).
-inline BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}) {
+/// (others are left out: they can never be hit). With opt.spatial_splits, `clip` chops
+/// primitives at split planes (clip_triangle for triangles); a primitive may then be in
+/// several leaves (prims holds it once per leaf), at most opt.spatial_budget times the
+/// primitives in all.
+template <PrimitiveClipper Clip = NoClipper>
+BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
     opt.check();
-    BinaryBvh out;
+    if (opt.spatial_splits && std::same_as<Clip, NoClipper>)
+        throw Error("build_binary_bvh: spatial_splits needs a clipper for the primitives (MeshBvh gives triangles one)");
+    std::vector<detail::BvhRef> refs;
     AABB<float> root;
     for (std::uint32_t i = 0; i < boxes.size(); ++i) {
         const AABB<float>& b = boxes[i];
         if (b.empty() || !all_finite(b.lo) || !all_finite(b.hi)) continue;
-        out.prims.push_back(i);
+        refs.push_back({b, i, 0});
         root.extend(b);
     }
-    if (out.prims.empty()) return out;
-    out.nodes.resize(2 * out.prims.size() - 1);
-    std::vector<Vec3f> centres(boxes.size());
-    for (std::uint32_t p : out.prims) centres[p] = boxes[p].center();
-    detail::BinnedSah(boxes, centres, opt, out).node(0, 0, std::uint32_t(out.prims.size()), root);
+    BinaryBvh out;
+    if (refs.empty()) return out;
+    const std::size_t n = refs.size();
+    const std::size_t cap = opt.spatial_splits ? std::max(n, std::size_t(double(n) * double(opt.spatial_budget))) : n;
+    if (cap >= (std::size_t(1) << 31))
+        throw Error("build_binary_bvh: " + std::to_string(cap) + " references, at most 2^31 - 1");
+    refs.resize(cap);
+    out.nodes.resize(2 * cap - 1);
+    detail::BinnedSah<Clip>(refs, opt, clip, root.surface_area(), out)
+        .node(0, 0, std::uint32_t(n), std::uint32_t(cap), root);
+    out.prims.reserve(cap);
+    detail::bvh_compact(out, refs, 0);
     return out;
 }
 

@@ -10,6 +10,8 @@
 // intersector's batch kernel through the leaf callable WideBvh::intersect takes), laid out
 // in the order traversal meets the nodes.
 // The mesh is read only while building; the accelerator keeps its own records.
+// With BvhBuildOptions::spatial_splits (bvh_builder.hpp) a triangle may have a record in
+// several leaves; hits still report the user's triangle index.
 // Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
 
@@ -138,7 +140,10 @@ private:
             if (!detail::can_be_hit(t)) continue;  // an empty box: left out
             for (const auto& p : t) boxes[j].extend(p);
         }
-        bvh_ = WideBvh<N, B>(boxes, opt);
+        bvh_ = WideBvh<N, B>(boxes, opt, [&](std::uint32_t j, int axis, const AABB<float>& region) {
+            const TriangleVertices<float> t = tri(j);
+            return clip_triangle(t[0], t[1], t[2], axis, region);
+        });
         std::vector<TriangleVertices<float>> leaf_tris;
         bvh_.remap_leaves([&](std::uint32_t first, std::uint32_t count) {
             const std::span<const std::uint32_t> ids(bvh_.prims().data() + first, count);

@@ -328,9 +328,11 @@ public:
     static constexpr int max_stack = 512;
 
     WideBvh() = default;
-    /// Over boxes[i] for every i whose box is not empty and finite.
-    explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}) {
-        const BinaryBvh bin = build_binary_bvh(boxes, opt);
+    /// Over boxes[i] for every i whose box is not empty and finite; `clip` chops primitives
+    /// for spatial splits (build_binary_bvh).
+    template <PrimitiveClipper Clip = NoClipper>
+    explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
+        const BinaryBvh bin = build_binary_bvh(boxes, opt, clip);
         prims_ = bin.prims;
         order_ = opt.node_order;
         if (bin.empty()) return;
