@@ -22,10 +22,12 @@
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -350,8 +352,17 @@ void check_intersector() {
     }
 }
 
-/// The wide BVH (8 and 4 wide with float child boxes, 8 wide with quantized ones) against
-/// brute force: the same rules and rays as the other trees, 10^6 per scene with GLINT_LONG_TESTS.
+/// The 8-wide BVH with spatial splits (BvhBuildOptions::spatial_splits, default alpha and budget).
+template <class P>
+struct SpatialBvh8 : MeshBvh<P, 8> {
+    static constexpr const char* name = "sbvh8";
+    explicit SpatialBvh8(const Mesh<float>& m)
+        : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m), BvhBuildOptions{.spatial_splits = true}) {}
+};
+
+/// The wide BVH (8 and 4 wide with float child boxes, 8 wide with quantized ones, 8 wide with
+/// spatial splits) against brute force: the same rules and rays as the other trees, 10^6 per
+/// scene with GLINT_LONG_TESTS.
 template <class P>
 void check_wide() {
     for (std::size_t s = 0; s < scenes().size(); ++s) {
@@ -361,6 +372,7 @@ void check_wide() {
         check_agreement<MeshBvh<P, 8>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 4>, P>(sc, ref, found);
         check_agreement<MeshBvh<P, 8, WideBoxes::quantized>, P>(sc, ref, found);  // 4 wide: the user-leaf test
+        check_agreement<SpatialBvh8<P>, P>(sc, ref, found);
     }
 }
 
@@ -443,7 +455,7 @@ TEST_CASE("agreement: MollerTrumbore, kd-tree and BIH, all layouts vs brute forc
 TEST_CASE("agreement: Wald, kd-tree and BIH, all layouts vs brute force") { check_intersector<Wald<float>>(); }
 TEST_CASE("agreement: Watertight, kd-tree and BIH, all layouts vs brute force") { check_intersector<Watertight<float>>(); }
 
-TEST_CASE("agreement: wide BVH (8, 4 wide; quantized 8 wide), every intersector vs brute force") {
+TEST_CASE("agreement: wide BVH (8, 4 wide; quantized 8 wide; spatial splits 8 wide), every intersector vs brute force") {
     check_wide<Ivm<float>>();
     check_wide<MollerTrumbore<float>>();
     check_wide<Wald<float>>();
@@ -754,6 +766,77 @@ TEST_CASE("wide BVH: the tree does not depend on the thread count") {
         CHECK(std::memcmp(other->nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
     }
     CHECK(one.stats().nodes > 100);
+}
+
+TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree does not depend on the thread count") {
+    const Mesh<float> knot = make_torus_knot<float>(400, 32);  // 25600 triangles: several parallel subtrees
+    const auto boxes = triangle_boxes(knot);
+    const auto clip = [&](std::uint32_t j, int axis, const AABB<float>& region) {
+        return clip_triangle(knot[j][0], knot[j][1], knot[j][2], axis, region);
+    };
+    BvhBuildOptions opt{.spatial_splits = true};
+    const WideBvh<8> one(boxes, {.threads = 1, .spatial_splits = true}, clip);
+    for (unsigned threads : {2u, 4u}) {
+        const WideBvh<8> other(boxes, {.threads = threads, .spatial_splits = true}, clip);
+        REQUIRE(other.nodes().size() == one.nodes().size());
+        CHECK(other.prims() == one.prims());
+        CHECK(std::memcmp(other.nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
+    }
+    // Splits happen, within the budget; every triangle is referenced at least once.
+    for (const float budget : {1.0f, 1.02f, 1.5f}) {
+        opt.spatial_budget = budget;
+        const WideBvh<8> t(boxes, opt, clip);
+        const std::size_t refs = t.prims().size();
+        CHECK(refs <= std::size_t(double(budget) * double(knot.size())));
+        if (budget == 1.0f) CHECK(refs == knot.size());
+        else CHECK(refs > knot.size());
+        std::vector<char> seen(knot.size());
+        for (std::uint32_t p : t.prims()) seen[p] = 1;
+        CHECK(std::count(seen.begin(), seen.end(), 1) == std::ptrdiff_t(knot.size()));
+    }
+    // Spatial splits need a clipper; a budget below 1 is refused.
+    CHECK_THROWS_WITH_AS(WideBvh<8>(boxes, {.spatial_splits = true}), doctest::Contains("needs a clipper"), Error);
+    CHECK_THROWS_WITH_AS(WideBvh<8>(boxes, {.spatial_budget = 0.5f}, clip), doctest::Contains("spatial_budget"), Error);
+}
+
+TEST_CASE("wide BVH: clip_triangle bounds the triangle's part in a slab, and nothing outside the region") {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f), w(0.0f, 1.0f);
+    std::size_t points = 0, inside = 0, tighter = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const float s = std::pow(10.0f, float(trial % 7) - 3.0f);  // 10^-3 ... 10^3
+        const Vec3f a(u(rng) * s, u(rng) * s, u(rng) * s), b(u(rng) * s, u(rng) * s, u(rng) * s),
+            c(u(rng) * s, u(rng) * s, u(rng) * s);
+        AABB<float> box;
+        for (const Vec3f& p : {a, b, c}) box.extend(p);
+        const int axis = trial % 3;
+        AABB<float> region = box;  // a slab inside the triangle's box on `axis`
+        float x0 = box.lo[axis] + w(rng) * (box.hi[axis] - box.lo[axis]);
+        float x1 = box.lo[axis] + w(rng) * (box.hi[axis] - box.lo[axis]);
+        region.lo[axis] = std::min(x0, x1);
+        region.hi[axis] = std::max(x0, x1);
+        const AABB<float> clipped = clip_triangle(a, b, c, axis, region);
+        if (!clipped.empty()) {
+            for (int k = 0; k < 3; ++k) {
+                CHECK(clipped.lo[k] >= region.lo[k]);
+                CHECK(clipped.hi[k] <= region.hi[k]);
+            }
+            tighter += clipped.surface_area() < 0.999f * region.surface_area();
+        }
+        for (int i = 0; i < 200; ++i) {  // points of the triangle in the slab (in double) lie in the clipped box
+            double p = w(rng), q = w(rng);
+            if (p + q > 1) p = 1 - p, q = 1 - q;
+            const Vec3d x = Vec3d(a) + (Vec3d(b) - Vec3d(a)) * p + (Vec3d(c) - Vec3d(a)) * q;
+            if (x[axis] < region.lo[axis] || x[axis] > region.hi[axis]) continue;
+            ++points;
+            bool in = true;
+            for (int k = 0; k < 3; ++k) in = in && x[k] >= clipped.lo[k] && x[k] <= clipped.hi[k];
+            inside += in;
+        }
+    }
+    CHECK(points > 10000);
+    CHECK(inside == points);
+    CHECK(tighter > 1000);  // clipping the triangle, not its box, bounds it closer
 }
 
 TEST_CASE("wide BVH: sibling blocks place a node's inner children side by side, with the same hits") {
