@@ -27,8 +27,9 @@
 // timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
 // children side by side (WideNodeOrder::sibling_blocks). --sbvh adds the 8-wide BVH with
 // spatial splits (BvhBuildOptions::spatial_splits; tree sbvh8, Moller-Trumbore, paired with
-// Embree like every row) and prints its references and build time; --sbvh-alpha and
-// --sbvh-budget set its overlap threshold and reference budget.
+// Embree like every row) and prints its references and build time, then times it against
+// bvh8 directly (passes alternating, median ratio); --sbvh-alpha and --sbvh-budget set its
+// overlap threshold and reference budget.
 // --quick: fewer rays, the knot and the meshes only, pointer and compact-31 only (CI smoke).
 // --all: every layout (pointer, havran-K and compact-K for K = 3 ... 63); --few: pointer and
 // compact-31 only (as --quick, with the full ray count).
@@ -363,6 +364,49 @@ void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector
     time_sets(sc, acc, peer, opt, base, rows);
 }
 
+/// --sbvh: the 8-wide BVH without and with spatial splits (Moller-Trumbore) timed against
+/// each other directly, passes alternating (which goes first alternates too), per set the
+/// median over --reps pairs of (time without / time with): above 1, spatial splits are faster.
+void compare_spatial(const Scene& sc, const Options& opt) {
+    BvhBuildOptions bo = opt.bvh;
+    bo.threads = opt.build_threads;
+    const MeshBvh<MollerTrumbore<float>, 8> plain(sc.mesh, bo);
+    bo.spatial_splits = true;
+    const MeshBvh<MollerTrumbore<float>, 8> split(sc.mesh, bo);
+    const auto pass = [](const MeshBvh<MollerTrumbore<float>, 8>& acc, const std::vector<Ray<float>>& rays) {
+        std::size_t hits = 0;
+        const double t0 = pass_clock();
+        for (const auto& r : rays) {
+            StoreHit<float> h;
+            hits += acc.closest_hit(r, h);
+        }
+        const double t = pass_clock() - t0;
+        if (hits == std::size_t(-1)) std::puts("");  // keep the loop
+        return t;
+    };
+    for (const auto& set : sc.sets) {
+        std::vector<double> ratios;
+        for (int rep = 0; rep < opt.reps; ++rep) {
+            double without = 0, with = 0;
+            if (rep % 2 == 0) {
+                without = pass(plain, set.rays);
+                with = pass(split, set.rays);
+            } else {
+                with = pass(split, set.rays);
+                without = pass(plain, set.rays);
+            }
+            ratios.push_back(without / with);
+        }
+        std::sort(ratios.begin(), ratios.end());
+        std::printf("# %s %s: sbvh8 / bvh8 speed x%.3f (median of %d paired passes, range %.3f ... %.3f); build %.4f / %.4f s "
+                    "(x%.1f), references x%.3f\n",
+                    sc.name.c_str(), set.name.c_str(), ratios[ratios.size() / 2], opt.reps, ratios.front(), ratios.back(),
+                    split.build_seconds(), plain.build_seconds(), split.build_seconds() / plain.build_seconds(),
+                    double(split.bvh().prims().size()) / double(sc.mesh.size()));
+        std::fflush(stdout);
+    }
+}
+
 /// CPU seconds used so far by this process (who = RUSAGE_SELF) or this thread (RUSAGE_THREAD).
 double cpu_seconds(int who) {
     rusage u{};
@@ -568,7 +612,10 @@ int main(int argc, char** argv) try {
         }
         if (opt.build_table) wide_build_table(sc, peer.get(), opt);
         run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows);
-        if (opt.sbvh) run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows, true);
+        if (opt.sbvh) {
+            run_wide<MollerTrumbore<float>, 8>(sc, peer.get(), opt, rows, true);
+            compare_spatial(sc, opt);
+        }
         if (!opt.wide || !opt.few || opt.quantized) run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
         if (!opt.quick && !opt.few) {
