@@ -185,7 +185,7 @@ struct SahSplit {
 /// reference - b), fixed before either child is built. Each node reads and writes only its
 /// own range and slots, so the tree does not depend on the thread count. Without spatial
 /// splits the room is the references (cap = e) and this is the object-split build alone.
-template <class Clip>
+template <PrimitiveClipper Clip>
 class BinnedSah {
 public:
     BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, BinaryBvh& out)
