@@ -12,12 +12,15 @@
 // per-group frame origins; what a reference counts (padded records, or groups of records
 // sharing a frame) is its business, not the tree's. A tree's leaf callable is
 // `[&](first, count) { return leaves.test<Any>(first, count, ray, world, hit); }` with
-// world = leaves.prepare(ray), made once per query. A tree over other primitives passes a
+// world = leaves.prepare(ray), made once per query; closest_hit() and any_hit() write that
+// wrapper once for every tree, taking the tree's traversal as a callable
+// `traverse(ray, leaf)` (a TreeTraversal). A tree over other primitives passes a leaf
 // callable of its own (tests/test_trees.cpp puts spheres in a WideBvh's leaves).
 //
 // Thread safety: leaf tests are const and keep their state in the caller's callable.
 #pragma once
 
+#include <concepts>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -33,6 +36,19 @@ namespace glint {
 template <class F>
 concept LeafTest = requires(F f, std::uint32_t i) {
     { f(i, i) } -> std::convertible_to<bool>;
+};
+
+namespace detail {
+/// The leaf callable type a TreeTraversal is checked with (its stand-in for a real one).
+using LeafProbe = bool (*)(std::uint32_t, std::uint32_t);
+}  // namespace detail
+
+/// A tree's traversal as TriangleLeaves' queries take it: `traverse(ray, leaf)` runs the tree
+/// over `ray` (a Ray<T>&, whose tmax the leaf callable lowers), calling the LeafTest `leaf`
+/// for the leaves the ray enters, and returns whether any call returned true.
+template <class F, class T>
+concept TreeTraversal = requires(F f, Ray<T>& r, detail::LeafProbe leaf) {
+    { f(r, leaf) } -> std::convertible_to<bool>;
 };
 
 /// Triangle records of intersector P laid out for tree leaves (see the file comment).
@@ -68,6 +84,41 @@ public:
         if (!store_.template test_leaf<Any>(first, count, ray, world, hit)) return false;
         if constexpr (!Any) ray.tmax = hit.t;
         return true;
+    }
+
+    /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)) through a tree's traversal
+    /// (`traverse(r, leaf)`, a TreeTraversal); true when `hit` was updated, hit.id then being
+    /// the user's triangle index. With `record_count`, adds the record slots tested to it.
+    template <class Traverse>
+        requires TreeTraversal<Traverse, T>
+    [[gnu::always_inline]] bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit, Traverse&& traverse,
+                                            std::uint64_t* record_count = nullptr) const {
+        // On local copies: the compiler keeps them in registers (the caller's `hit` could
+        // alias the traversal stack's floats).
+        StoreHit<T> h = hit;
+        Ray<T> r = ray;
+        r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
+        const auto world = prepare(r);
+        if (!traverse(r, [&](std::uint32_t first, std::uint32_t count) {
+                if (record_count) *record_count += records(first, count);
+                return test<false>(first, count, r, world, h);
+            }))
+            return false;
+        hit = h;
+        hit.id = id(h.id);  // the leaf test reports the record
+        return true;
+    }
+    /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays), through a
+    /// tree's traversal as in closest_hit().
+    template <class Traverse>
+        requires TreeTraversal<Traverse, T>
+    [[gnu::always_inline]] bool any_hit(const Ray<T>& ray, Traverse&& traverse) const {
+        StoreHit<T> h;
+        Ray<T> r = ray;
+        const auto world = prepare(r);
+        return traverse(r, [&](std::uint32_t first, std::uint32_t count) {
+            return test<true>(first, count, r, world, h);
+        });
     }
 
     /// The user's triangle index of record `record` (a closest hit's hit.id).

@@ -94,30 +94,14 @@ public:
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     /// With `counters`, counts nodes, leaves and records tested.
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters = nullptr) const {
-        StoreHit<float> h = hit;  // a local copy the compiler keeps in registers
-        Ray<float> r = ray;
-        r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
-        const auto world = leaves_.prepare(r);
-        const bool found = bvh_.template intersect<false>(
-            r,
-            [&](std::uint32_t first, std::uint32_t count) {
-                if (counters) counters->records += leaves_.records(first, count);
-                return leaves_.template test<false>(first, count, r, world, h);
-            },
-            counters);
-        if (!found) return false;
-        hit = h;
-        hit.id = leaves_.id(h.id);  // the leaf test reports the record
-        return true;
+        return leaves_.closest_hit(
+            ray, hit,
+            [&](Ray<float>& r, auto&& leaf) -> bool { return bvh_.template intersect<false>(r, leaf, counters); },
+            counters ? &counters->records : nullptr);
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
-        StoreHit<float> h;
-        Ray<float> r = ray;
-        const auto world = leaves_.prepare(r);
-        return bvh_.template intersect<true>(r, [&](std::uint32_t first, std::uint32_t count) {
-            return leaves_.template test<true>(first, count, r, world, h);
-        });
+        return leaves_.any_hit(ray, [&](Ray<float>& r, auto&& leaf) -> bool { return bvh_.template intersect<true>(r, leaf); });
     }
 
     const WideBvh<N, B>& bvh() const { return bvh_; }

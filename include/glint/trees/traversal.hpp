@@ -91,28 +91,11 @@ public:
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const {
-        // On local copies: the compiler keeps them in registers (the caller's `hit` could
-        // alias the stack's floats).
-        StoreHit<T> h = hit;
-        Ray<T> r = ray;
-        r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
-        const auto world = leaves_.prepare(r);
-        if (!intersect<false>(r, [&](std::uint32_t first, std::uint32_t count) {
-                return leaves_.template test<false>(first, count, r, world, h);
-            }))
-            return false;
-        hit = h;
-        hit.id = leaves_.id(h.id);  // the leaf test reports the record
-        return true;
+        return leaves_.closest_hit(ray, hit, [&](Ray<T>& r, auto&& leaf) -> bool { return intersect<false>(r, leaf); });
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<T>& ray) const {
-        StoreHit<T> h;
-        Ray<T> r = ray;
-        const auto world = leaves_.prepare(r);
-        return intersect<true>(r, [&](std::uint32_t first, std::uint32_t count) {
-            return leaves_.template test<true>(first, count, r, world, h);
-        });
+        return leaves_.any_hit(ray, [&](Ray<T>& r, auto&& leaf) -> bool { return intersect<true>(r, leaf); });
     }
 
     const LayoutStats& stats() const { return stats_; }
