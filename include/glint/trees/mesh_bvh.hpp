@@ -96,15 +96,15 @@ public:
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters = nullptr) const {
         return leaves_.closest_hit(
             ray, hit,
-            [&](Ray<float>& r, auto&& leaf) -> bool { return bvh_.template intersect<false>(r, leaf, counters); },
+            [&](Ray<float>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return bvh_.template intersect<false>(r, leaf, counters); },
             counters ? &counters->records : nullptr);
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
-        return leaves_.any_hit(ray, [&](Ray<float>& r, auto&& leaf) -> bool { return bvh_.template intersect<true>(r, leaf); });
+        return leaves_.any_hit(ray, [&](Ray<float>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return bvh_.template intersect<true>(r, leaf); });
     }
 
-    const WideBvh<N, B>& bvh() const { return bvh_; }
+    const WideBvh<N, B, L>& bvh() const { return bvh_; }
     /// The triangle records of the leaves.
     const TriangleLeaves<P>& leaves() const { return leaves_; }
     /// Build time (boxes, tree, records), in seconds.

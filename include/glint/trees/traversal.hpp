@@ -91,11 +91,11 @@ public:
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const {
-        return leaves_.closest_hit(ray, hit, [&](Ray<T>& r, auto&& leaf) -> bool { return intersect<false>(r, leaf); });
+        return leaves_.closest_hit(ray, hit, [&](Ray<T>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return intersect<false>(r, leaf); });
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<T>& ray) const {
-        return leaves_.any_hit(ray, [&](Ray<T>& r, auto&& leaf) -> bool { return intersect<true>(r, leaf); });
+        return leaves_.any_hit(ray, [&](Ray<T>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return intersect<true>(r, leaf); });
     }
 
     const LayoutStats& stats() const { return stats_; }
