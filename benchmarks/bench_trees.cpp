@@ -25,7 +25,9 @@
 // without --few includes); --no-build-table skips the build timing. --bvh-ct / --bvh-ci / --bvh-block /
 // --bvh-leaf / --bvh-bins set its SAH constants (BvhBuildOptions); --build-threads N builds the
 // timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
-// children side by side (WideNodeOrder::sibling_blocks). --sbvh adds the 8-wide BVH with
+// children side by side (WideNodeOrder::sibling_blocks); --compact-subtrees adds bvh8 and bvh4
+// (Moller-Trumbore) in 000's compact subtrees of 4 KiB (WideCompactSubtrees<18> and <36>,
+// layout soa-compact18 / soa-compact36) and bvh4 in the collapse's order. --sbvh adds the 8-wide BVH with
 // spatial splits (BvhBuildOptions::spatial_splits; tree sbvh8, Moller-Trumbore, paired with
 // Embree like every row) and prints its references and build time, then times it against
 // bvh8 directly (passes alternating, median ratio); --sbvh-alpha and --sbvh-budget set its
@@ -225,6 +227,7 @@ struct Options {
     bool build_table = true;     // --no-build-table: skip the 1- and 2-thread build timing
     bool quantized = false;      // --quantized: with --wide --few, also bvh8 with quantized boxes
     bool sbvh = false;           // --sbvh: also bvh8 with spatial splits (tree sbvh8)
+    bool compact = false;        // --compact-subtrees: also the wide BVH in compact subtrees
     bool quick = false, generated = true, all = false, memory = false, few = false, wide = false, big = false;
     BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
@@ -339,23 +342,24 @@ void run_combination(const Scene& sc, const BuiltTree<float>& built, const Peer*
     time_sets(sc, acc, peer, opt, base, rows);
 }
 
-/// The wide BVH over intersector P, N wide, child boxes as B, built on --build-threads threads;
+/// The wide BVH over intersector P, N wide, child boxes as B, nodes arranged by L, built on
+/// --build-threads threads;
 /// with `spatial`, with spatial splits (tree sbvh8 / sbvh4), whose references it prints.
-template <class P, int N, WideBoxes B = WideBoxes::floats>
+template <class P, int N, WideBoxes B = WideBoxes::floats, WideNodeLayout L = WideBuildOrder>
 void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector<Row>& rows, bool spatial = false) {
     BvhBuildOptions bo = opt.bvh;
     bo.threads = opt.build_threads;
     bo.spatial_splits = spatial;
-    const MeshBvh<P, N, B> acc(sc.mesh, bo);
+    const MeshBvh<P, N, B, L> acc(sc.mesh, bo);
     Row base;
     base.scene = sc.name;
-    base.tree = spatial ? (N == 8 ? "sbvh8" : "sbvh4") : MeshBvh<P, N, B>::name;
+    base.tree = spatial ? (N == 8 ? "sbvh8" : "sbvh4") : MeshBvh<P, N, B, L>::name;
     if (spatial)
         std::printf("# %s %s: %zu references for %zu triangles (x%.3f, budget x%.2f), build %.4f s on %u thread(s)\n",
                     sc.name.c_str(), base.tree.c_str(), acc.bvh().prims().size(), sc.mesh.size(),
                     double(acc.bvh().prims().size()) / double(sc.mesh.size()), double(bo.spatial_budget),
                     acc.build_seconds(), bo.threads);
-    base.layout = WideBvh<N, B>::boxes_label;
+    base.layout = MeshBvh<P, N, B, L>::layout_label();
     base.intersector = P::name;
     base.build_s = acc.build_seconds();
     base.node_bytes = acc.bvh().stats().node_bytes;
@@ -534,6 +538,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--sbvh") o.sbvh = true;
         else if (a == "--sbvh-alpha") o.bvh.spatial_alpha = std::stof(value());
         else if (a == "--sbvh-budget") o.bvh.spatial_budget = std::stof(value());
+        else if (a == "--compact-subtrees") o.compact = true;
         else if (a == "--bvh-siblings") o.bvh.node_order = std::stoi(value()) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
         else if (a == "--build-threads") o.build_threads = unsigned(std::stoul(value()));
         else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
@@ -548,7 +553,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] [--sbvh-budget X]");
+                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] [--sbvh-budget X] [--compact-subtrees]");
             std::exit(0);
         } else {
             throw Error("bench_trees: unknown option '" + a + "' (try --help)");
@@ -618,6 +623,11 @@ int main(int argc, char** argv) try {
         }
         if (!opt.wide || !opt.few || opt.quantized) run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
+        if (opt.compact) {  // 000's compact subtrees against the collapse's order, 8 and 4 wide (4 KiB units)
+            run_wide<MollerTrumbore<float>, 8, WideBoxes::floats, WideCompactSubtrees<18>>(sc, peer.get(), opt, rows);
+            run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);
+            run_wide<MollerTrumbore<float>, 4, WideBoxes::floats, WideCompactSubtrees<36>>(sc, peer.get(), opt, rows);
+        }
         if (!opt.quick && !opt.few) {
             run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);
             run_wide<Watertight<float>, 8>(sc, peer.get(), opt, rows);

@@ -69,9 +69,9 @@ struct IndexedMesh {
     }
 };
 
-/// Wide BVH (N = 8 or 4 children per node, child boxes stored as B says) over triangles
-/// tested with intersector P.
-template <TriangleIntersector P, int N = 8, WideBoxes B = WideBoxes::floats>
+/// Wide BVH (N = 8 or 4 children per node, child boxes stored as B says, nodes arranged by
+/// layout policy L) over triangles tested with intersector P.
+template <TriangleIntersector P, int N = 8, WideBoxes B = WideBoxes::floats, WideNodeLayout L = WideBuildOrder>
     requires std::same_as<typename P::scalar_type, float>
 class MeshBvh {
 public:
@@ -79,7 +79,9 @@ public:
     using T = float;
     using intersector_type = P;
     static constexpr const char* name = N == 8 ? "bvh8" : "bvh4";
-    static constexpr const char* boxes_label = WideBvh<N, B>::boxes_label;
+    static constexpr const char* boxes_label = WideBvh<N, B, L>::boxes_label;
+    /// The benchmarks' layout column (box format and node layout).
+    static std::string layout_label() { return WideBvh<N, B, L>::layout_label(); }
 
     /// From the user's indexed mesh (hits report the index of the user's triangle).
     explicit MeshBvh(const IndexedMesh<float>& mesh, const BvhBuildOptions& opt = {}) {
@@ -124,7 +126,7 @@ private:
             if (!detail::can_be_hit(t)) continue;  // an empty box: left out
             for (const auto& p : t) boxes[j].extend(p);
         }
-        bvh_ = WideBvh<N, B>(boxes, opt, [&](std::uint32_t j, int axis, const AABB<float>& region) {
+        bvh_ = WideBvh<N, B, L>(boxes, opt, [&](std::uint32_t j, int axis, const AABB<float>& region) {
             const TriangleVertices<float> t = tri(j);
             return clip_triangle(t[0], t[1], t[2], axis, region);
         });
@@ -138,7 +140,7 @@ private:
         build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
 
-    WideBvh<N, B> bvh_;
+    WideBvh<N, B, L> bvh_;
     TriangleLeaves<P> leaves_;
     double build_seconds_ = 0;
 };

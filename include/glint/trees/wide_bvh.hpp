@@ -29,7 +29,9 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <span>
 #include <string>
@@ -311,9 +313,87 @@ struct WideBvhStats {
     std::uint32_t depth = 0;  // wide levels on the longest path, leaves included
 };
 
-/// N-wide BVH (N = 4 or 8) over primitive boxes, child boxes stored as B says; leaves are
-/// ranges of prims(), or of whatever remap_leaves() made them.
-template <int N, WideBoxes B = WideBoxes::floats>
+/// A wide node layout policy: where the nodes of a collapsed wide BVH go in its node array.
+/// `arrange<N>(nodes)` gets the nodes in the collapse's order (root first; a child word
+/// without the leaf bit is an inner child's index) and returns every node's new index (a
+/// permutation keeping the root at 0); `label()` names it in benchmarks ("" for none).
+template <class L>
+concept WideNodeLayout = requires(std::span<const WideBvhNode<8>> n8, std::span<const WideBvhNode<4>> n4) {
+    { L::label() } -> std::convertible_to<std::string>;
+    { L::template arrange<8>(n8) } -> std::same_as<std::vector<std::uint32_t>>;
+    { L::template arrange<4>(n4) } -> std::same_as<std::vector<std::uint32_t>>;
+};
+
+/// The collapse's own order (BvhBuildOptions::node_order: depth first or sibling blocks).
+struct WideBuildOrder {
+    static std::string label() { return ""; }
+    template <int N>
+    static std::vector<std::uint32_t> arrange(std::span<const WideBvhNode<N>> nodes) {
+        std::vector<std::uint32_t> at(nodes.size());
+        for (std::size_t i = 0; i < at.size(); ++i) at[i] = std::uint32_t(i);
+        return at;
+    }
+};
+
+/// 000's compact subtrees (000 §4.4; layouts.hpp's CompactSubtrees)
+/// on wide nodes: the nodes are stored in units of at most K consecutive nodes, each holding
+/// whole subtrees (K = 18 eight-wide nodes of 224 bytes fill 4 KiB, a page; K = 9 is a node
+/// and its eight children). A subtree starts with the root or with a sibling block (the
+/// inner children of one node, side by side) and grows breadth first: each node met adds
+/// its inner children as one block while the unit has room; a block that does not fit
+/// waits in a queue (breadth first between subtrees, as in layouts.hpp, where the pointer
+/// level of a subtree leads to fresh ones; here the parent's child words are the
+/// pointers). A waiting block starts a fresh unit, or, while the current unit has room for
+/// it, continues there: 000's reuse of the room a branch that ended early left.
+/// Child words stay explicit indices: a wide node keeps one word per child for its leaves'
+/// references anyway, so 000's implicit addressing inside a subtree would save only the
+/// words of inner children (4 of 224 bytes per node, 8 wide) at the price of a second node
+/// format; node bytes equal the collapse's order (nothing is padded).
+template <std::uint32_t K>
+struct WideCompactSubtrees {
+    static std::string label() { return "compact" + std::to_string(K); }
+    template <int N>
+    static std::vector<std::uint32_t> arrange(std::span<const WideBvhNode<N>> nodes) {
+        static_assert(K >= std::uint32_t(N), "WideCompactSubtrees: a unit holds at least one sibling block");
+        std::vector<std::uint32_t> at(nodes.size(), 0), subtree{0}, block;
+        std::deque<std::uint32_t> waiting;  // nodes whose inner children did not fit their unit
+        std::uint32_t next = 1, unit = 1;   // the root stays at 0; nodes in the current unit
+        auto place_children = [&](std::uint32_t p) {
+            block.clear();
+            for (std::uint32_t c : nodes[p].child)
+                if (!detail::wide_is_leaf(c)) block.push_back(c);
+            for (std::uint32_t c : block) at[c] = next++;
+            unit += std::uint32_t(block.size());
+        };
+        auto inner_count = [&](std::uint32_t p) {
+            std::uint32_t k = 0;
+            for (std::uint32_t c : nodes[p].child) k += !detail::wide_is_leaf(c);
+            return k;
+        };
+        for (;;) {
+            for (std::size_t q = 0; q < subtree.size(); ++q) {  // grows while it is read
+                const std::uint32_t k = inner_count(subtree[q]);
+                if (k == 0) continue;
+                if (unit + k > K) {
+                    waiting.push_back(subtree[q]);
+                    continue;
+                }
+                place_children(subtree[q]);
+                subtree.insert(subtree.end(), block.begin(), block.end());
+            }
+            if (waiting.empty()) return at;
+            if (unit + inner_count(waiting.front()) > K) unit = 0;  // a fresh unit
+            place_children(waiting.front());
+            waiting.pop_front();
+            subtree = block;
+        }
+    }
+};
+
+/// N-wide BVH (N = 4 or 8) over primitive boxes, child boxes stored as B says, nodes
+/// arranged in memory by layout policy L; leaves are ranges of prims(), or of whatever
+/// remap_leaves() made them.
+template <int N, WideBoxes B = WideBoxes::floats, WideNodeLayout L = WideBuildOrder>
 class WideBvh {
     static_assert(N == 4 || N == 8, "WideBvh: 4- or 8-wide nodes");
     using FloatNodes = std::vector<WideBvhNode<N>, detail::CacheLineAllocator<WideBvhNode<N>>>;
@@ -323,6 +403,8 @@ public:
     static constexpr int width = N;
     static constexpr WideBoxes box_format = B;
     static constexpr const char* boxes_label = B == WideBoxes::floats ? "soa" : "soa-q8";
+    /// The benchmarks' layout column: the box format, then L's label if any.
+    static std::string layout_label() { return L::label().empty() ? boxes_label : boxes_label + ("-" + L::label()); }
     /// Stack entries: a step pushes at most N - 1 more than it pops, so a tree of depth D
     /// needs (N - 1) D + 1; build() refuses deeper trees.
     static constexpr int max_stack = 512;
@@ -345,6 +427,7 @@ public:
         } else {
             fill(bin, wide, 0, 0, 1);
         }
+        if constexpr (!std::same_as<L, WideBuildOrder>) arrange(wide);
         if constexpr (B == WideBoxes::floats) {
             nodes_ = std::move(wide);
         } else {
@@ -448,6 +531,28 @@ private:
             node.bounds[2 * a + 1][i] = b.box.hi[a];
         }
         node.child[i] = ref;
+    }
+
+    /// Moves the nodes where L puts them, checking that L gave a permutation keeping the root.
+    static void arrange(FloatNodes& wide) {
+        const std::vector<std::uint32_t> at = L::template arrange<N>(std::span<const WideBvhNode<N>>(wide.data(), wide.size()));
+        if (at.size() != wide.size())
+            throw Error("WideBvh: layout " + L::label() + " placed " + std::to_string(at.size()) + " of " +
+                        std::to_string(wide.size()) + " nodes");
+        std::vector<char> taken(wide.size(), 0);
+        for (std::size_t i = 0; i < at.size(); ++i)
+            if (at[i] >= wide.size() || taken[at[i]]++ || (i == 0 && at[0] != 0))
+                throw Error("WideBvh: layout " + L::label() + " moves node " + std::to_string(i) + " to " +
+                            std::to_string(at[i]) + ", not a permutation of " + std::to_string(wide.size()) +
+                            " nodes keeping the root at 0");
+        FloatNodes moved(wide.size());
+        for (std::size_t i = 0; i < wide.size(); ++i) {
+            WideBvhNode<N> n = wide[i];
+            for (std::uint32_t& c : n.child)
+                if (!detail::wide_is_leaf(c)) c = at[c];
+            moved[at[i]] = n;
+        }
+        wide = std::move(moved);
     }
 
     /// Fills wide node `node` of `wide` from binary inner node `slot` (depth: of this wide
