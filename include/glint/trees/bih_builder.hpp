@@ -1,7 +1,7 @@
 // glint/trees/bih_builder.hpp: bounding interval hierarchy builder, after Waechter and
 // Keller, "Instant ray tracing: the bounding interval hierarchy" (EGSR 2006).
 //
-// 000 section 4.2 (lines 2522-2535): the BIH is a kd-tree-like binary tree whose node stores
+// 000 section 4.2: the BIH is a kd-tree-like binary tree whose node stores
 // two planes on one axis, the maximum of the left child's triangles and the minimum of the
 // right child's, so each triangle is referenced exactly once and the two children may
 // overlap or leave empty space between them.

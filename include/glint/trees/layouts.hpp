@@ -1,15 +1,15 @@
 // glint/trees/layouts.hpp: node layouts, the policies that encode a BuiltTree into an
 // array of equal-size nodes (tree.hpp's EncodedNode) and tell traversal where children are.
 //
-// 000 section 4.4 (lines 2633-2700, Fig. 4.3):
+// 000 section 4.4 (Fig. 4.3):
 // - PointerLayout: every split node carries the index of its first child; the two children
 //   are adjacent (right = left + 1), so one index per split node suffices.
 // - HavranSubtrees<K> (Havran 2001, as 000 describes it): the tree is cut into compact
 //   subtrees of K = 2^d - 1 slots; inside a subtree the children of local slot n are
 //   2n + 1 and 2n + 2. The last level of a subtree holds pointers only: every node that
 //   falls on it, split or leaf, becomes a pointer to the root of a fresh subtree. Slots below
-//   a leaf inside a subtree ("orphaned trees below leaf nodes", line 2652) stay unused.
-// - CompactSubtrees<K> (000's layout, lines 2660-2668): the same compact subtrees, but
+//   a leaf inside a subtree ("orphaned trees below leaf nodes") stay unused.
+// - CompactSubtrees<K> (000's layout): the same compact subtrees, but
 //   (a) a leaf that falls on the pointer level is stored in the pointer's slot ("the pointer
 //   level of the cache line may also contain leaves"), and (b) when a branch ends early, the
 //   would-be children of the leaf become roots of free subtrees whose locations are

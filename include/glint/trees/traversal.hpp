@@ -1,10 +1,10 @@
 // glint/trees/traversal.hpp: the tree accelerator (builder x intersector x layout) and its
 // closest-hit and any-hit traversal.
 //
-// 000 section 4.3 (lines 2597-2631): starting at the root, at a split node the children are
+// 000 section 4.3: starting at the root, at a split node the children are
 // labelled near and far by the sign of the ray direction on the split axis; the ray
 // segments inside the two cells come from one ray-plane intersection (kd-tree) or two
-// (BIH; 000 says "four", counting the GPU BIH's four planes, lines 2681-2683). If only one
+// (BIH; 000 says "four", counting the GPU BIH's four planes). If only one
 // cell has a non-empty segment it is entered; otherwise the far cell and its segment are
 // pushed on a stack and the near cell is entered. At a leaf all its triangles are tested
 // and the nearest kept; a popped cell whose segment starts beyond the best hit is skipped.

@@ -2,7 +2,7 @@
 // builders, the equal-size node formats the layouts encode it into, and the concepts that
 // connect builders, layouts and accelerators.
 //
-// 000 section 4.2 (lines 2522-2560): a kd-tree splits a cell with one axis-aligned plane into
+// 000 section 4.2: a kd-tree splits a cell with one axis-aligned plane into
 // two disjoint cells, so a triangle crossing the plane is referenced from both; a BIH
 // (bounding interval hierarchy) stores two planes per node, the left child's maximum and the
 // right child's minimum along the axis, so every triangle is referenced once and the children
@@ -94,7 +94,7 @@ concept TreeBuilder = requires(const B b, std::span<const TriangleVertices<typen
 };
 
 // ---------------------------------------------------------------------------------------
-// Encoded nodes. 000 section 4.4 (lines 2672-2686): "Every element has the same size, but it
+// Encoded nodes. 000 section 4.4: "Every element has the same size, but it
 // can be of three different types": a leaf (triangle count and start of its block in the
 // leaf list), a splitting node (plane position(s) and axis) and a pointer node (an index to
 // another node). glint's nodes describe themselves in the low bits of one 32-bit word:
