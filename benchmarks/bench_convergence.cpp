@@ -36,7 +36,7 @@
 //                   difference)
 //   envmap          environment lighting (000 section 3.3), at the first vertex only, single
 //                   thread: importance (MisEnvironment, the baseline), and CorrelatedEnvironment
-//                   with K = --light-samples (default 4) map-importance samples per vertex:
+//                   with K = --light-samples (default 16) map-importance samples per vertex:
 //                   importance-k (lambda = 0), correlated (eq. 3.5), combined-3.5, combined (both
 //                   main parts chosen per cell); not part of --scene all
 //   ./build/benchmarks/bench_convergence --scene envmap --size 48 --max-spp 64 --csv envmap.csv
@@ -454,6 +454,7 @@ RenderResult envmap_method(const std::string& method, const Scene<float>& scene,
 }
 
 using Results = std::map<std::string, std::map<std::string, std::vector<Point>>>;
+double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& base);
 
 /// Whether combined has the lowest RMSE at each level, and its time over `base`'s.
 void summarize_combined(const std::map<std::string, std::vector<Point>>& m, const std::vector<std::string>& others,
@@ -476,7 +477,7 @@ void summarize_combined(const std::map<std::string, std::vector<Point>>& m, cons
 /// 4x max-spp, another seed; its own variance is subtracted from the MSE.
 void envmap_convergence(const Config& cfg, const Scene<float>& scene, const RenderAccel& accel, std::ofstream& csv,
                         Results& results) {
-    const int k = cfg.light_samples > 0 ? cfg.light_samples : 4;
+    const int k = cfg.light_samples > 0 ? cfg.light_samples : CorrelatedEnvironmentSettings{}.samples;
     const RenderResult ref = envmap_method("correlated", scene, accel, cfg.size, 4 * cfg.max_spp, 0x5eed, 16);
     const double ref_var = mean_variance(ref);
     std::printf("  reference: %d spp, 16 samples per vertex, %.1f s; K = %d samples per vertex\n", 4 * cfg.max_spp,
@@ -505,7 +506,9 @@ void envmap_convergence(const Config& cfg, const Scene<float>& scene, const Rend
         for (const Point& p : by.at(m)) t += p.seconds;
         std::printf(" %14.3f", 1e6 * t / samples);
     }
-    std::printf("\n");
+    std::printf("\n  %-14s", "efficiency");
+    for (const std::string& m : methods) std::printf(" %13.2fx", efficiency_ratio(by.at(m), by.at("importance")));
+    std::printf("   (1 / (MSE seconds) against importance)\n");
     summarize_combined(by, {"importance", "importance-k", "correlated", "combined-3.5"}, "importance");
     summarize_combined(by, {"importance-k"}, "importance-k");
 }
