@@ -110,7 +110,7 @@ struct CorrelatedStats {
 /// importance sampling that section 3.1 introduces lambda as). lambda_-i is independent of
 /// sample i, so E[f_i/p_i + lambda_-i (J - g_i/p_i)] = I exactly, whatever the lambda's noise:
 ///   I^ = 1/M sum_i [f_i/p_i + lambda_-i (J - g_i/p_i)]
-/// (000 reduces the bias instead by pooling lambda over neighbouring pixels, lines 1951-1975).
+/// (000 section 3.1.1 reduces the bias instead by pooling lambda over neighbouring pixels.)
 /// Raw sums in double; M < 3 leaves no variance to estimate lambda_-i from: importance sampling.
 template <Scalar T>
 T leave_one_out_estimate(std::span<const T> f_over_p, std::span<const T> g_over_p, T J) {
