@@ -12,10 +12,11 @@
 //            g for any constant c_d, so only the cell average L~_d must be exact: it is computed
 //            once from the map's pixels (EnvironmentMap::integrate), as 000 says ("computed once
 //            when the environment map is loaded").
-//   eq. 3.6  g = L~_d fr~ cos(theta), fr~ = kd / pi (the diffuse part, as 000 section 3.2's fr~;
+//   eq. 3.6  g = L~_d fr~ (n . w), fr~ = kd / pi (the diffuse part, as 000 section 3.2's fr~;
 //            the whole BRDF of a Lambertian surface). J_d = L~_d fr~ n . V_d with V_d the cell's
-//            closed-form direction integral (SphereCells::direction_integral), exact where the
-//            whole cell lies above the tangent plane; cells the tangent plane cuts use eq. 3.5.
+//            closed-form direction integral (SphereCells::direction_integral): the exact integral
+//            of g, whose cosine is signed. Only where the whole cell lies above the tangent plane
+//            is that cosine fr cos's (below it f = 0), so cells the plane cuts use eq. 3.5.
 // The main part is chosen per cell and vertex by choose_environment_main_part (000: "the optimal
 // alternative can be selected separately for each sample"), from the radiance's relative variance
 // over the cell (once per map) and fr cos's over the stencil (per vertex). Neither depends on the
