@@ -34,6 +34,12 @@
 //                   (direct illumination only, max depth 1, as 000 section 3.2 compares it:
 //                   with indirect light the shared path-tracing noise would hide the
 //                   difference)
+//   envmap          environment lighting (000 section 3.3), at the first vertex only, single
+//                   thread: importance (MisEnvironment, the baseline), and CorrelatedEnvironment
+//                   with K = --light-samples (default 16) map-importance samples per vertex:
+//                   importance-k (lambda = 0), correlated (eq. 3.5), combined-3.5, combined (both
+//                   main parts chosen per cell); not part of --scene all
+//   ./build/benchmarks/bench_convergence --scene envmap --size 48 --max-spp 64 --csv envmap.csv
 // --compare roulette runs the roulette methods on any scene (e.g. cornell-glossy); --rr-depth N
 // sets the throughput roulettes' first decision depth (default 3).
 // --analysis (furnace, cornell) prints instead what bounds the radiance-estimate roulette: the
@@ -45,6 +51,7 @@
 // CSV columns: scene,method,spp,seconds,rmse. A gnuplot plot (RMSE against seconds) is
 // written next to the CSV when gnuplot is installed.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -58,6 +65,7 @@
 #include <vector>
 
 #include <glint/io/exr.hpp>
+#include <glint/tracer/correlated_environment.hpp>
 #include <glint/tracer/scenes.hpp>
 
 #include "dispatch_impl.hpp"
@@ -144,7 +152,7 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
         }
     } else {
         throw Error("bench_convergence: no methods for scene '" + scene +
-                    "' (furnace, cornell, cornell-glossy, arealight, all)");
+                    "' (furnace, cornell, cornell-glossy, arealight, envmap, all)");
     }
     return m;
 }
@@ -375,6 +383,136 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
                 100.0 * top_share, cfg.jitter ? "jittered over each pixel" : "through pixel centres");
 }
 
+/// --scene envmap: 000 section 3.3's comparison, environment lighting at the first vertex only.
+/// Per pixel sample, at the point the camera ray through the pixel's centre finds: the
+/// environment policy's estimate plus the BRDF sample (the path tracer's continuation ray)
+/// weighted by the policy's escaped(), which is MisEnvironment's second strategy and 0 for
+/// CorrelatedEnvironment. (The path tracer itself cannot stop there: MIS needs the
+/// continuation ray that a depth cap does not trace, and with indirect light the shared
+/// path-tracing noise hides the estimators' difference.) Rays that miss the scene see the map.
+template <class E>
+RenderResult envmap_direct(const Scene<float>& scene, const RenderAccel& accel, const E& env, int size, int spp,
+                           std::uint64_t seed) {
+    RenderSettings settings;
+    settings.width = settings.height = size;
+    settings.pixel_jitter = false;
+    const PixelCamera<float> camera(scene.camera, settings);
+    RandomSampler<float> sampler(seed);
+    RenderResult r;
+    r.image = Image<Rgb<float>>(size, size);
+    r.variance = Image<Rgb<float>>(size, size);
+    const auto start = std::chrono::steady_clock::now();
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            Rgb<double> sum(0.0), square(0.0);
+            for (int i = 0; i < spp; ++i) {
+                const Ray<float> ray = camera.ray(x, y, std::uint64_t(i), sampler);
+                RayQueries<RenderAccel, float> queries(accel);
+                StoreHit<float> hit;
+                Rgb<float> L = env.escaped(ray.direction, Arrival<float>{});
+                if (queries.closest_hit(ray, hit)) {
+                    const Vec3<float> ng = scene.normal(hit.id);
+                    const Vec3<float> n = glm::dot(ng, ray.direction) < 0.0f ? ng : -ng;
+                    const SurfacePoint<float> p = surface_point(scene, hit);
+                    const Frame<float> frame = Frame<float>::from_normal(n);
+                    const SurfaceBrdf<float> brdf(scene.materials[scene.material_of[hit.id]], frame.to_local(-ray.direction));
+                    const ShadingPoint<float> sp{p.x, p.err, n, frame, &brdf};
+                    L = env.estimate(sp, sampler, queries);
+                    const Vec3<float> wi = brdf.sample_by_albedo(sampler.get_2d());
+                    const float pdf = brdf.sampling_pdf(wi);
+                    const Vec3<float> w = frame.to_world(wi);
+                    StoreHit<float> next;
+                    if (pdf > 0.0f && wi.z > 0.0f && !queries.closest_hit(spawn(sp, w), next))
+                        L += brdf.f(wi) * (wi.z / pdf) * env.escaped(w, Arrival<float>{true, pdf});
+                }
+                sum += Rgb<double>(L[0], L[1], L[2]);
+                square += Rgb<double>(L[0], L[1], L[2]) * Rgb<double>(L[0], L[1], L[2]);
+            }
+            const Rgb<double> mean = sum / double(spp), var = (square / double(spp) - mean * mean) / double(spp);
+            r.image.at(x, y) = Rgb<float>(float(mean[0]), float(mean[1]), float(mean[2]));
+            r.variance.at(x, y) = Rgb<float>(float(std::max(0.0, var[0])), float(std::max(0.0, var[1])), float(std::max(0.0, var[2])));
+        }
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return r;
+}
+
+/// The envmap methods: MisEnvironment (importance: the map's importance sampling and the BRDF
+/// sample by the balance heuristic, the path tracer's default) and CorrelatedEnvironment with K
+/// samples from the same map density: importance-k (lambda = 0), correlated (lambda = 1, main part
+/// eq. 3.5 only), combined-3.5 (combined, eq. 3.5 only) and combined (both main parts, chosen per
+/// cell and vertex).
+RenderResult envmap_method(const std::string& method, const Scene<float>& scene, const RenderAccel& accel, int size,
+                           int spp, std::uint64_t seed, int samples) {
+    if (method == "importance") return envmap_direct(scene, accel, MisEnvironment<float>(scene), size, spp, seed);
+    CorrelatedEnvironmentSettings cs;
+    cs.samples = samples;
+    cs.estimator = method == "importance-k" ? DirectEstimator::importance
+                   : method == "correlated"  ? DirectEstimator::correlated
+                                             : DirectEstimator::combined;
+    if (method == "correlated" || method == "combined-3.5") cs.main_part = EnvironmentMainPart::radiance;
+    return envmap_direct(scene, accel, CorrelatedEnvironment<float>(scene, cs), size, spp, seed);
+}
+
+using Results = std::map<std::string, std::map<std::string, std::vector<Point>>>;
+double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& base);
+
+/// Whether combined has the lowest RMSE at each level, and its time over `base`'s.
+void summarize_combined(const std::map<std::string, std::vector<Point>>& m, const std::vector<std::string>& others,
+                        const std::string& base) {
+    const auto& com = m.at("combined");
+    int lower = 0;
+    for (std::size_t i = 0; i < com.size(); ++i) {
+        bool lowest = true;
+        for (const std::string& o : others) lowest = lowest && com[i].rmse < m.at(o)[i].rmse;
+        lower += lowest;
+    }
+    double t_com = 0, t_base = 0;
+    for (std::size_t i = 0; i < com.size(); ++i) t_com += com[i].seconds, t_base += m.at(base)[i].seconds;
+    std::printf("  combined has the lowest RMSE at %d of %zu spp levels; time overhead vs %s %+.1f%%\n", lower,
+                com.size(), base.c_str(), 100.0 * (t_com / t_base - 1.0));
+}
+
+/// --scene envmap: every method at spp = 1, 2, .. max-spp (single thread, levels outer) against
+/// a reference of correlated sampling (lambda = 1, unbiased) with 16 samples per vertex at
+/// 4x max-spp, another seed; its own variance is subtracted from the MSE.
+void envmap_convergence(const Config& cfg, const Scene<float>& scene, const RenderAccel& accel, std::ofstream& csv,
+                        Results& results) {
+    const int k = cfg.light_samples > 0 ? cfg.light_samples : CorrelatedEnvironmentSettings{}.samples;
+    const RenderResult ref = envmap_method("correlated", scene, accel, cfg.size, 4 * cfg.max_spp, 0x5eed, 16);
+    const double ref_var = mean_variance(ref);
+    std::printf("  reference: %d spp, 16 samples per vertex, %.1f s; K = %d samples per vertex\n", 4 * cfg.max_spp,
+                ref.seconds, k);
+    const std::vector<std::string> methods{"importance", "importance-k", "correlated", "combined-3.5", "combined"};
+    for (int spp = 1; spp <= cfg.max_spp; spp *= 2)
+        for (const std::string& m : methods) {
+            const RenderResult r = envmap_method(m, scene, accel, cfg.size, spp, 1000 * cfg.seed + std::uint64_t(spp), k);
+            const Point p{spp, r.seconds, rmse(r.image, ref.image, ref_var)};
+            results["envmap"][m].push_back(p);
+            if (csv) csv << "envmap," << m << ',' << spp << ',' << p.seconds << ',' << p.rmse << '\n';
+        }
+    std::printf("  %-14s", "spp");
+    for (const std::string& m : methods) std::printf(" %14s", m.c_str());
+    std::printf("   (RMSE; last row: seconds per sample)\n");
+    const auto& by = results["envmap"];
+    for (std::size_t i = 0; i < by.at("combined").size(); ++i) {
+        std::printf("  %-14d", by.at("combined")[i].spp);
+        for (const std::string& m : methods) std::printf(" %14.5f", by.at(m)[i].rmse);
+        std::printf("\n");
+    }
+    const double samples = double(cfg.size) * cfg.size * double(2 * cfg.max_spp - 1);
+    std::printf("  %-14s", "us/sample");
+    for (const std::string& m : methods) {
+        double t = 0;
+        for (const Point& p : by.at(m)) t += p.seconds;
+        std::printf(" %14.3f", 1e6 * t / samples);
+    }
+    std::printf("\n  %-14s", "efficiency");
+    for (const std::string& m : methods) std::printf(" %13.2fx", efficiency_ratio(by.at(m), by.at("importance")));
+    std::printf("   (1 / (MSE seconds) against importance)\n");
+    summarize_combined(by, {"importance", "importance-k", "correlated", "combined-3.5"}, "importance");
+    summarize_combined(by, {"importance-k"}, "importance-k");
+}
+
 /// Geometric mean over spp >= 4 (or all levels when there are fewer) of eff(m) / eff(base).
 double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& base) {
     double log_sum = 0;
@@ -439,7 +577,7 @@ int main(int argc, char** argv) {
         if (cfg.scene == "all") scenes = {"furnace", "cornell", "cornell-glossy", "arealight"};
         else scenes = {cfg.scene};
 
-        std::map<std::string, std::map<std::string, std::vector<Point>>> results;
+        Results results;
         std::ofstream csv;
         if (!cfg.csv.empty()) {
             csv.open(cfg.csv);
@@ -451,6 +589,10 @@ int main(int argc, char** argv) {
             const RenderAccel accel(scene.triangles);
             std::printf("%s (%dx%d, spp 1..%d)\n", name.c_str(), cfg.size, cfg.size, cfg.max_spp);
             double ref_var = 0;
+            if (name == "envmap") {
+                envmap_convergence(cfg, scene, accel, csv, results);
+                continue;
+            }
             if (cfg.analysis) {
                 if (name == "furnace" || name == "cornell") roulette_analysis(name, scene, accel, cfg);
                 continue;
@@ -480,17 +622,7 @@ int main(int argc, char** argv) {
                 if (field) std::printf("  %8.3fx vs throughput", efficiency_ratio(pts, results[name]["throughput"]));
                 std::printf("\n");
             }
-            if (name == "arealight") {
-                const auto& imp = results[name]["importance"];
-                const auto& cor = results[name]["correlated"];
-                const auto& com = results[name]["combined"];
-                int lower = 0;
-                for (std::size_t i = 0; i < com.size(); ++i) lower += com[i].rmse < imp[i].rmse && com[i].rmse < cor[i].rmse;
-                double t_com = 0, t_imp = 0;
-                for (std::size_t i = 0; i < com.size(); ++i) t_com += com[i].seconds, t_imp += imp[i].seconds;
-                std::printf("  combined has lower RMSE than importance and correlated at %d of %zu spp levels; "
-                            "time overhead vs importance %+.1f%%\n", lower, com.size(), 100.0 * (t_com / t_imp - 1.0));
-            }
+            if (name == "arealight") summarize_combined(results[name], {"importance", "correlated"}, "importance");
         }
         if (csv.is_open()) std::printf("wrote %s\n", cfg.csv.c_str());
         plot(cfg, results);

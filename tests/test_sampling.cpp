@@ -1060,6 +1060,70 @@ TEST_CASE("exact: equal-solid-angle sphere cells and the closed-form diffuse a_d
     CHECK_THROWS_AS(SphereCells<double>(0, 3), Error);
 }
 
+TEST_CASE("exact: sphere cells' direction integral, least cosine and cell lookup (000 3.3.1)") {
+    const SphereCells<double> cells(8, 4, false);
+    Vec3<double> total(0.0);
+    Pcg32 rng(41);
+    for (std::size_t d = 0; d < cells.count(); ++d) {
+        total += cells.direction_integral(d);
+        // Upper cells: V_d . z is section 3.3.1's closed-form cosine integral.
+        if (cells.cos_boundary(int(d / 8) + 1) >= 0.0)
+            CHECK(cells.direction_integral(d).z == doctest::Approx(cells.cosine_integral(d)).epsilon(1e-12));
+        for (int t = 0; t < 20; ++t) {
+            const Vec2<double> u(0.02 + 0.96 * rng.uniform<double>(), 0.02 + 0.96 * rng.uniform<double>());
+            REQUIRE(cells.cell_of(cells.sample(d, u)) == d);
+        }
+    }
+    CHECK(glm::length(total) < 1e-12);  // the whole sphere's integral of w is 0
+    for (int t = 0; t < 20; ++t) {
+        const Vec3<double> n = glm::normalize(Vec3<double>(rng.uniform<double>() - 0.5, rng.uniform<double>() - 0.5,
+                                                           rng.uniform<double>() - 0.5));
+        for (std::size_t d = 0; d < cells.count(); ++d) {
+            // The least n . w over a 100 x 100 grid of the cell (edges included): never below the
+            // exact least value, and within the grid's spacing of it.
+            double least = 2;
+            for (int a = 0; a <= 100; ++a)
+                for (int b = 0; b <= 100; ++b)
+                    least = std::min(least, glm::dot(n, cells.sample(d, Vec2<double>(a / 100.0, b / 100.0))));
+            const double exact = cells.min_cosine(d, n);
+            REQUIRE(exact <= least + 1e-12);
+            REQUIRE(exact >= least - 2e-3);
+        }
+    }
+    // n . V_d against Monte Carlo over a cell the tangent plane of n cuts: the signed integral.
+    const Vec3<double> n = glm::normalize(Vec3<double>(0.3, -0.4, 0.2));
+    check_unbiased([&] {
+        return glm::dot(n, cells.sample(5, Vec2<double>(rng.uniform<double>(), rng.uniform<double>()))) * cells.solid_angle();
+    }, glm::dot(n, cells.direction_integral(5)), 100000);
+}
+
+TEST_CASE("statistics: the leave-one-out combined estimate is unbiased where eq. 3.3's lambda is not") {
+    // g/p = 1 + u, f/p = g/p where u < 0.3 (visible), else 0: with 4 samples, lambda from the
+    // same samples correlates with them. The leave-one-out estimate is unbiased within 4
+    // standard errors; with f = g it is J exactly.
+    const double J = 1.5, exact = 0.3 + 0.045;
+    Pcg32 rng(43);
+    std::array<double, 4> f, g;
+    Stats loo, same;
+    for (int t = 0; t < 400000; ++t) {
+        CorrelatedStats<double> st;
+        for (std::size_t i = 0; i < 4; ++i) {
+            const double u = rng.uniform<double>();
+            g[i] = 1.0 + u;
+            f[i] = u < 0.3 ? g[i] : 0.0;
+            st.add(f[i], g[i]);
+        }
+        loo.add(leave_one_out_estimate<double>(f, g, J));
+        same.add(st.estimate(J, std::clamp(st.lambda(J), 0.0, 1.0)));
+    }
+    INFO("leave-one-out " << loo.mean << " +- " << loo.stderr_mean() << ", same-sample lambda " << same.mean
+                          << " +- " << same.stderr_mean() << ", exact " << exact);
+    CHECK(std::abs(loo.mean - exact) < 4 * loo.stderr_mean());
+    CHECK(std::abs(same.mean - exact) > 4 * same.stderr_mean());
+    const std::array<double, 4> g2{1.0, 1.2, 1.7, 1.9};
+    CHECK(leave_one_out_estimate<double>(g2, g2, J) == doctest::Approx(J).epsilon(1e-12));
+}
+
 namespace {
 
 struct EnvScene {

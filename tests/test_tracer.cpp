@@ -23,6 +23,7 @@
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
+#include <glint/tracer/correlated_environment.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/intersection/ivm.hpp>
 #include <glint/trees/brute_force.hpp>
@@ -302,6 +303,113 @@ struct UniformAreaDirect : NoPixelStatistics<float> {
 };
 
 }  // namespace
+
+namespace {
+
+/// The envmap scene's image (full paths) with environment policy `env`, camera rays through
+/// pixel centres.
+template <class E>
+RenderResult render_envmap(const Scene<float>& s, const RenderAccel& accel, const E& env, int size, int spp,
+                           std::uint64_t seed) {
+    RenderSettings settings;
+    settings.width = settings.height = size;
+    settings.spp = spp;
+    settings.pixel_jitter = false;
+    using R = SpectralRoulette<float, 3>;
+    const PathTracer<RenderAccel, RandomSampler<float>, R, MisDirect<float>, E, false> pt(
+        s, accel, R{}, MisDirect<float>(s, settings), env, settings);
+    return render_image(s, settings, pt, RandomSampler<float>(seed));
+}
+
+/// A shading point with normal n on material m, seen from direction `view` (towards the eye).
+struct EnvVertex {
+    Frame<float> frame;
+    SurfaceBrdf<float> brdf;
+    ShadingPoint<float> sp;
+    EnvVertex(const Material<float>& m, const Vec3f& n, const Vec3f& view)
+        : frame(Frame<float>::from_normal(n)), brdf(m, frame.to_local(view)),
+          sp{Vec3f(0.0f), Vec3f(0.0f), n, frame, &brdf} {}
+};
+
+}  // namespace
+
+TEST_CASE("statistics: correlated environment lighting (000 3.3) renders MisEnvironment's image mean") {
+    // envmap, 12x12, full paths: importance (lambda = 0), correlated (lambda = 1, eq. 3.5 only)
+    // and combined (both main parts chosen per cell, leave-one-out lambda) against the map's
+    // MIS, per band within 4 standard errors of the difference (from the variance layers).
+    const Scene<float> s = builtin_scene<float>("envmap");
+    const RenderAccel accel(s.triangles);
+    Rgb<double> mis_mean, mis_se;
+    image_mean(render_envmap(s, accel, MisEnvironment<float>(s), 12, 256, 1), mis_mean, mis_se);
+    for (const DirectEstimator e : {DirectEstimator::importance, DirectEstimator::correlated, DirectEstimator::combined}) {
+        CorrelatedEnvironmentSettings cs;
+        cs.estimator = e;
+        if (e == DirectEstimator::correlated) cs.main_part = EnvironmentMainPart::radiance;
+        Rgb<double> mean, se;
+        image_mean(render_envmap(s, accel, CorrelatedEnvironment<float>(s, cs), 12, 64, 2), mean, se);
+        for (std::size_t c = 0; c < 3; ++c) {
+            INFO("estimator " << int(e) << " band " << c << ": " << mean[c] << " +- " << se[c] << ", MIS " << mis_mean[c]
+                              << " +- " << mis_se[c]);
+            CHECK(std::abs(mean[c] - mis_mean[c]) < 4 * std::sqrt(se[c] * se[c] + mis_se[c] * mis_se[c]));
+            CHECK(se[c] > 0.0);
+        }
+    }
+}
+
+TEST_CASE("CorrelatedEnvironment: the main part chosen per cell, and J the integral of the chosen parts") {
+    const Scene<float> s = builtin_scene<float>("envmap");
+    const CorrelatedEnvironment<float> env(s);
+    using Part = CorrelatedEnvironment<float>::CellPart;
+    const auto& cells = env.cells();
+    auto to_cells = [](const Vec3f& w) { return Vec3f(w.x, w.z, w.y); };  // the map's up axis is the cells' pole
+    const Vec3f sun = glm::normalize(Vec3f(0.5f, 0.6f, 0.3f));            // default_sky's sun
+    for (const Vec3f n : {Vec3f(0, 1, 0), glm::normalize(Vec3f(0.6f, 0.3f, 0.74f))}) {
+        EnvVertex v(s.materials[1], n, glm::normalize(Vec3f(0.2f, 0.5f, 0.8f) + n));
+        std::vector<Part> parts(cells.count());
+        const Rgb<float> J = env.main_parts(v.sp, parts);
+        int radiance = 0, brdf = 0;
+        for (std::size_t d = 0; d < parts.size(); ++d) {
+            if (parts[d].part == EnvironmentMainPart::brdf) {
+                ++brdf;
+                CHECK(cells.min_cosine(d, to_cells(n)) >= 0.0f);  // eq. 3.6's J is exact only there
+            } else if (parts[d].weight.max() > 0.0f) {
+                ++radiance;
+            }
+        }
+        // Both main parts are in use, and the sun's cell (radiance varying most) keeps eq. 3.5.
+        CHECK(radiance > 0);
+        CHECK(brdf > 0);
+        CHECK(parts[cells.cell_of(to_cells(sun))].part == EnvironmentMainPart::radiance);
+        // J against Monte Carlo of g / p with the map's importance samples.
+        Pcg32 rng(7);
+        std::array<double, 3> sum{}, square{};
+        const int m = 400000;
+        for (int i = 0; i < m; ++i) {
+            float pdf;
+            const Vec3f w = s.environment->sample(Vec2<float>(rng.uniform<float>(), rng.uniform<float>()), pdf);
+            const Part& p = parts[cells.cell_of(to_cells(w))];
+            const Rgb<float> g = p.part == EnvironmentMainPart::radiance ? s.environment->eval(w) * p.weight / pdf
+                                                                         : p.weight * (glm::dot(n, w) / pdf);
+            for (std::size_t c = 0; c < 3; ++c) sum[c] += g[c], square[c] += double(g[c]) * g[c];
+        }
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double mean = sum[c] / m, se = std::sqrt((square[c] / m - mean * mean) / m);
+            INFO("n (" << n.x << ", " << n.y << ", " << n.z << ") band " << c << ": J " << J[c] << ", Monte Carlo " << mean
+                       << " +- " << se);
+            CHECK(std::abs(J[c] - mean) < 4 * se);
+        }
+    }
+    // One main part forced: eq. 3.6 wherever the cell lies above the tangent plane.
+    CorrelatedEnvironmentSettings cs;
+    cs.main_part = EnvironmentMainPart::brdf;
+    const CorrelatedEnvironment<float> forced(s, cs);
+    EnvVertex v(s.materials[0], Vec3f(0, 1, 0), Vec3f(0, 1, 0));
+    std::vector<Part> parts(cells.count());
+    forced.main_parts(v.sp, parts);
+    for (std::size_t d = 0; d < parts.size(); ++d)
+        CHECK((parts[d].part == EnvironmentMainPart::brdf) == (cells.min_cosine(d, Vec3f(0, 0, 1)) >= 0.0f));
+    CHECK_THROWS_AS(CorrelatedEnvironment<float>(s, CorrelatedEnvironmentSettings{16, 16, 16, DirectEstimator::combined, std::nullopt}), Error);
+}
 
 TEST_CASE("policies: a direct-lighting policy defined outside the library renders what MisDirect renders") {
     const Scene<float> s = builtin_scene<float>("cornell");

@@ -104,6 +104,38 @@ struct CorrelatedStats {
     T correlated_estimate(T J) const { return estimate(J, T(1)); }
 };
 
+/// The combined estimate of one integral without section 3.1.1's initial bias, from the M
+/// samples' f_i/p_i and g_i/p_i: sample i is weighted by lambda_-i, estimated (regression form)
+/// from the other M - 1 samples and clamped to [0, 1] (the convex combination of correlated and
+/// importance sampling that section 3.1 introduces lambda as). lambda_-i is independent of
+/// sample i, so E[f_i/p_i + lambda_-i (J - g_i/p_i)] = I exactly, whatever the lambda's noise:
+///   I^ = 1/M sum_i [f_i/p_i + lambda_-i (J - g_i/p_i)]
+/// (000 section 3.1.1 reduces the bias instead by pooling lambda over neighbouring pixels.)
+/// Raw sums in double; M < 3 leaves no variance to estimate lambda_-i from: importance sampling.
+template <Scalar T>
+T leave_one_out_estimate(std::span<const T> f_over_p, std::span<const T> g_over_p, T J) {
+    const std::size_t m = std::min(f_over_p.size(), g_over_p.size());
+    double sf = 0, sg = 0, sfg = 0, sgg = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+        const double f = f_over_p[i], g = g_over_p[i];
+        sf += f, sg += g, sfg += f * g, sgg += g * g;
+    }
+    if (m == 0) return T(0);
+    double sum = 0;
+    const double rest = double(m) - 1.0;
+    for (std::size_t i = 0; i < m; ++i) {
+        const double f = f_over_p[i], g = g_over_p[i];
+        double lambda = 0;
+        if (m >= 3) {
+            const double rf = sf - f, rg = sg - g;
+            const double cgg = (sgg - g * g) - rg * rg / rest, cfg = (sfg - f * g) - rf * rg / rest;
+            if (cgg > (sgg - g * g) * 0x1p-40) lambda = std::clamp(cfg / cgg, 0.0, 1.0);
+        }
+        sum += f + lambda * (double(J) - g);
+    }
+    return T(sum / double(m));
+}
+
 /// Section 3.1.1: lambda of each pixel from the statistics pooled over the (2 radius + 1)^2
 /// neighbourhood (clamped at the image border). Within-pixel co-moments are summed, so pixels
 /// with different means do not distort each other's correlation. Writes width*height weights.
@@ -386,6 +418,64 @@ public:
         const T c0 = std::max(cos_boundary(j), T(0)), c1 = std::max(cos_boundary(j + 1), T(0));
         return (T(2) * pi<T> / T(n_phi_)) * (c0 * c0 - c1 * c1) / T(2);
     }
+    /// The cell d = j * n_phi + i that holds the unit direction w (the inverse of sample()).
+    std::size_t cell_of(const Vec3<T>& w) const {
+        const T span = hemisphere_ ? T(1) : T(2);
+        const int j = std::clamp(int((T(1) - w.z) / span * T(n_theta_)), 0, n_theta_ - 1);
+        T phi = std::atan2(w.y, w.x);
+        if (phi < T(0)) phi += T(2) * pi<T>;
+        const int i = std::clamp(int(phi / (T(2) * pi<T>) * T(n_phi_)), 0, n_phi_ - 1);
+        return std::size_t(j) * std::size_t(n_phi_) + std::size_t(i);
+    }
+    /// V_d = integral over cell d of w dw, in closed form: with s(z) = sqrt(1 - z^2) and
+    /// S = integral of s dz over the cell's cos(theta) interval, V_d = ((sin phi_i+1 - sin phi_i) S,
+    /// (cos phi_i - cos phi_i+1) S, (phi_i+1 - phi_i)(cos^2 theta_j - cos^2 theta_j+1)/2).
+    /// n . V_d is the integral of cos(n, w) over the cell, the exact a_d of a diffuse BRDF with
+    /// normal n where the whole cell lies above the tangent plane (min_cosine(d, n) >= 0); the
+    /// section 3.3.1 closed form is its n = +z case.
+    Vec3<T> direction_integral(std::size_t d) const {
+        const int i = int(d % std::size_t(n_phi_)), j = int(d / std::size_t(n_phi_));
+        const T c0 = cos_boundary(j), c1 = cos_boundary(j + 1);
+        auto antiderivative = [](T z) { return (z * std::sqrt(std::max(T(0), T(1) - z * z)) + std::asin(z)) / T(2); };
+        const T S = antiderivative(c0) - antiderivative(c1);
+        const T p0 = phi_boundary(i), p1 = phi_boundary(i + 1);
+        return Vec3<T>((std::sin(p1) - std::sin(p0)) * S, (std::cos(p0) - std::cos(p1)) * S,
+                       (p1 - p0) * (c0 * c0 - c1 * c1) / T(2));
+    }
+    /// A cell's extent: unit vectors of its azimuth boundaries phi_i, phi_i+1 in the xy plane,
+    /// phi_i+1 - phi_i, and its cos(theta) interval [z_lo, z_hi].
+    struct Bounds {
+        Vec2<T> e0, e1;
+        T width, z_lo, z_hi;
+    };
+    Bounds bounds(std::size_t d) const {
+        const int i = int(d % std::size_t(n_phi_)), j = int(d / std::size_t(n_phi_));
+        const T p0 = phi_boundary(i), p1 = phi_boundary(i + 1);
+        return {Vec2<T>(std::cos(p0), std::sin(p0)), Vec2<T>(std::cos(p1), std::sin(p1)), p1 - p0,
+                cos_boundary(j + 1), cos_boundary(j)};
+    }
+    /// The least n . w over the directions w of a cell (n a unit vector), exactly:
+    /// n . w = n_z z + sqrt(1 - z^2) (n_xy . e(phi)); its least value over the cell's azimuths is
+    /// A = -|n_xy| when the azimuth of -n_xy lies in the cell, else the smaller of n_xy . e0 and
+    /// n_xy . e1; and n_z z + A sqrt(1 - z^2) is least at an end of the z interval or, for A < 0,
+    /// at z* = -n_z / sqrt(n_z^2 + A^2), where it is -sqrt(n_z^2 + A^2). No trigonometry.
+    static T min_cosine(const Bounds& b, const Vec3<T>& n) {
+        auto cross = [](const Vec2<T>& u, const Vec2<T>& v) { return u.x * v.y - u.y * v.x; };
+        const Vec2<T> a(-n.x, -n.y);  // the azimuth where n_xy . e(phi) is least
+        const bool inside = b.width < pi<T> ? cross(b.e0, a) >= T(0) && cross(a, b.e1) >= T(0)
+                                            : !(cross(b.e1, a) > T(0) && cross(a, b.e0) > T(0));
+        const T A = inside ? -std::sqrt(a.x * a.x + a.y * a.y)
+                           : std::min(n.x * b.e0.x + n.y * b.e0.y, n.x * b.e1.x + n.y * b.e1.y);
+        auto h = [&](T z) { return n.z * z + A * std::sqrt(std::max(T(0), T(1) - z * z)); };
+        T least = std::min(h(b.z_lo), h(b.z_hi));
+        const T len = std::sqrt(n.z * n.z + A * A);
+        if (A < T(0) && len > T(0)) {
+            const T z_star = -n.z / len;
+            if (z_star >= b.z_lo && z_star <= b.z_hi) least = std::min(least, -len);
+        }
+        return least;
+    }
+    T min_cosine(std::size_t d, const Vec3<T>& n) const { return min_cosine(bounds(d), n); }
 
 private:
     int n_phi_, n_theta_;
@@ -397,6 +487,19 @@ enum class EnvironmentMainPart {
     radiance,  // eq. 3.5: g = L_env(w) a_d / |Omega_d| (diffuse or moderately specular)
     brdf       // eq. 3.6: g = L~_d fr(w) cos(theta) (smooth environment, specular BRDF)
 };
+
+/// Section 3.3's choice of main part for one cell, "selected separately for each sample": eq. 3.5
+/// neglects the variation of fr cos over the cell, eq. 3.6 that of the radiance, so the main part
+/// kept is the one whose neglected factor varies less there, measured by the relative variances
+/// (variance / mean^2 over the cell) of the radiance and of fr cos. ("If the environment map has
+/// high variation in the subdomain and the point to be rendered is diffuse or moderately
+/// specular, then option one is better ... when the environment map is smooth and the BRDF is
+/// strongly specular, then option two.")
+template <Scalar T>
+EnvironmentMainPart choose_environment_main_part(T radiance_relative_variance, T brdf_cos_relative_variance) {
+    return brdf_cos_relative_variance <= radiance_relative_variance ? EnvironmentMainPart::radiance
+                                                                    : EnvironmentMainPart::brdf;
+}
 
 /// Cell averages L~_d of an environment, by a q x q midpoint rule in (phi, cos theta), which is
 /// exact for radiance linear in cos(theta) and constant in phi within a cell. Computed once.

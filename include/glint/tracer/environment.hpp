@@ -81,6 +81,36 @@ public:
         return Vec3<T>(T(sin_t * std::cos(phi)), T(cos_t), T(sin_t * std::sin(phi)));
     }
 
+    /// Integrals over the directions with phi in [phi0, phi1] and cos(theta) in [cos_lo, cos_hi]
+    /// (0 <= phi0 <= phi1 <= 2 pi), exact for the piecewise-constant map: each pixel counts with
+    /// the solid angle it shares with the region, (phi overlap) x (cos(theta) overlap).
+    struct RegionIntegrals {
+        Rgb<double> radiance{0.0};     // integral of L dw
+        double luminance_squared = 0;  // integral of luminance(L)^2 dw
+        double solid_angle = 0;
+    };
+    RegionIntegrals integrate(double phi0, double phi1, double cos_lo, double cos_hi) const {
+        const int w = image_.width, h = image_.height;
+        RegionIntegrals out;
+        for (int y = 0; y < h; ++y) {
+            const double dz = std::min(cos_hi, std::cos(pi<double> * y / h)) -
+                              std::max(cos_lo, std::cos(pi<double> * (y + 1) / h));
+            if (!(dz > 0)) continue;
+            const int x0 = std::max(0, int(phi0 / (2 * pi<double>) * w));
+            const int x1 = std::min(w - 1, int(phi1 / (2 * pi<double>) * w));
+            for (int x = x0; x <= x1; ++x) {
+                const double dphi = std::min(phi1, 2 * pi<double> * (x + 1) / w) - std::max(phi0, 2 * pi<double> * x / w);
+                if (!(dphi > 0)) continue;
+                const Rgb<float>& p = image_.at(x, y);
+                const double omega = dphi * dz, lum = double(p.luminance());
+                out.radiance += Rgb<double>(p[0], p[1], p[2]) * omega;
+                out.luminance_squared += lum * lum * omega;
+                out.solid_angle += omega;
+            }
+        }
+        return out;
+    }
+
     /// A sky: gradient from `horizon` to `zenith` radiance, dark ground, and a sun disc of
     /// angular radius `sun_radius` with radiance `sun` in direction `sun_dir`.
     static EnvironmentMap sky(int width, int height, const Vec3<T>& sun_dir, const Rgb<float>& sun,

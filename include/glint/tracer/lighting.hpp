@@ -12,7 +12,8 @@
 //                     3.1.1) from statistics the policy keeps per pixel and turns into the
 //                     film's values once, when the render is finished.
 // Environment lighting (an EnvironmentLighting policy): NoEnvironment, MisEnvironment (the
-// map's importance sampling and the BRDF sample by the balance heuristic).
+// map's importance sampling and the BRDF sample by the balance heuristic); CorrelatedEnvironment
+// (000 section 3.3) is in tracer/correlated_environment.hpp.
 // A policy written anywhere (a test defines one) plugs into PathTracer unchanged: the concepts
 // below name everything the tracer asks of it.
 #pragma once

@@ -11,7 +11,8 @@
 //   R        glint::RoulettePolicy (classic, spectral, throughput, radiance estimate);
 //   D        DirectLighting (tracer/lighting.hpp: BrdfOnlyDirect, MisDirect; CorrelatedDirect
 //            in tracer/correlated_direct.hpp; or a user's own);
-//   E        EnvironmentLighting (NoEnvironment, MisEnvironment);
+//   E        EnvironmentLighting (NoEnvironment, MisEnvironment; CorrelatedEnvironment in
+//            tracer/correlated_environment.hpp);
 //   Points   a compile-time switch: a scene without point lights gets no point-light code.
 // Specular (mirror, dielectric) vertices are followed deterministically (Fresnel choice for
 // dielectrics) and count emission on the next hit, as camera rays do.
