@@ -116,8 +116,8 @@ PixelPoint<T> primary_point(const Scene<T>& s, const A& accel, int px, int py, c
             p.triangle = hit.id, p.u = hit.u, p.v = hit.v;
             return p;
         }
-        if (m.kind == MaterialKind::mirror) p.weight *= m.ks;
-        ray = detail::vpl_spawn(x, n, detail::specular_direction(m, d, ng, rng.uniform<T>()));
+        p.weight *= specular_albedo(m);
+        ray = detail::vpl_spawn(x, n, specular_direction(m, d, ng, rng.uniform<T>()));
     }
     return p;
 }
