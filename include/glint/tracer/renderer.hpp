@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <mutex>
 #include <span>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -56,11 +57,18 @@ struct RenderSettings {
     int lambda_filter_radius = 1;
 };
 
+/// An integrator's own layer of the image, by name (the VPL method's "indirect" part).
+struct FilmLayer {
+    std::string name;
+    Image<Rgb<float>> pixels;
+};
+
 /// The layers of an image.
 struct Film {
     Image<Rgb<float>> image;     // mean radiance per pixel
     Image<Rgb<float>> variance;  // variance of that mean (sample variance / spp)
     Image<float> lambda;         // mean lambda of the primary vertices (CorrelatedDirect)
+    std::vector<FilmLayer> layers;  // what integrators add in finish()
 };
 
 struct RenderResult : Film {
@@ -113,18 +121,44 @@ private:
     bool jitter_;
 };
 
-/// An integrator: the radiance along a camera ray, with statistics of its own per pixel
-/// (`pixel_state`, an empty struct when it keeps none) that it turns into film values once,
-/// in finish(), after every sample is taken. `states` holds one pixel_state per pixel, row by
-/// row; `state` is its pixel's.
+/// An integrator that needs scratch state of its own per rendering thread (a visibility
+/// policy's caches): make_thread_state() makes one for each thread, which passes it to every
+/// radiance() it calls.
+template <class I>
+concept ThreadStateIntegrator = requires(const I& in) {
+    { in.make_thread_state() } -> std::same_as<typename I::thread_state>;
+};
+
+/// An integrator: the radiance along a camera ray (with the thread's thread_state where it has
+/// one), with statistics of its own per pixel (`pixel_state`, an empty struct when it keeps
+/// none) that it turns into film values once, in finish(), after every sample is taken.
+/// `states` holds one pixel_state per pixel, row by row; `state` is its pixel's.
 template <class I, class S>
 concept Integrator =
     std::default_initializable<typename I::pixel_state> &&
-    requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state, Film& film,
-             std::span<const typename I::pixel_state> states) {
-        { in.radiance(ray, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
-        in.finish(film, states);
-    };
+    requires(const I& in, Film& film, std::span<const typename I::pixel_state> states) { in.finish(film, states); } &&
+    ((ThreadStateIntegrator<I> &&
+      requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state,
+               typename I::thread_state& thread) {
+          { in.radiance(ray, sampler, state, thread) } -> std::same_as<PathSample<typename I::scalar_type>>;
+      }) ||
+     (!ThreadStateIntegrator<I> &&
+      requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state) {
+          { in.radiance(ray, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
+      }));
+
+namespace detail {
+
+struct NoThreadState {};
+
+/// A rendering thread's scratch state for integrator `in` (nothing for most integrators).
+template <class I>
+auto make_thread_state(const I& in) {
+    if constexpr (ThreadStateIntegrator<I>) return in.make_thread_state();
+    else return NoThreadState{};
+}
+
+}  // namespace detail
 
 template <class C>
 class Renderer {
@@ -147,12 +181,14 @@ public:
         const auto start = std::chrono::steady_clock::now();
         auto worker = [&] {
             S sampler = prototype;
+            auto thread = detail::make_thread_state(integrator);
             Tally tally;
             for (int t = next++; t < tiles; t = next++) {
                 const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
                 for (int y = y0; y < std::min(y0 + tile, h); ++y)
                     for (int x = x0; x < std::min(x0 + tile, w); ++x)
-                        tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)], out);
+                        tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)],
+                                              thread, out);
                 progress(++done, tiles);
             }
             rays += tally.rays;
@@ -184,15 +220,19 @@ private:
     int spp() const { return std::max(1, settings_.spp); }
 
     /// The pixel's samples, their mean and the variance of the mean (Welford's update).
-    template <class I, class S>
+    template <class I, class S, class Th>
         requires Integrator<I, S> && CameraPolicy<C, S>
-    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Film& film) const {
+    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Th& thread,
+                       Film& film) const {
         using T = typename I::scalar_type;
         Rgb<T> mean(T(0)), m2(T(0));
         Tally tally;
         const int n = spp();
         for (int i = 0; i < n; ++i) {
-            const PathSample<T> s = integrator.radiance(camera_.ray(x, y, std::uint64_t(i), sampler), sampler, state);
+            const Ray<T> ray = camera_.ray(x, y, std::uint64_t(i), sampler);
+            PathSample<T> s;
+            if constexpr (ThreadStateIntegrator<I>) s = integrator.radiance(ray, sampler, state, thread);
+            else s = integrator.radiance(ray, sampler, state);
             tally.rays += s.rays;
             tally.capped += s.capped ? 1 : 0;
             const Rgb<T> L = s.L.is_finite() ? s.L : Rgb<T>(T(0));  // never let one sample poison a pixel
