@@ -78,7 +78,12 @@ public:
         pixel_state state;
         return radiance(ray, sampler, state);
     }
-    void finish(Film& film, std::span<const pixel_state> states) const { direct_.finish(film, states); }
+    /// The direct-lighting policy's film values, on any film it can finish on.
+    template <class F>
+        requires requires(const D& d, F& film, std::span<const pixel_state> states) { d.finish(film, states); }
+    void finish(F& film, std::span<const pixel_state> states) const {
+        direct_.finish(film, states);
+    }
 
     const D& direct() const { return direct_; }
 
