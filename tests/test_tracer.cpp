@@ -268,7 +268,8 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
             sampler.start_pixel_sample(0, 0, std::uint64_t(i));
             CHECK(pooled.radiance(down, sampler, states[0]).L[0] == 0.0f);
         }
-        Film film{Image<Rgb<float>>(1, 1), Image<Rgb<float>>(1, 1), Image<float>(1, 1)};
+        Film film;
+        film.resize(1, 1);
         pooled.finish(film, std::span<const Tracer::pixel_state>(states));
         CHECK(film.image.at(0, 0)[0] == doctest::Approx(expected).epsilon(1e-4));
         CHECK(film.variance.at(0, 0)[0] <= 1e-6 * expected * expected);
