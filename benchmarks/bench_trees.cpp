@@ -386,13 +386,13 @@ void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector
 void compare_spatial(const Scene& sc, const Options& opt) {
     BvhBuildOptions bo = opt.bvh;
     bo.threads = opt.build_threads;
-    auto t0 = Clock::now();
+    auto build_start = Clock::now();
     const MeshBvh<MollerTrumbore<float>, 8> plain(sc.mesh, bo);
-    const double plain_s = seconds_since(t0);
+    const double plain_s = seconds_since(build_start);
     bo.spatial_splits = true;
-    t0 = Clock::now();
+    build_start = Clock::now();
     const MeshBvh<MollerTrumbore<float>, 8> split(sc.mesh, bo);
-    const double split_s = seconds_since(t0);
+    const double split_s = seconds_since(build_start);
     const auto pass = [](const MeshBvh<MollerTrumbore<float>, 8>& acc, const std::vector<Ray<float>>& rays) {
         std::size_t hits = 0;
         const double t0 = pass_clock();
