@@ -8,6 +8,7 @@
 // 2. The tree: MeshBvh over an IndexedMesh view (pointer, count, byte stride, indices).
 // 3. Camera rays for the closest hit, a shadow ray toward the sun for any hit, Lambert shading.
 // 4. The image, written as a binary PPM.
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -45,8 +46,10 @@ int main(int argc, char** argv) {
 
     // 2. The tree, built on two threads straight from those arrays.
     const IndexedMesh<float> mesh{vertices.data(), vertices.size(), sizeof(Vertex), indices.data(), indices.size() / 3};
+    const auto build_start = std::chrono::steady_clock::now();
     const MeshBvh<MollerTrumbore<float>, 8> bvh(mesh, {.threads = 2});
-    std::printf("%zu triangles, built in %.3f s\n", mesh.triangle_count, bvh.build_seconds());
+    const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
+    std::printf("%zu triangles, built in %.3f s\n", mesh.triangle_count, build_s);
 
     // 3. A pinhole camera above the terrain, the sun low in the sky.
     const int width = 512, height_px = 384;

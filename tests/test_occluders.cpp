@@ -169,7 +169,6 @@ TEST_CASE("delaunay: random, gridded, coplanar, cospherical and duplicate sets")
         for (auto& q : pts) q = rand_point(rng);
         Delaunay<double> d(pts);
         check_delaunay(d, pts.size());
-        MESSAGE(n_random << " random points: " << d.build_seconds() << " s");
     }
     SUBCASE("grid") {
         std::vector<Vec3d> pts;
@@ -178,14 +177,12 @@ TEST_CASE("delaunay: random, gridded, coplanar, cospherical and duplicate sets")
                 for (int z = 0; z < grid; ++z) pts.push_back(Vec3d(x, y, z) * 0.1);
         Delaunay<double> d(pts);
         check_delaunay(d, pts.size());
-        MESSAGE(pts.size() << " gridded points: " << d.build_seconds() << " s");
     }
     SUBCASE("cospherical") {
         auto pts = integer_sphere_points(1105 * 1105);  // 6630 exactly cospherical points
         const std::size_t n = pts.size();
         Delaunay<double> d(pts);
         check_delaunay(d, n);
-        MESSAGE(n << " cospherical points: " << d.build_seconds() << " s");
     }
     SUBCASE("coplanar layers, float input, duplicates") {
         std::vector<Vec3f> pts;

@@ -28,6 +28,7 @@
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
 #include <glint/sampling/warps.hpp>
+#include <glint/tracer/brdf.hpp>
 
 using namespace glint;
 
@@ -603,8 +604,10 @@ namespace {
 
 using Rgbd = Rgb<double>;
 
-/// One reflection with L_in(w) = (1 + z) * tint: the exact reflected radiance of
-/// DiffuseGlossyBrdf is kd (1 + 2/3) tint + ks (1 + (e+1)/(e+2)) tint.
+/// One reflection with L_in(w) = (1 + z) * tint off glint's material (tracer/brdf.hpp) seen
+/// from the normal, where its Phong lobe (n + 2)/(2 pi) cos^e(theta) cos(theta) is about the
+/// normal and covers the hemisphere: the exact reflected radiance is
+/// kd (1 + 2/3) tint + ks (1 + (e+2)/(e+3)) tint.
 /// W divides the whole w by the selected lobe's density: with the glossy lobe selected,
 /// w_d / p_g ~ cos^(1-e), whose variance is infinite for e >= 3 (000 line 1210: "the specular
 /// sampling cannot sample the whole domain of the diffuse reflection"), so a finite-sample mean
@@ -613,11 +616,12 @@ using Rgbd = Rgb<double>;
 template <BrdfSelection C, class R>
 void check_scatter_unbiased(const R& roulette, std::uint64_t seed, int depth = 0) {
     const double exponent = C == BrdfSelection::weighted ? 2.0 : 20.0;
-    DiffuseGlossyBrdf<double, 3> brdf{Rgbd(0.5, 0.3, 0.1), Rgbd(0.2, 0.4, 0.6), exponent};
+    const auto material = Material<double>::glossy(Rgbd(0.5, 0.3, 0.1), Rgbd(0.2, 0.4, 0.6), exponent);
+    const SurfaceBrdf<double> brdf(material, Vec3<double>(0, 0, 1));
     const Rgbd tint(1.0, 0.5, 2.0);
     const Rgbd throughput(0.2, 1.0, 0.6);  // what the walk carried so far
-    const double e = brdf.exponent;
-    const Rgbd exact = (brdf.kd * (1 + 2.0 / 3.0) + brdf.ks * (1 + (e + 1) / (e + 2))) * tint;
+    const double e = exponent;
+    const Rgbd exact = (material.kd * (1 + 2.0 / 3.0) + material.ks * (1 + (e + 2) / (e + 3))) * tint;
     Pcg32 rng(seed);
     std::array<Stats, 3> stats;
     const int n = 1'000'000;
@@ -675,7 +679,6 @@ static_assert(RoulettePolicy<SpectralRoulette<double, 8>, double, 8>);
 static_assert(RoulettePolicy<RadianceEstimateRoulette<float, 3>, float, 3>);
 static_assert(RoulettePolicy<ThroughputRoulette<float, 3>, float, 3>);
 static_assert(RoulettePolicy<NoRoulette<double, 8>, double, 8>);
-static_assert(MultiLobeBrdf<DiffuseGlossyBrdf<float, 3>, float, 3>);
 
 TEST_CASE("statistics: DIS with every roulette is unbiased (10^6 samples)") {
     check_all_roulettes<BrdfSelection::decomposition>(100);
@@ -1195,7 +1198,8 @@ TEST_CASE("statistics: correlated environment lighting with both main parts, hal
 
 TEST_CASE("stress: float instantiations, degenerate and non-finite inputs give no NaN") {
     // float versions compile and agree with double.
-    DiffuseGlossyBrdf<float, 3> brdf{Rgb<float>(0.5f, 0.3f, 0.1f), Rgb<float>(0.2f, 0.4f, 0.6f), 20.0f};
+    const SurfaceBrdf<float> brdf(Material<float>::glossy(Rgb<float>(0.5f, 0.3f, 0.1f), Rgb<float>(0.2f, 0.4f, 0.6f), 20.0f),
+                                  Vec3<float>(0, 0, 1));
     const auto s = scatter<BrdfSelection::mis>(brdf, SpectralRoulette<float, 3>{}, Rgb<float>(1.0f), 0.1f,
                                                Vec2<float>(0.3f, 0.7f), 0);
     CHECK_FALSE(s.terminated());

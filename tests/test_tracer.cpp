@@ -13,6 +13,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
@@ -268,7 +269,8 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
             sampler.start_pixel_sample(0, 0, std::uint64_t(i));
             CHECK(pooled.radiance(down, sampler, states[0]).L[0] == 0.0f);
         }
-        Film film{Image<Rgb<float>>(1, 1), Image<Rgb<float>>(1, 1), Image<float>(1, 1)};
+        Film film;
+        film.resize(1, 1);
         pooled.finish(film, std::span<const Tracer::pixel_state>(states));
         CHECK(film.image.at(0, 0)[0] == doctest::Approx(expected).epsilon(1e-4));
         CHECK(film.variance.at(0, 0)[0] <= 1e-6 * expected * expected);
@@ -455,6 +457,60 @@ TEST_CASE("policies: a direct-lighting policy defined outside the library render
     CAPTURE(far);
     CHECK(counted > 1000);
     CHECK(far <= counted / 100);
+}
+
+namespace {
+
+/// A film of one's own, outside include/ (a FilmPolicy): it keeps each pixel's luminance and
+/// its standard error, and counts how often each pixel is written.
+struct LuminanceFilm {
+    int width = 0, height = 0;
+    std::vector<float> luminance, standard_error;
+    std::vector<int> writes;
+
+    void resize(int w, int h) {
+        width = w, height = h;
+        luminance.assign(std::size_t(w) * std::size_t(h), -1.0f);
+        standard_error.assign(luminance.size(), -1.0f);
+        writes.assign(luminance.size(), 0);
+    }
+    void set_pixel(int x, int y, const Rgb<float>& mean, const Rgb<float>& variance_of_mean) {
+        const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
+        luminance[i] = mean.luminance();
+        standard_error[i] = std::sqrt(variance_of_mean.luminance());
+        ++writes[i];
+    }
+};
+
+}  // namespace
+
+TEST_CASE("policies: a film defined outside the library receives exactly the pixels of the default film") {
+    const Scene<float> s = builtin_scene<float>("cornell");
+    const RenderAccel accel(s.triangles);
+    RenderSettings settings;
+    settings.width = 20, settings.height = 12;  // not a multiple of the 16-pixel tiles
+    settings.spp = 8;
+    settings.threads = 2;
+    using Roulette = ClassicRoulette<float, 3>;
+    const PathTracer<RenderAccel, RandomSampler<float>, Roulette, MisDirect<float>, NoEnvironment<float>, false> tracer(
+        s, accel, Roulette{}, settings);
+    static_assert(FilmPolicy<LuminanceFilm, float>);
+    const RenderResult reference = render_image(s, settings, tracer, RandomSampler<float>(5));
+    LuminanceFilm film;
+    const RenderStats stats = render_image(s, settings, tracer, RandomSampler<float>(5), film);
+    REQUIRE(film.luminance.size() == reference.image.size());
+    CHECK(stats.paths == reference.paths);
+    CHECK(stats.rays == reference.rays);
+    int once = 0, equal = 0, lit = 0;
+    for (std::size_t i = 0; i < film.luminance.size(); ++i) {
+        once += film.writes[i] == 1;
+        equal += film.luminance[i] == reference.image.pixels[i].luminance() &&
+                 film.standard_error[i] == std::sqrt(reference.variance.pixels[i].luminance());
+        lit += film.luminance[i] > 0.0f;
+    }
+    CHECK(once == int(film.luminance.size()));
+    CHECK(equal == int(film.luminance.size()));
+    CHECK(lit > int(film.luminance.size()) / 2);
 }
 
 TEST_CASE("convergence: the Cornell box's RMSE falls as 1/sqrt(spp)") {

@@ -28,7 +28,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -60,7 +59,6 @@ public:
     explicit Delaunay(std::span<const Vec3<T>> pts, std::uint64_t seed = 1) { build(pts, seed); }
 
     void build(std::span<const Vec3<T>> pts, std::uint64_t seed = 1) {
-        const auto t0 = std::chrono::steady_clock::now();
         tets_.clear();
         alive_.clear();
         free_.clear();
@@ -114,7 +112,6 @@ public:
         last_ = 0;
         rng_ = Pcg32(seed, 77);
         for (const auto& o : order) insert(o.second);
-        build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
 
     /// All points, the 4 super vertices first: input point i is points()[i + 4].
@@ -139,7 +136,6 @@ public:
         return out;
     }
     std::size_t duplicate_count() const { return duplicates_; }
-    double build_seconds() const { return build_seconds_; }
 
 private:
     static std::uint32_t spread(std::uint32_t x) {
@@ -347,7 +343,6 @@ private:
     std::int32_t last_ = 0;
     Pcg32 rng_;
     std::size_t duplicates_ = 0;
-    double build_seconds_ = 0;
 };
 
 }  // namespace glint

@@ -51,7 +51,6 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/spectrum.hpp>
-#include <glint/sampling/warps.hpp>
 
 namespace glint {
 
@@ -410,27 +409,5 @@ ScatterSample<T, N> scatter(const M& brdf, const R& roulette, const Spectrum<T, 
     }
     return out;
 }
-
-/// A Lambertian lobe (albedo kd) plus a normalized cosine-power lobe about the normal (albedo
-/// ks, exponent e), each sampled exactly: w_d / p_d = kd and w_g / p_g = ks. Both lobes cover
-/// the whole hemisphere, so DIS, W and MIS are all unbiased on it. Satisfies MultiLobeBrdf.
-template <Scalar T, std::size_t N>
-struct DiffuseGlossyBrdf {
-    Spectrum<T, N> kd{};
-    Spectrum<T, N> ks{};
-    T exponent = 20;
-
-    std::size_t lobe_count() const { return 2; }
-    Spectrum<T, N> albedo(std::size_t i) const { return i == 0 ? kd : ks; }
-    Vec3<T> sample(std::size_t i, const Vec2<T>& u) const {
-        return i == 0 ? square_to_cosine_hemisphere(u) : square_to_cosine_power_hemisphere(u, exponent);
-    }
-    T pdf(std::size_t i, const Vec3<T>& wi) const {
-        return i == 0 ? cosine_hemisphere_pdf(wi.z) : cosine_power_hemisphere_pdf(wi.z, exponent);
-    }
-    Spectrum<T, N> eval(std::size_t i, const Vec3<T>& wi) const {
-        return (i == 0 ? kd : ks) * pdf(i, wi);
-    }
-};
 
 }  // namespace glint

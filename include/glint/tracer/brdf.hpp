@@ -1,6 +1,8 @@
-// glint/tracer/brdf.hpp: the scene materials as multi-lobe BRDFs in a local shading frame
-// (z = normal, wo = direction towards the viewer), for glint::scatter (sampling/roulette.hpp)
-// and for light sampling.
+// glint/tracer/brdf.hpp: glint's one material model. A scene Material (tracer/scene.hpp) is
+// either a multi-lobe BRDF in a local shading frame (z = normal, wo = direction towards the
+// viewer), SurfaceBrdf, for glint::scatter (sampling/roulette.hpp) and light sampling, or a
+// specular surface (mirror, dielectric) with one scattering direction, specular_scatter. The
+// path tracer, the VPL method (shooting and gathering) and the roulette tests all use it.
 //
 // Lobe 0 is Lambertian (kd / pi, cosine sampled). Lobe 1, for glossy materials, is the
 // energy-normalized Phong lobe ks (n + 2) / (2 pi) cos^n(alpha) about the mirror direction
@@ -8,7 +10,9 @@
 // sample below the horizon has w = 0 (its weight is zero, which is what makes the Phong
 // density unable to cover the diffuse lobe: the W estimator of 000 section 2.1 is biased
 // here, DIS and MIS are not). Lobe albedos: kd, and ks (the Phong lobe's albedo at normal
-// incidence; the roulette only needs a positive selection weight).
+// incidence; the roulette only needs a positive selection weight). Seen from the normal
+// (wo = z) the Phong lobe is about the normal and covers the whole hemisphere, so there DIS,
+// W and MIS are all unbiased (tests/test_sampling.cpp checks them on it).
 #pragma once
 
 #include <algorithm>
@@ -17,6 +21,7 @@
 #include <limits>
 
 #include <glint/core/math.hpp>
+#include <glint/core/optics.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/warps.hpp>
@@ -84,11 +89,8 @@ public:
     }
     /// Density of sample_by_albedo, for multiple importance sampling with light sampling.
     T sampling_pdf(const Vec3<T>& wi) const {
-        if (lobes_ == 1) return pdf(0, wi);
-        const T a0 = kd_.luminance(), a1 = ks_.luminance();
-        if (!(a0 + a1 > T(0))) return T(0);
         const T p0 = lobe0_probability();
-        return p0 * pdf(0, wi) + (T(1) - p0) * pdf(1, wi);
+        return p0 < T(1) ? p0 * pdf(0, wi) + (T(1) - p0) * pdf(1, wi) : pdf(0, wi);
     }
     bool diffuse_only() const { return lobes_ == 1; }
     const Rgb<T>& kd() const { return kd_; }
@@ -101,5 +103,31 @@ private:
 };
 
 static_assert(MultiLobeBrdf<SurfaceBrdf<float>, float, 3>);
+
+/// The albedo a walk carries through a specular Material: ks for a mirror, 1 for a dielectric
+/// (what it does not reflect it transmits).
+template <Scalar T>
+Rgb<T> specular_albedo(const Material<T>& m) {
+    return m.kind == MaterialKind::mirror ? m.ks : Rgb<T>(T(1));
+}
+
+/// The one direction a specular Material (precondition: m.specular()) sends the ray direction
+/// d in, at a surface of geometric normal ng (either side): a mirror reflects; a dielectric
+/// reflects with the Fresnel reflectance (core/optics.hpp; ior relative to the side ng points
+/// away from) and refracts otherwise, chosen by u in [0, 1).
+template <Scalar T>
+Vec3<T> specular_direction(const Material<T>& m, const Vec3<T>& d, const Vec3<T>& ng, T u) {
+    const Vec3<T> dn = safe_normalize(d);
+    const bool inside = glm::dot(dn, ng) > T(0);
+    const Vec3<T> n = inside ? -ng : ng;  // facing the incoming ray
+    const T cos_i = -glm::dot(dn, n);
+    const Vec3<T> reflected = dn + n * (T(2) * cos_i);
+    if (m.kind == MaterialKind::mirror) return reflected;
+    const T eta = inside ? m.ior : T(1) / m.ior;
+    Vec3<T> refracted;
+    const T cos_t = refract(dn, n, eta, refracted);
+    if (cos_t < T(0) || u < fresnel_dielectric(cos_i, cos_t, eta)) return reflected;
+    return refracted;
+}
 
 }  // namespace glint

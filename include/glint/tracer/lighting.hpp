@@ -75,7 +75,8 @@ struct NoPixelStatistics {
     struct pixel_state {};
     struct vertex_record {};
     void record(pixel_state&, const vertex_record&, const Rgb<T>&) const {}
-    void finish(Film&, std::span<const pixel_state>) const {}
+    template <class F>
+    void finish(F&, std::span<const pixel_state>) const {}
 };
 
 /// The balance heuristic's weight of a strategy of density a against one of density b.

@@ -32,7 +32,6 @@
 #include <vector>
 
 #include <glint/core/math.hpp>
-#include <glint/core/optics.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/intersection/triangle.hpp>
@@ -46,22 +45,6 @@
 #include <glint/tracer/shading.hpp>
 
 namespace glint {
-
-/// Dielectric: Fresnel reflectance (core/optics.hpp) chooses reflection or refraction by u;
-/// ior is relative to the side ng points away from.
-template <Scalar T>
-Vec3<T> fresnel_refract_or_reflect(const Vec3<T>& d, const Vec3<T>& ng, T ior, T u) {
-    const Vec3<T> dn = safe_normalize(d);
-    const bool inside = glm::dot(dn, ng) > T(0);
-    const Vec3<T> n = inside ? -ng : ng;
-    const T eta = inside ? ior : T(1) / ior;
-    const T cos_i = -glm::dot(dn, n);
-    const Vec3<T> reflected = dn + n * (T(2) * cos_i);
-    Vec3<T> refracted;
-    const T cos_t = refract(dn, n, eta, refracted);
-    if (cos_t < T(0) || u < fresnel_dielectric(cos_i, cos_t, eta)) return reflected;
-    return refracted;
-}
 
 template <class Accel, class S, class R, class D, class E, bool Points, Scalar T = float>
     requires Sampler<S, T> && RoulettePolicy<R, T, 3> && TracerAccelerator<Accel, T> &&
@@ -96,7 +79,12 @@ public:
         pixel_state state;
         return radiance(ray, sampler, state);
     }
-    void finish(Film& film, std::span<const pixel_state> states) const { direct_.finish(film, states); }
+    /// The direct-lighting policy's film values, on any film it can finish on.
+    template <class F>
+        requires requires(const D& d, F& film, std::span<const pixel_state> states) { d.finish(film, states); }
+    void finish(F& film, std::span<const pixel_state> states) const {
+        direct_.finish(film, states);
+    }
 
     const D& direct() const { return direct_; }
 
@@ -209,20 +197,13 @@ private:
     /// offset); false when the walk stops.
     bool specular_step(const Material<T>& m, const ShadingPoint<T>& sp, const Vec3<T>& ng, int depth, S& sampler,
                        Ray<T>& ray, Rgb<T>& F, Rgb<T>& L) const {
-        const Vec3<T>& n = sp.n;
-        Vec3<T> wi;
-        Rgb<T> albedo = m.ks;
-        if (m.kind == MaterialKind::mirror) {
-            wi = ray.direction - n * (T(2) * glm::dot(ray.direction, n));
-        } else {
-            wi = fresnel_refract_or_reflect(ray.direction, ng, m.ior, sampler.get_1d());
-            albedo = Rgb<T>(T(1));
-        }
-        const std::array<Rgb<T>, 1> lobes{albedo};
+        const T u = m.kind == MaterialKind::dielectric ? sampler.get_1d() : T(0);  // only a dielectric chooses
+        const Vec3<T> wi = specular_direction(m, ray.direction, ng, u);
+        const std::array<Rgb<T>, 1> lobes{specular_albedo(m)};
         const auto sel = select_lobe(roulette_, F, std::span<const Rgb<T>>(lobes), sampler.get_1d(), depth);
         if constexpr (R::has_radiance_estimate) L += F * sel.offset;
         if (sel.terminated()) return false;
-        F *= albedo / sel.probability[0];
+        F *= lobes[0] / sel.probability[0];
         ray = spawn(sp, wi);
         return true;
     }

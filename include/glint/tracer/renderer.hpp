@@ -1,11 +1,13 @@
 // glint/tracer/renderer.hpp: the renderer around an integrator.
 //
-// The renderer owns what every image needs whatever the light transport: the film and its
-// layers, 16x16 tiles over std::thread workers, the progress bar and the statistics (rays,
-// paths, capped walks, seconds). For each pixel sample it asks its camera policy for a ray and
-// the integrator (PathTracer, or any type that satisfies Integrator) for the radiance along
-// it; after all samples it lets the integrator finish the film once (correlated direct
-// lighting pools its lambda there, 000 section 3.1.1). Every pixel sample draws from the
+// The renderer owns what every image needs whatever the light transport: 16x16 tiles over
+// std::thread workers, the progress bar, the statistics (rays, paths, capped walks, seconds)
+// and each pixel's mean and variance, which it hands to a film policy (Film, the default, keeps
+// the image's layers; any FilmPolicy plugs in). For each pixel sample it asks its camera
+// policy for a ray and the integrator (PathTracer, VplIntegrator, or any type that satisfies
+// Integrator) for the radiance along it; after all samples it lets the integrator finish the
+// film once (correlated direct lighting pools its lambda there, 000 section 3.1.1; the VPL
+// method adds its indirect layer). Every pixel sample draws from the
 // sampler's stream for (x, y, sample index), so the image does not depend on the thread count
 // or the order tiles are rendered in.
 #pragma once
@@ -18,6 +20,7 @@
 #include <cstdio>
 #include <mutex>
 #include <span>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -56,19 +59,54 @@ struct RenderSettings {
     int lambda_filter_radius = 1;
 };
 
-/// The layers of an image.
+/// An integrator's own layer of the image, by name (the VPL method's "indirect" part).
+struct FilmLayer {
+    std::string name;
+    Image<Rgb<float>> pixels;
+};
+
+/// A film policy: what the renderer does with each pixel's estimate. resize(width, height)
+/// comes first; then set_pixel(x, y, mean, variance of the mean) once per pixel, from the
+/// thread that rendered it (pixels are disjoint: a film that stores per pixel needs no lock);
+/// after all pixels, the integrator's finish(film, states) sees the same film.
+template <class F, class T>
+concept FilmPolicy = Scalar<T> && requires(F& film, int x, const Rgb<T>& value) {
+    film.resize(x, x);
+    film.set_pixel(x, x, value, value);
+};
+
+/// The renderer's default film: the image's layers.
 struct Film {
     Image<Rgb<float>> image;     // mean radiance per pixel
     Image<Rgb<float>> variance;  // variance of that mean (sample variance / spp)
     Image<float> lambda;         // mean lambda of the primary vertices (CorrelatedDirect)
+    std::vector<FilmLayer> layers;  // what integrators add in finish()
+
+    void resize(int width, int height) {
+        image = Image<Rgb<float>>(width, height);
+        variance = Image<Rgb<float>>(width, height);
+        lambda = Image<float>(width, height);
+        layers.clear();
+    }
+    template <Scalar T>
+    void set_pixel(int x, int y, const Rgb<T>& mean, const Rgb<T>& variance_of_mean) {
+        for (std::size_t c = 0; c < 3; ++c) {
+            image.at(x, y)[c] = float(mean[c]);
+            variance.at(x, y)[c] = float(variance_of_mean[c]);
+        }
+    }
 };
 
-struct RenderResult : Film {
+/// What a render measured.
+struct RenderStats {
     double seconds = 0;
     std::uint64_t rays = 0;          // closest-hit plus shadow rays
     std::uint64_t paths = 0;         // camera paths (pixel samples)
     std::uint64_t capped_walks = 0;  // walks cut at RenderSettings::max_depth (biased)
 };
+
+/// A render on the default film.
+struct RenderResult : Film, RenderStats {};
 
 /// What an integrator returns for one camera ray: the radiance, the rays it traced and
 /// whether its walk was cut by a depth cap.
@@ -113,46 +151,81 @@ private:
     bool jitter_;
 };
 
-/// An integrator: the radiance along a camera ray, with statistics of its own per pixel
-/// (`pixel_state`, an empty struct when it keeps none) that it turns into film values once,
-/// in finish(), after every sample is taken. `states` holds one pixel_state per pixel, row by
-/// row; `state` is its pixel's.
-template <class I, class S>
+/// An integrator that needs scratch state of its own per rendering thread (a visibility
+/// policy's caches): make_thread_state() makes one for each thread, which passes it to every
+/// radiance() it calls.
+template <class I>
+concept ThreadStateIntegrator = requires(const I& in) {
+    { in.make_thread_state() } -> std::same_as<typename I::thread_state>;
+};
+
+/// An integrator: the radiance along a camera ray (with the thread's thread_state where it has
+/// one), with statistics of its own per pixel (`pixel_state`, an empty struct when it keeps
+/// none) that it turns into values of film F once, in finish(), after every sample is taken.
+/// `states` holds one pixel_state per pixel, row by row; `state` is its pixel's.
+template <class I, class S, class F = Film>
 concept Integrator =
     std::default_initializable<typename I::pixel_state> &&
-    requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state, Film& film,
-             std::span<const typename I::pixel_state> states) {
-        { in.radiance(ray, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
-        in.finish(film, states);
-    };
+    requires(const I& in, F& film, std::span<const typename I::pixel_state> states) { in.finish(film, states); } &&
+    ((ThreadStateIntegrator<I> &&
+      requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state,
+               typename I::thread_state& thread) {
+          { in.radiance(ray, sampler, state, thread) } -> std::same_as<PathSample<typename I::scalar_type>>;
+      }) ||
+     (!ThreadStateIntegrator<I> &&
+      requires(const I& in, const Ray<typename I::scalar_type>& ray, S& sampler, typename I::pixel_state& state) {
+          { in.radiance(ray, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
+      }));
+
+namespace detail {
+
+struct NoThreadState {};
+
+/// A rendering thread's scratch state for integrator `in` (nothing for most integrators).
+template <class I>
+auto make_thread_state(const I& in) {
+    if constexpr (ThreadStateIntegrator<I>) return in.make_thread_state();
+    else return NoThreadState{};
+}
+
+}  // namespace detail
 
 template <class C>
 class Renderer {
 public:
     Renderer(const C& camera, const RenderSettings& settings) : camera_(camera), settings_(settings) {}
 
-    /// Renders with `integrator` and one sampler per thread, copied from `prototype`.
+    /// Renders with `integrator` and one sampler per thread, copied from `prototype`, on the
+    /// default film.
     template <class I, class S>
         requires Integrator<I, S> && CameraPolicy<C, S>
     RenderResult render(const I& integrator, const S& prototype) const {
+        RenderResult out;
+        static_cast<RenderStats&>(out) = render(integrator, prototype, static_cast<Film&>(out));
+        return out;
+    }
+
+    /// Renders on `film`, a FilmPolicy.
+    template <class I, class S, class F>
+        requires Integrator<I, S, F> && CameraPolicy<C, S> && FilmPolicy<F, typename I::scalar_type>
+    RenderStats render(const I& integrator, const S& prototype, F& film) const {
         const int w = settings_.width, h = settings_.height, tile = 16, tx = (w + tile - 1) / tile;
         const int tiles = tx * ((h + tile - 1) / tile);
-        RenderResult out;
-        out.image = Image<Rgb<float>>(w, h);
-        out.variance = Image<Rgb<float>>(w, h);
-        out.lambda = Image<float>(w, h);
+        film.resize(w, h);
         std::vector<typename I::pixel_state> states(std::size_t(w) * std::size_t(h));
         std::atomic<int> next{0}, done{0};
         std::atomic<std::uint64_t> rays{0}, capped{0};
         const auto start = std::chrono::steady_clock::now();
         auto worker = [&] {
             S sampler = prototype;
+            auto thread = detail::make_thread_state(integrator);
             Tally tally;
             for (int t = next++; t < tiles; t = next++) {
                 const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
                 for (int y = y0; y < std::min(y0 + tile, h); ++y)
                     for (int x = x0; x < std::min(x0 + tile, w); ++x)
-                        tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)], out);
+                        tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)],
+                                              thread, film);
                 progress(++done, tiles);
             }
             rays += tally.rays;
@@ -163,7 +236,8 @@ public:
         for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
         worker();
         for (auto& th : pool) th.join();
-        integrator.finish(out, std::span<const typename I::pixel_state>(states));
+        integrator.finish(film, std::span<const typename I::pixel_state>(states));
+        RenderStats out;
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         out.rays = rays;
         out.capped_walks = capped;
@@ -184,15 +258,18 @@ private:
     int spp() const { return std::max(1, settings_.spp); }
 
     /// The pixel's samples, their mean and the variance of the mean (Welford's update).
-    template <class I, class S>
-        requires Integrator<I, S> && CameraPolicy<C, S>
-    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Film& film) const {
+    template <class I, class S, class Th, class F>
+    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Th& thread,
+                       F& film) const {
         using T = typename I::scalar_type;
         Rgb<T> mean(T(0)), m2(T(0));
         Tally tally;
         const int n = spp();
         for (int i = 0; i < n; ++i) {
-            const PathSample<T> s = integrator.radiance(camera_.ray(x, y, std::uint64_t(i), sampler), sampler, state);
+            const Ray<T> ray = camera_.ray(x, y, std::uint64_t(i), sampler);
+            PathSample<T> s;
+            if constexpr (ThreadStateIntegrator<I>) s = integrator.radiance(ray, sampler, state, thread);
+            else s = integrator.radiance(ray, sampler, state);
             tally.rays += s.rays;
             tally.capped += s.capped ? 1 : 0;
             const Rgb<T> L = s.L.is_finite() ? s.L : Rgb<T>(T(0));  // never let one sample poison a pixel
@@ -200,10 +277,7 @@ private:
             mean += delta / T(i + 1);
             m2 += delta * (L - mean);
         }
-        for (std::size_t c = 0; c < 3; ++c) {
-            film.image.at(x, y)[c] = float(mean[c]);
-            film.variance.at(x, y)[c] = n > 1 ? float(m2[c] / T(n - 1) / T(n)) : 0.0f;
-        }
+        film.set_pixel(x, y, mean, n > 1 ? m2 / T(n - 1) / T(n) : Rgb<T>(T(0)));
         return tally;
     }
 
@@ -226,6 +300,14 @@ template <Scalar T, class I, class S>
     requires Integrator<I, S> && CameraPolicy<PixelCamera<T>, S>
 RenderResult render_image(const Scene<T>& scene, const RenderSettings& settings, const I& integrator, const S& sampler) {
     return Renderer<PixelCamera<T>>(PixelCamera<T>(scene.camera, settings), settings).render(integrator, sampler);
+}
+
+/// The same on a film of one's own (a FilmPolicy).
+template <Scalar T, class I, class S, class F>
+    requires Integrator<I, S, F> && CameraPolicy<PixelCamera<T>, S> && FilmPolicy<F, typename I::scalar_type>
+RenderStats render_image(const Scene<T>& scene, const RenderSettings& settings, const I& integrator, const S& sampler,
+                         F& film) {
+    return Renderer<PixelCamera<T>>(PixelCamera<T>(scene.camera, settings), settings).render(integrator, sampler, film);
 }
 
 }  // namespace glint

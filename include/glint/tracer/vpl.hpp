@@ -8,8 +8,8 @@
 // (the extraction lost the fraction bars and product limits; repaired from Fig. 1.5 and the
 // definitions below the formula: p_light and p are the light-sample and direction densities,
 // s(z_i) the continuation probability, w = f_r cos). Walks continue by a roulette policy of
-// sampling/roulette.hpp (RoulettePolicy) through scatter() with a diffuse lobe, so
-// w / (p s) = albedo / s. Gathering: a shading point x seen through a pixel
+// sampling/roulette.hpp (RoulettePolicy) through scatter() with the Lambertian material of
+// tracer/brdf.hpp, so w / (p s) = albedo / s. Gathering: a shading point x seen through a pixel
 // is connected deterministically to every VPL y; for diffuse surfaces
 //   L(x) = sum_vpl f_r(x) dPhi f_r(y) cos(theta_x) cos(theta_y) / |x - y|^2 * V(x, y)
 // with f_r = albedo / pi. The squared distance is clamped below by min_distance^2 (the usual
@@ -36,6 +36,8 @@
 #include <glint/occluders/visibility.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/warps.hpp>
+#include <glint/tracer/brdf.hpp>
+#include <glint/tracer/scene.hpp>
 #include <glint/trees/tree.hpp>
 
 namespace glint {
@@ -149,7 +151,7 @@ std::vector<Vpl<T>> shoot_vpls(const VplScene<T>& scene, const Accel& accel, con
             if (glm::dot(n, dir) > 0) n = -n;
             const Rgb<T> a = scene.albedo[hit.id];
             out.push_back({p, n, power, a});
-            DiffuseGlossyBrdf<T, 3> brdf{a, Rgb<T>(T(0)), T(1)};
+            const SurfaceBrdf<T> brdf(Material<T>::lambertian(a), Vec3<T>(0, 0, 1));
             const ScatterSample<T, 3> s = scatter<BrdfSelection::decomposition>(
                 brdf, roulette, power, rng.uniform<T>(), Vec2<T>(rng.uniform<T>(), rng.uniform<T>()), int(depth));
             if (s.terminated()) break;

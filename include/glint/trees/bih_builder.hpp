@@ -134,7 +134,7 @@ struct BihBuilder {
     BihBuildOptions options{};
 
     BuiltTree<T> build(std::span<const TriangleVertices<T>> tris) const {
-        return detail::timed_build([&] { return detail::BihBuild<T>(tris, options).run(); });
+        return detail::BihBuild<T>(tris, options).run();
     }
 };
 

@@ -341,7 +341,7 @@ struct KdTreeBuilder {
     KdBuildOptions options{};
 
     BuiltTree<T> build(std::span<const TriangleVertices<T>> tris) const {
-        return detail::timed_build([&] { return detail::KdBuild<T>(tris, options).run(); });
+        return detail::KdBuild<T>(tris, options).run();
     }
 };
 

@@ -15,7 +15,6 @@
 // Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
 
-#include <chrono>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -109,15 +108,12 @@ public:
     const WideBvh<N, B, L>& bvh() const { return bvh_; }
     /// The triangle records of the leaves.
     const TriangleLeaves<P>& leaves() const { return leaves_; }
-    /// Build time (boxes, tree, records), in seconds.
-    double build_seconds() const { return build_seconds_; }
     /// Node bytes plus triangle-record bytes.
     std::size_t total_bytes() const { return bvh_.stats().node_bytes + leaves_.bytes(); }
 
 private:
     template <class Get>
     void build(std::size_t n, Get&& tri, const BvhBuildOptions& opt) {
-        const auto t0 = std::chrono::steady_clock::now();
         if (n > std::size_t(detail::wide_max_first))
             throw Error("MeshBvh: " + std::to_string(n) + " triangles, at most 2^27 - 2");
         std::vector<AABB<float>> boxes(n);
@@ -137,12 +133,10 @@ private:
             for (std::uint32_t id : ids) leaf_tris.push_back(tri(id));
             return leaves_.add(leaf_tris, ids);
         });
-        build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
 
     WideBvh<N, B, L> bvh_;
     TriangleLeaves<P> leaves_;
-    double build_seconds_ = 0;
 };
 
 }  // namespace glint

@@ -23,7 +23,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -70,8 +69,6 @@ public:
         if (tree.kind != B::kind || tree.triangle_count != tris.size())
             throw Error(std::string("TreeAccelerator: the built tree is not a ") + B::name + " tree over these " +
                         std::to_string(tris.size()) + " triangles");
-        build_seconds_ = tree.build_seconds;
-        const auto t0 = std::chrono::steady_clock::now();
         bounds_ = tree.bounds;
         std::vector<std::array<std::uint32_t, 2>> groups(tree.nodes.size(), {0u, 0u});
         std::vector<TriangleVertices<T>> leaf_tris;
@@ -86,7 +83,6 @@ public:
             detail::check_index(std::size_t(ref.first) + ref.second);
         }
         stats_ = L::encode(tree, std::span<const std::array<std::uint32_t, 2>>(groups), nodes_);
-        build_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
@@ -102,8 +98,6 @@ public:
     const TriangleLeaves<P>& leaves() const { return leaves_; }
     const std::vector<Node>& nodes() const { return nodes_; }
     const AABB<T>& bounds() const { return bounds_; }
-    /// Builder time plus leaf-record and layout encoding time, in seconds.
-    double build_seconds() const { return build_seconds_; }
     /// Node bytes plus triangle-record bytes.
     std::size_t total_bytes() const { return stats_.node_bytes() + leaves_.bytes(); }
 
@@ -227,7 +221,6 @@ private:
     TriangleLeaves<P> leaves_;
     AABB<T> bounds_;
     LayoutStats stats_;
-    double build_seconds_ = 0;
 };
 
 /// SAH kd-tree over intersector P in layout L, e.g. KdTree<float, Ivm<float>, CompactSubtrees<31>>.

@@ -16,7 +16,6 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <chrono>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -57,7 +56,6 @@ struct BuiltTree {
     std::vector<std::uint32_t> prims;   // leaf contents, original triangle indices
     AABB<T> bounds;                     // of all (finite) triangles
     std::size_t triangle_count = 0;     // input triangles, including dropped ones
-    double build_seconds = 0;
 
     std::size_t leaf_count() const {
         std::size_t n = 0;
@@ -71,19 +69,6 @@ struct BuiltTree {
         return 1 + std::max(height(n.left), height(n.right));
     }
 };
-
-namespace detail {
-
-/// Runs a builder's work and records its wall time in build_seconds.
-template <class F>
-auto timed_build(F&& build) {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto tree = build();
-    tree.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return tree;
-}
-
-}  // namespace detail
 
 /// A builder: a policy that turns triangles into a BuiltTree.
 template <class B>

@@ -13,15 +13,23 @@
 // Kollig and Keller 2004 analyse the bias it leaves).
 // Clamping only removes energy, so its bias is negative (tests/test_vpl.cpp measures it;
 // docs/vpl.md reports it).
-// One camera ray per pixel, through the pixel centre. Rows are gathered in parallel with
-// std::thread; every thread has its own copy of the visibility policy; a pixel's random
-// numbers come from a stream of its own, so images do not depend on the thread count.
+// VplIntegrator is the method as an Integrator of tracer/renderer.hpp: the Renderer owns the
+// tiles, threads, progress, statistics and film, as for the path tracer; the integrator owns
+// the light transport of one camera ray, with a copy of the visibility policy per rendering
+// thread (its thread_state) and the VPL part kept per pixel for the film's "indirect" layer.
+// render_vpl shoots, then renders through the Renderer with one camera ray per pixel through
+// the pixel's centre; a pixel's random numbers come from the sampler's stream for that pixel,
+// so images do not depend on the thread count.
+// For methods that gather the same pixel points many times (light_animation.hpp,
+// light_path_maps.hpp), primary_points, direct_image and gather_image work on a fixed array
+// of points, rows in parallel.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -33,7 +41,9 @@
 #include <glint/core/math.hpp>
 #include <glint/core/random.hpp>
 #include <glint/occluders/visibility.hpp>
+#include <glint/sampling/sampler.hpp>
 #include <glint/tracer/brdf.hpp>
+#include <glint/tracer/renderer.hpp>
 #include <glint/tracer/scene.hpp>
 #include <glint/vpl/shooting.hpp>
 
@@ -72,7 +82,34 @@ struct PixelPoint {
     bool hit = false;
 };
 
+/// A source of independent uniforms in [0, 1): a callable returning T (a sampler's get_1d, a
+/// Pcg32 stream).
+template <class U, class T>
+concept UniformSource = std::invocable<U&> && std::convertible_to<std::invoke_result_t<U&>, T>;
+
 namespace detail {
+
+/// An accelerator that counts the rays traced through it (one per closest_hit or any_hit):
+/// made for one camera ray's rays and read once they are traced.
+template <SceneAccelerator A>
+class CountedRays {
+public:
+    using scalar_type = typename A::scalar_type;
+    explicit CountedRays(const A& accel) : accel_(accel) {}
+    bool closest_hit(const Ray<scalar_type>& ray, StoreHit<scalar_type>& hit) const {
+        ++rays_;
+        return accel_.closest_hit(ray, hit);
+    }
+    bool any_hit(const Ray<scalar_type>& ray) const {
+        ++rays_;
+        return accel_.any_hit(ray);
+    }
+    std::uint64_t rays() const { return rays_; }
+
+private:
+    const A& accel_;
+    mutable std::uint64_t rays_ = 0;
+};
 
 /// Runs worker(next_row) on `threads` threads (0: hardware concurrency); workers take rows
 /// from the shared counter until none is left.
@@ -94,16 +131,15 @@ inline Pcg32 pixel_rng(int x, int y, std::uint64_t seed) {
 
 }  // namespace detail
 
-/// Follows the camera ray of pixel (px, py) through mirrors and dielectrics to the first
-/// diffuse or glossy point.
-template <SceneAccelerator A, Scalar T = typename A::scalar_type>
-PixelPoint<T> primary_point(const Scene<T>& s, const A& accel, int px, int py, const VplSettings& st, Pcg32& rng) {
-    const T aspect = T(st.width) / T(st.height);
-    Ray<T> ray = s.camera.ray((T(px) + T(0.5)) / T(st.width), (T(py) + T(0.5)) / T(st.height), aspect);
+/// Follows a camera ray through mirrors and dielectrics (at most max_specular of them; the
+/// dielectrics' Fresnel choices drawn from `uniform`) to the first diffuse or glossy point.
+template <SceneAccelerator A, class U, Scalar T = typename A::scalar_type>
+    requires UniformSource<U, T>
+PixelPoint<T> surface_seen(const Scene<T>& s, const A& accel, Ray<T> ray, int max_specular, U&& uniform) {
     PixelPoint<T> p;
     p.weight = Rgb<T>(T(1));
     p.emitted = Rgb<T>(T(0));
-    for (int k = 0; k <= st.max_specular; ++k) {
+    for (int k = 0; k <= max_specular; ++k) {
         StoreHit<T> hit;
         if (!accel.closest_hit(ray, hit)) return p;
         const Material<T>& m = s.materials[s.material_of[hit.id]];
@@ -116,23 +152,34 @@ PixelPoint<T> primary_point(const Scene<T>& s, const A& accel, int px, int py, c
             p.triangle = hit.id, p.u = hit.u, p.v = hit.v;
             return p;
         }
-        if (m.kind == MaterialKind::mirror) p.weight *= m.ks;
-        ray = detail::vpl_spawn(x, n, detail::specular_direction(m, d, ng, rng.uniform<T>()));
+        p.weight *= specular_albedo(m);
+        ray = detail::vpl_spawn(x, n, specular_direction(m, d, ng, T(uniform())));
     }
     return p;
 }
 
-/// Direct illumination at p from `samples` real-light samples (shadow rays through accel).
+/// The first diffuse or glossy point seen through the centre of pixel (px, py).
 template <SceneAccelerator A, Scalar T = typename A::scalar_type>
+PixelPoint<T> primary_point(const Scene<T>& s, const A& accel, int px, int py, const VplSettings& st, Pcg32& rng) {
+    const T aspect = T(st.width) / T(st.height);
+    const Ray<T> ray = s.camera.ray((T(px) + T(0.5)) / T(st.width), (T(py) + T(0.5)) / T(st.height), aspect);
+    return surface_seen(s, accel, ray, st.max_specular, [&rng] { return rng.uniform<T>(); });
+}
+
+/// Direct illumination at p from `samples` real-light samples (shadow rays through accel),
+/// three uniforms each.
+template <SceneAccelerator A, class U, Scalar T = typename A::scalar_type>
+    requires UniformSource<U, T>
 Rgb<T> direct_light(const Scene<T>& s, const A& accel, const EmitterSet<T>& lights, const PixelPoint<T>& p,
-                    int samples, Pcg32& rng) {
+                    int samples, U&& uniform) {
     const Frame<T> frame = Frame<T>::from_normal(p.n);
     const SurfaceBrdf<T> brdf(s.materials[p.material], frame.to_local(p.wo));
     Rgb<T> sum(T(0));
     for (int i = 0; i < samples; ++i) {
         T pdf;
-        const T u = rng.uniform<T>();
-        const LightSample<T> ls = lights.sample_point(u, Vec2<T>(rng.uniform<T>(), rng.uniform<T>()), pdf);
+        const T u = T(uniform());
+        const T u0 = T(uniform());
+        const LightSample<T> ls = lights.sample_point(u, Vec2<T>(u0, T(uniform())), pdf);
         const Vec3<T> d = ls.position - p.x;
         const T r2 = glm::dot(d, d);
         const Vec3<T> wi = d / std::sqrt(r2);
@@ -209,7 +256,8 @@ std::vector<Rgb<T>> direct_image(const Scene<T>& s, const A& accel, std::span<co
                 const std::size_t i = std::size_t(y) * std::size_t(st.width) + std::size_t(x);
                 Pcg32 rng = detail::pixel_rng(x, y, st.seed);
                 out[i] = points[i].emitted;
-                if (points[i].hit) out[i] += direct_light(s, accel, lights, points[i], st.light_samples, rng);
+                if (points[i].hit)
+                    out[i] += direct_light(s, accel, lights, points[i], st.light_samples, [&rng] { return rng.uniform<T>(); });
             }
     });
     return out;
@@ -234,34 +282,103 @@ std::vector<Rgb<T>> gather_image(const Scene<T>& s, std::span<const PixelPoint<T
     return out;
 }
 
-/// What render_vpl returns: the image, its indirect (VPL) part, and what it cost.
-struct VplResult {
-    Image<Rgb<float>> image, indirect;
-    std::size_t vpls = 0;
-    double seconds = 0, shooting_seconds = 0;
+/// The virtual light sources method as an Integrator (tracer/renderer.hpp) over VPLs shot
+/// beforehand: for a camera ray, the emission it sees through mirrors and dielectrics, direct
+/// illumination at the first diffuse or glossy point and the VPLs' illumination there through
+/// the visibility policy (each rendering thread its own copy, thread_state). rays counts the
+/// camera path's and the light samples' rays (the visibility policy's tests are its own). The
+/// VPL part is kept per pixel and written by finish() to the film layer "indirect".
+template <SceneAccelerator A, class V, Scalar T = typename A::scalar_type>
+    requires VisibilityPolicy<V, T>
+class VplIntegrator {
+public:
+    using scalar_type = T;
+    using thread_state = V;
+    struct pixel_state {
+        Rgb<T> indirect{T(0)};  // sum of the samples' VPL parts
+        std::uint32_t samples = 0;
+    };
+
+    /// `vpls` must outlive the integrator.
+    VplIntegrator(const Scene<T>& s, const A& accel, std::span<const Vpl<T>> vpls, const V& visibility,
+                  const VplSettings& st)
+        : scene_(s), accel_(accel), lights_(s), vpls_(vpls), visibility_(visibility), st_(st),
+          d2min_(T(st.min_distance * st.min_distance)) {
+        st.validate();
+    }
+
+    V make_thread_state() const { return visibility_; }
+
+    template <class S>
+        requires Sampler<S, T>
+    PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state, V& vis) const {
+        const detail::CountedRays<A> accel(accel_);
+        const auto uniform = [&sampler] { return sampler.get_1d(); };
+        const PixelPoint<T> p = surface_seen(scene_, accel, ray, st_.max_specular, uniform);
+        PathSample<T> out;
+        if (st_.direct) {
+            out.L = p.emitted;
+            if (p.hit) out.L += direct_light(scene_, accel, lights_, p, st_.light_samples, uniform);
+        }
+        if (st_.indirect && p.hit) {
+            const Rgb<T> indirect = gather_point(scene_, p, vpls_, vis, d2min_) * p.weight;
+            if (indirect.is_finite()) state.indirect += indirect;
+            out.L += indirect;
+        }
+        ++state.samples;
+        out.rays = accel.rays();
+        return out;
+    }
+
+    void finish(Film& film, std::span<const pixel_state> states) const {
+        FilmLayer layer{"indirect", Image<Rgb<float>>(film.image.width, film.image.height)};
+        for (std::size_t i = 0; i < states.size() && i < layer.pixels.pixels.size(); ++i)
+            for (std::size_t c = 0; c < 3; ++c)
+                layer.pixels.pixels[i][c] = states[i].samples ? float(states[i].indirect[c] / T(states[i].samples)) : 0.0f;
+        film.layers.push_back(std::move(layer));
+    }
+
+private:
+    const Scene<T>& scene_;
+    const A& accel_;
+    EmitterSet<T> lights_;
+    std::span<const Vpl<T>> vpls_;
+    V visibility_;
+    VplSettings st_;
+    T d2min_;
 };
 
-/// The whole method: shooting with roulette R, then gathering with visibility policy V.
+/// What render_vpl returns: the renderer's result (image, variance, rays, seconds: shooting
+/// included), the image's VPL part, and the shooting's count and time.
+struct VplResult : RenderResult {
+    Image<Rgb<float>> indirect;
+    std::size_t vpls = 0;
+    double shooting_seconds = 0;
+};
+
+/// The whole method: shooting with roulette R, then gathering through the Renderer with
+/// visibility policy V, one camera ray per pixel through its centre.
 template <SceneAccelerator A, class R, class V, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T> && VisibilityPolicy<V, T>
 VplResult render_vpl(const Scene<T>& s, const A& accel, const R& roulette, const V& visibility, const VplSettings& st) {
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
     st.validate();
-    VplResult out{Image<Rgb<float>>(st.width, st.height), Image<Rgb<float>>(st.width, st.height)};
+    s.validate();
     const std::vector<Vpl<T>> vpls =
         st.indirect ? shoot_scene_vpls(s, accel, roulette, st.vpl_walks, st.seed, st.shooting) : std::vector<Vpl<T>>{};
+    VplResult out;
     out.shooting_seconds = std::chrono::duration<double>(clock::now() - t0).count();
     out.vpls = vpls.size();
-    const auto points = primary_points(s, accel, st);
-    std::vector<Rgb<T>> direct(points.size(), Rgb<T>(T(0))), indirect(points.size(), Rgb<T>(T(0)));
-    if (st.direct) direct = direct_image(s, accel, std::span<const PixelPoint<T>>(points), st);
-    if (st.indirect) indirect = gather_image(s, std::span<const PixelPoint<T>>(points), std::span<const Vpl<T>>(vpls), visibility, st);
-    for (std::size_t i = 0; i < points.size(); ++i)
-        for (std::size_t c = 0; c < 3; ++c) {
-            out.indirect.pixels[i][c] = float(indirect[i][c]);
-            out.image.pixels[i][c] = float(direct[i][c] + indirect[i][c]);
-        }
+    RenderSettings rs;
+    rs.width = st.width, rs.height = st.height, rs.threads = st.threads;
+    rs.spp = 1;
+    rs.pixel_jitter = false;
+    const VplIntegrator<A, V, T> integrator(s, accel, std::span<const Vpl<T>>(vpls), visibility, st);
+    static_cast<RenderResult&>(out) = render_image(s, rs, integrator, RandomSampler<T>(st.seed));
+    for (FilmLayer& layer : out.layers)
+        if (layer.name == "indirect") out.indirect = std::move(layer.pixels);
+    std::erase_if(out.layers, [](const FilmLayer& l) { return l.name == "indirect"; });
     out.seconds = std::chrono::duration<double>(clock::now() - t0).count();
     return out;
 }

@@ -154,24 +154,6 @@ Ray<T> vpl_spawn(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& dir) {
     return Ray<T>{x + (glm::dot(dir, n) >= T(0) ? n : -n) * eps, dir, T(0), infinity<T>};
 }
 
-/// Direction leaving a mirror (reflection) or a dielectric (Fresnel choice by u between
-/// reflection and refraction; ior relative to the side ng points away from).
-template <Scalar T>
-Vec3<T> specular_direction(const Material<T>& m, const Vec3<T>& d, const Vec3<T>& ng, T u) {
-    const T c = glm::dot(d, ng);
-    const Vec3<T> reflected = d - ng * (T(2) * c);
-    if (m.kind == MaterialKind::mirror) return reflected;
-    const bool entering = c < T(0);
-    const T eta = entering ? T(1) / m.ior : m.ior, ci = std::abs(c);
-    const T k = T(1) - eta * eta * (T(1) - ci * ci);
-    if (k <= T(0)) return reflected;  // total internal reflection
-    const T ct = std::sqrt(k);
-    const T rs = (eta * ci - ct) / (eta * ci + ct), rp = (ci - eta * ct) / (ci + eta * ct);
-    if (u < T(0.5) * (rs * rs + rp * rp)) return reflected;
-    const Vec3<T> nf = entering ? ng : -ng;  // facing the incoming ray
-    return d * eta + nf * (eta * ci - ct);
-}
-
 }  // namespace detail
 
 /// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
@@ -192,12 +174,12 @@ void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, R
         const Vec3<T> n = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
         const Vec3<T> x = ray.at(hit.t);
         if (m.specular()) {
-            const Rgb<T> a = m.kind == MaterialKind::mirror ? m.ks : Rgb<T>(T(1));
+            const Rgb<T> a = specular_albedo(m);
             const std::array<Rgb<T>, 1> lobes{a};
             const auto sel = select_lobe(roulette, beta, std::span<const Rgb<T>>(lobes), rng.uniform<T>(), depth);
             if (sel.terminated()) return;
             beta *= a / sel.probability[0];
-            const Vec3<T> d = detail::specular_direction(m, safe_normalize(ray.direction), ng, rng.uniform<T>());
+            const Vec3<T> d = specular_direction(m, ray.direction, ng, rng.uniform<T>());
             ray = detail::vpl_spawn(x, n, d);
             continue;
         }
