@@ -199,16 +199,37 @@ TEST_CASE("accuracy: the furnace with the Halton sampler") {
     for (std::size_t c = 0; c < 3; ++c) CHECK(std::abs(mean[c] - 1.0) < 3.0 * se[c]);
 }
 
-TEST_CASE("accuracy: direct light from a fully visible polygon light equals the form factor") {
-    // A diffuse floor (albedo 0.5) under a 1 x 1 light (Le = 2) at height 1, offset so that
-    // the geometry is not symmetric. Outgoing radiance at x: rho Le F(x).
+namespace {
+
+/// The light's corners in formfactor_scene.
+const std::array<Vec3f, 4> formfactor_light{Vec3f(0.2f, 1, -0.4f), Vec3f(1.2f, 1, -0.4f), Vec3f(1.2f, 1, 0.6f),
+                                                Vec3f(0.2f, 1, 0.6f)};
+
+/// A diffuse floor (albedo 0.5) under a 1 x 1 light (Le = 2) at height 1, offset so that the
+/// geometry is not symmetric. With occluder_x1 > occluder_x0: a black quad at height 0.5 over
+/// x in [x0, x1], z in [-0.5, 0.5], which hides from the origin the light's points with x in
+/// [2 x0, 2 x1] (a shadow ray to (x, 1, z) crosses height 0.5 at (x/2, z/2)).
+Scene<float> formfactor_scene(float occluder_x0 = 0, float occluder_x1 = 0) {
     Scene<float> s;
     s.name = "formfactor";
     const auto floor = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
     const auto light = s.add_material(Material<float>::lambertian(Rgb<float>(0.0f), Rgb<float>(2.0f)));
     s.add_quad(Vec3f(-5, 0, -5), Vec3f(-5, 0, 5), Vec3f(5, 0, 5), Vec3f(5, 0, -5), floor);
-    const std::array<Vec3f, 4> lq{Vec3f(0.2f, 1, -0.4f), Vec3f(1.2f, 1, -0.4f), Vec3f(1.2f, 1, 0.6f), Vec3f(0.2f, 1, 0.6f)};
-    s.add_polygon(lq, light);  // counter-clockwise seen from below: faces down
+    s.add_polygon(formfactor_light, light);  // counter-clockwise seen from below: faces down
+    if (occluder_x1 > occluder_x0) {
+        const auto black = s.add_material(Material<float>::lambertian(Rgb<float>(0.0f)));
+        s.add_quad(Vec3f(occluder_x0, 0.5f, -0.5f), Vec3f(occluder_x0, 0.5f, 0.5f), Vec3f(occluder_x1, 0.5f, 0.5f),
+                   Vec3f(occluder_x1, 0.5f, -0.5f), black);
+    }
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("accuracy: direct light from a fully visible polygon light equals the form factor") {
+    // Outgoing radiance at x: rho Le F(x).
+    const Scene<float> s = formfactor_scene();
+    const auto& lq = formfactor_light;
     REQUIRE(s.area_lights.size() == 1);
     REQUIRE(s.area_lights[0].normal.y < 0);
 
@@ -275,6 +296,79 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
         CHECK(film.image.at(0, 0)[0] == doctest::Approx(expected).epsilon(1e-4));
         CHECK(film.variance.at(0, 0)[0] <= 1e-6 * expected * expected);
         CHECK(film.lambda.at(0, 0) == doctest::Approx(1.0f).epsilon(1e-4));
+    }
+}
+
+TEST_CASE("lambda = fractional visibility (000 section 3.2): the visible share of the light, exact at 0 and 1") {
+    // The origin of formfactor_scene, seen by a ray straight down; 10 light samples per vertex,
+    // lambda per vertex (radius -1).
+    const Ray<float> down{Vec3f(0, 0.5f, 0), Vec3f(0, -1, 0)};
+    RenderSettings settings;
+    settings.max_depth = 1;  // the first vertex only: its direct light
+    settings.light_samples = 10;
+    settings.lambda_filter_radius = -1;
+    using Tracer = PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>,
+                              CorrelatedDirect<float>, NoEnvironment<float>, false>;
+    auto tracer = [&](const Scene<float>& s, const BruteForce<Ivm<float>>& accel, const RenderSettings& st) {
+        return Tracer(s, accel, {}, CorrelatedDirect<float>(s, st, DirectEstimator::combined, LambdaSource::visibility),
+                      NoEnvironment<float>{}, st);
+    };
+    const double exact = 0.5 * 2.0 * point_to_polygon_form_factor<double>(Vec3d(0), Vec3d(0, 1, 0),
+        std::vector<Vec3d>{Vec3d(formfactor_light[0]), Vec3d(formfactor_light[1]), Vec3d(formfactor_light[2]),
+                           Vec3d(formfactor_light[3])});
+    SUBCASE("fully visible: lambda = 1, the form factor's answer; fully hidden: lambda = 0, zero") {
+        for (const bool hidden : {false, true}) {
+            // The hiding occluder covers x in [0.05, 0.65]: the light's x in [0.1, 1.3].
+            const Scene<float> s = hidden ? formfactor_scene(0.05f, 0.65f) : formfactor_scene();
+            const BruteForce<Ivm<float>> accel(s.triangles);
+            const Tracer pt = tracer(s, accel, settings);
+            RandomSampler<float> sampler(3);
+            Tracer::pixel_state state;
+            for (int i = 0; i < 50; ++i) {
+                sampler.start_pixel_sample(0, 0, std::uint64_t(i));
+                const float L = pt.radiance(down, sampler, state).L[0];
+                if (hidden) CHECK(L == 0.0f);
+                else CHECK(L == doctest::Approx(exact).epsilon(1e-4));
+            }
+            CHECK(state.lambda_sum == (hidden ? 0.0 : 50.0));
+            CHECK(state.traced == 500.0);
+        }
+    }
+    SUBCASE("half hidden: E[lambda] = 1/2 within 4 measured standard errors; pooled lambda = the mean share") {
+        // The occluder over x in [0.1, 0.35] hides the light's x in [0.2, 0.7]: half its area,
+        // and the light's points are uniform in area.
+        const Scene<float> s = formfactor_scene(0.1f, 0.35f);
+        const BruteForce<Ivm<float>> accel(s.triangles);
+        const Tracer pt = tracer(s, accel, settings);
+        RandomSampler<float> sampler(4);
+        const int n = 4000;
+        double sum = 0, sum2 = 0;
+        for (int i = 0; i < n; ++i) {
+            sampler.start_pixel_sample(0, 0, std::uint64_t(i));
+            Tracer::pixel_state state;
+            pt.radiance(down, sampler, state);
+            REQUIRE(state.lambda_count == 1);
+            sum += state.lambda_sum;
+            sum2 += state.lambda_sum * state.lambda_sum;
+        }
+        const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
+        CAPTURE(mean);
+        CAPTURE(se);
+        CHECK(se > 0.0);
+        CHECK(std::abs(mean - 0.5) < 4.0 * se);
+        // Pooled at radius 0 over the same samples: the film's lambda is the share of all the
+        // pixel's shadow rays that reached the light, here the mean of the per-vertex shares.
+        RenderSettings pooled_settings = settings;
+        pooled_settings.lambda_filter_radius = 0;
+        const Tracer pooled = tracer(s, accel, pooled_settings);
+        std::vector<Tracer::pixel_state> states(1);
+        for (int i = 0; i < n; ++i) {
+            sampler.start_pixel_sample(0, 0, std::uint64_t(i));
+            pooled.radiance(down, sampler, states[0]);
+        }
+        Film film{Image<Rgb<float>>(1, 1), Image<Rgb<float>>(1, 1), Image<float>(1, 1)};
+        pooled.finish(film, std::span<const Tracer::pixel_state>(states));
+        CHECK(film.lambda.at(0, 0) == doctest::Approx(mean).epsilon(1e-5));
     }
 }
 

@@ -11,6 +11,13 @@
 // of the pooled estimator: the sample values X + a + lambda b (X the rest of the path) have,
 // for the pooled lambda, mean and second moment from the per-pixel sums of X, a, b and their
 // products.
+//
+// The weight's source (000 section 3.2, lines 2079-2086): lambda estimated from the samples
+// (eq. 3.3, above), or "a more drastic approach", lambda = the fractional visibility, the
+// share of the shadow rays (the samples with G > 0) that reach the light, pooled over the same
+// neighbourhood. 000 reports the statistical lambda "slightly better"; bench_lambda measures
+// both (docs/tracer.md). Either lambda comes from the samples it weights, so either makes the
+// combined estimate consistent, not unbiased (000 section 3.1.1).
 #pragma once
 
 #include <algorithm>
@@ -31,6 +38,10 @@ namespace glint {
 /// lambda estimated from the samples (eq. 3.3).
 enum class DirectEstimator { importance, correlated, combined };
 
+/// Where the combined estimator's lambda comes from (000 section 3.2, lines 2079-2086):
+/// eq. 3.3's statistical estimate, or the fractional visibility of the light samples.
+enum class LambdaSource { statistical, visibility };
+
 template <Scalar T = float>
 class CorrelatedDirect {
 public:
@@ -42,20 +53,23 @@ public:
         Rgb<T> a{T(0)}, b{T(0)};    // kept (pooled) parts: a = sum mean f/p, b = sum (J - mean g/p)
         Rgb<T> fg{T(0)}, gg{T(0)};  // within-vertex co-moments
         T lambda = std::numeric_limits<T>::quiet_NaN();  // mean per-vertex lambda over the lights
+        T visible = 0, traced = 0;  // shadow rays that reached a light, shadow rays traced
     };
     /// Per-pixel sums over its samples (X: the sample's radiance without the kept parts).
     struct pixel_state {
         D3 x{0.0}, a{0.0}, b{0.0}, xx{0.0}, aa{0.0}, bb{0.0}, xa{0.0}, xb{0.0}, ab{0.0}, fg{0.0}, gg{0.0};
-        double lambda_sum = 0;
+        double lambda_sum = 0, visible = 0, traced = 0;
         int lambda_count = 0, n = 0;
     };
 
-    CorrelatedDirect(const Scene<T>& scene, const RenderSettings& s, DirectEstimator estimator = DirectEstimator::combined)
-        : lights_(scene), k_(std::size_t(std::clamp(s.light_samples, 1, 64))), estimator_(estimator),
+    CorrelatedDirect(const Scene<T>& scene, const RenderSettings& s, DirectEstimator estimator = DirectEstimator::combined,
+                     LambdaSource source = LambdaSource::statistical)
+        : lights_(scene), k_(std::size_t(std::clamp(s.light_samples, 1, 64))), estimator_(estimator), source_(source),
           radius_(s.lambda_filter_radius),
           pooled_(estimator == DirectEstimator::combined && s.lambda_filter_radius >= 0 && !lights_.empty()) {}
 
     DirectEstimator estimator() const { return estimator_; }
+    LambdaSource lambda_source() const { return source_; }
 
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
@@ -71,9 +85,22 @@ public:
                 L += importance(sp, light, us, queries);
                 continue;
             }
-            const auto res = correlated_direct(
+            T visible = 0, traced = 0;
+            auto res = correlated_direct(
                 light, sp.x, sp.n, [&](const Vec3<T>& wi) { return sp.brdf->f(sp.frame.to_local(wi)); },
-                sp.brdf->kd() / pi<T>, [&](const Vec3<T>&, const Vec3<T>& y) { return queries.visible(sp, light, y); }, us);
+                sp.brdf->kd() / pi<T>,
+                [&](const Vec3<T>&, const Vec3<T>& y) {
+                    const bool v = queries.visible(sp, light, y);
+                    traced += T(1);
+                    visible += v ? T(1) : T(0);
+                    return v;
+                },
+                us);
+            if (source_ == LambdaSource::visibility) {
+                res.lambda = Rgb<T>(traced > T(0) ? visible / traced : T(0));
+                for (std::size_t c = 0; c < 3; ++c) res.combined[c] = res.stats[c].estimate(res.main_part[c], res.lambda[c]);
+            }
+            if (rec) rec->visible += visible, rec->traced += traced;
             if (rec && pooled_) keep(*rec, res);
             else L += estimator_ == DirectEstimator::correlated ? res.correlated : res.combined;
             lambda_sum += res.lambda.mean();
@@ -91,6 +118,7 @@ public:
             st.lambda_sum += double(rec.lambda);
             ++st.lambda_count;
         }
+        st.visible += double(rec.visible), st.traced += double(rec.traced);
         // A non-finite sample counts as 0, as the renderer counts it.
         if (!(L.is_finite() && rec.a.is_finite() && rec.b.is_finite())) return;
         for (std::size_t c = 0; c < 3; ++c) {
@@ -142,15 +170,19 @@ private:
         }
     }
 
-    /// lambda = sum fg / sum gg over the (2r + 1)^2 neighbourhood of (x, y), per band.
+    /// lambda = sum fg / sum gg over the (2r + 1)^2 neighbourhood of (x, y), per band; or the
+    /// neighbourhood's fractional visibility, sum visible / sum traced.
     D3 pooled_lambda(std::span<const pixel_state> states, int w, int h, int x, int y) const {
         D3 fg(0.0), gg(0.0), lambda(0.0);
+        double visible = 0, traced = 0;
         for (int yy = std::max(0, y - radius_); yy <= std::min(h - 1, y + radius_); ++yy)
             for (int xx = std::max(0, x - radius_); xx <= std::min(w - 1, x + radius_); ++xx) {
                 const pixel_state& q = states[std::size_t(yy) * std::size_t(w) + std::size_t(xx)];
                 fg += q.fg;
                 gg += q.gg;
+                visible += q.visible, traced += q.traced;
             }
+        if (source_ == LambdaSource::visibility) return D3(traced > 0.0 ? visible / traced : 0.0);
         for (std::size_t c = 0; c < 3; ++c) lambda[c] = gg[c] > 0.0 ? fg[c] / gg[c] : 0.0;
         return lambda;
     }
@@ -171,6 +203,7 @@ private:
     SceneLights<T> lights_;
     std::size_t k_;
     DirectEstimator estimator_;
+    LambdaSource source_;
     int radius_;
     bool pooled_;
 };

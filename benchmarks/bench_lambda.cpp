@@ -1,0 +1,287 @@
+// bench_lambda: bias and variance of the combined correlated estimator (000 section 3.1) as
+// its weight lambda is pooled over pixel neighbourhoods of radius 0, 1, 2 (000 section 3.1.1),
+// and statistical lambda (eq. 3.3) against lambda = the fractional visibility (000 section
+// 3.2, lines 2079-2086).
+//
+//   taskset -c 1 ./build/benchmarks/bench_lambda --csv docs/lambda.csv
+//   ./build/benchmarks/bench_lambda --scene cornell --size 48 --renders 128
+//
+// Direct illumination only (max depth 1, as bench_convergence's arealight comparison): the
+// rest of the path is noise every method shares and would hide what lambda does. Camera rays
+// through pixel centres, so each pixel estimates one integral, from spp x light-samples light
+// points (000 compares at 10 light samples). Every method renders `renders` independent
+// images (seed r for render r, the same seeds for every method: common random numbers).
+// Per pixel p and band, with d_r = Y_r - ref (ref: the reference image):
+//   variance  s_p^2 = the sample variance of Y_r over the renders (one render's variance)
+//   bias^2    U_p = (sum_{r != r'} d_r d_r') / (R (R - 1)), unbiased for (E Y - ref)^2, minus
+//             the reference's own variance of its mean (its variance layer);
+//             U_p = (mean d)^2 - s_p^2 / R, i.e. bias^2 = MSE - variance
+//   MSE       mean_r d_r^2 minus the reference's variance = variance + bias^2
+//   mean bias mean d (signed; averaged over pixels, biases of opposite sign cancel)
+// each averaged over the pixels (all, and the penumbra: reference fractional visibility
+// strictly between 0.02 and 0.98) and the three bands. Standard errors: the delete-a-group
+// jackknife over the renders in 32 groups (renders are independent, so it holds the
+// correlation between pooled neighbours), plus the
+// reference's noise in quadrature (its cross term 4 (m - ref)^2 v_ref and 2 v_ref^2 per pixel).
+// The reference is unbiased: lambda = 1 (correlated sampling, eq. 3.1 with lambda constant;
+// its variance is 1/50 of importance sampling's on arealight, zero where the light is fully
+// visible) at 64 light samples x --ref-spp, another seed. Methods: importance (lambda = 0) and correlated (lambda = 1)
+// are unbiased, so their bias^2 must be zero within its standard error -- the check that the
+// measurement separates bias from variance; then combined with statistical and visibility
+// lambda at radius 0, 1, 2.
+// CSV columns: scene,region,method,lambda,radius,renders,spp,light_samples,variance,
+// variance_se,bias2,bias2_se,mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/tracer/correlated_direct.hpp>
+#include <glint/tracer/path_tracer.hpp>
+#include <glint/tracer/scenes.hpp>
+#include <glint/trees/mesh_bvh.hpp>
+
+using namespace glint;
+
+namespace {
+
+using Accel = MeshBvh<MollerTrumbore<float>, 8>;
+using Tracer = PathTracer<Accel, RandomSampler<float>, ClassicRoulette<float, 3>, CorrelatedDirect<float>,
+                          NoEnvironment<float>, false>;
+
+struct Config {
+    std::string scene = "arealight", csv;
+    int size = 64, spp = 1, light_samples = 10, renders = 1024, ref_spp = 1024, depth = 1, groups = 32;
+    std::uint64_t seed = 0;
+};
+
+struct Method {
+    std::string name, lambda;  // lambda: "0", "1", "statistical" or "visibility"
+    DirectEstimator estimator;
+    LambdaSource source;
+    int radius;
+};
+
+std::vector<Method> methods() {
+    std::vector<Method> m{{"importance", "0", DirectEstimator::importance, LambdaSource::statistical, -1},
+                          {"correlated", "1", DirectEstimator::correlated, LambdaSource::statistical, -1}};
+    for (LambdaSource src : {LambdaSource::statistical, LambdaSource::visibility})
+        for (int r = 0; r <= 2; ++r) {
+            const std::string l = src == LambdaSource::statistical ? "statistical" : "visibility";
+            m.push_back({"combined " + l + " r" + std::to_string(r), l, DirectEstimator::combined, src, r});
+        }
+    return m;
+}
+
+RenderResult render(const Scene<float>& scene, const Accel& accel, RenderSettings s, const Method& m,
+                    std::uint64_t seed) {
+    s.lambda_filter_radius = m.radius;
+    const Tracer tracer(scene, accel, ClassicRoulette<float, 3>{}, CorrelatedDirect<float>(scene, s, m.estimator, m.source),
+                        NoEnvironment<float>{}, s);
+    return render_image(scene, s, tracer, RandomSampler<float>(seed));
+}
+
+/// One method's renders, as differences d = Y_r - ref to the reference, pixel-band by
+/// pixel-band: sums of d and d^2 over all renders and over each jackknife group.
+struct Renders {
+    int n = 0;
+    std::vector<double> s1, s2;
+    std::vector<std::vector<double>> g1, g2;  // [group][3 p + c]
+    Renders(std::size_t size, int groups)
+        : s1(size, 0.0), s2(size, 0.0), g1(std::size_t(groups), s1), g2(std::size_t(groups), s1) {}
+    void add(int group, std::size_t i, double d) {
+        s1[i] += d, s2[i] += d * d;
+        g1[std::size_t(group)][i] += d, g2[std::size_t(group)][i] += d * d;
+    }
+};
+
+struct Estimate {
+    double value = 0, se = 0;
+};
+
+struct Summary {
+    Estimate variance, bias2, mean_bias, mse, rmse;
+};
+
+/// The four statistics from the per-pixel sums of n renders over the masked pixel-bands.
+std::array<double, 4> statistics(const std::vector<double>& s1, const std::vector<double>& s2, double n,
+                                 const std::vector<std::size_t>& idx, double ref_var) {
+    double var = 0, u = 0, bias = 0;
+    for (std::size_t i : idx) {
+        var += (s2[i] - s1[i] * s1[i] / n) / (n - 1.0);
+        u += (s1[i] * s1[i] - s2[i]) / (n * (n - 1.0));
+        bias += s1[i] / n;
+    }
+    const double k = double(idx.size());
+    var /= k, u /= k, bias /= k;
+    return {var, u - ref_var, bias, var + u - ref_var};
+}
+
+/// Statistics over the pixel-bands `idx` with delete-a-group jackknife standard errors over
+/// the renders (equal groups) and the reference's noise (ref_v: its variance layer) added in
+/// quadrature.
+Summary summarize(const Renders& rs, const std::vector<std::size_t>& idx, const std::vector<double>& ref_v) {
+    const double n = double(rs.n), k = double(idx.size()), groups = double(rs.g1.size());
+    double ref_var = 0;
+    for (std::size_t i : idx) ref_var += ref_v[i] / k;
+    const auto full = statistics(rs.s1, rs.s2, n, idx, ref_var);
+    // Leave-one-group-out values of the four statistics and of the RMSE.
+    std::vector<std::array<double, 5>> loo(rs.g1.size());
+    std::vector<double> a(rs.s1.size()), b(rs.s2.size());
+    for (std::size_t g = 0; g < rs.g1.size(); ++g) {
+        for (std::size_t i : idx) a[i] = rs.s1[i] - rs.g1[g][i], b[i] = rs.s2[i] - rs.g2[g][i];
+        const auto s = statistics(a, b, n - n / groups, idx, ref_var);
+        loo[g] = {s[0], s[1], s[2], s[3], std::sqrt(std::max(s[3], 0.0))};
+    }
+    std::array<double, 5> se{};
+    for (std::size_t j = 0; j < 5; ++j) {
+        double mean = 0, ss = 0;
+        for (const auto& l : loo) mean += l[j] / groups;
+        for (const auto& l : loo) ss += (l[j] - mean) * (l[j] - mean);
+        se[j] = std::sqrt((groups - 1.0) / groups * ss);
+    }
+    // The reference's noise: bias^2 and MSE hold -2 (m - I)(ref - I) + (ref - I)^2 - v_ref per
+    // pixel-band, of variance about 4 (m - ref)^2 v_ref + 2 v_ref^2; the mean bias holds -(ref - I).
+    double ref_sq = 0, ref_lin = 0;
+    for (std::size_t i : idx) {
+        const double m = rs.s1[i] / n;
+        ref_sq += 4.0 * m * m * ref_v[i] + 2.0 * ref_v[i] * ref_v[i];
+        ref_lin += ref_v[i];
+    }
+    const double se_sq = std::sqrt(ref_sq) / k, se_lin = std::sqrt(ref_lin) / k;
+    const double mse = full[3], rmse = std::sqrt(std::max(mse, 0.0));
+    Summary out;
+    out.variance = {full[0], se[0]};
+    out.bias2 = {full[1], std::hypot(se[1], se_sq)};
+    out.mean_bias = {full[2], std::hypot(se[2], se_lin)};
+    out.mse = {mse, std::hypot(se[3], se_sq)};
+    out.rmse = {rmse, std::hypot(se[4], rmse > 0 ? se_sq / (2.0 * rmse) : 0.0)};
+    return out;
+}
+
+Config parse(int argc, char** argv) {
+    Config cfg;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw Error(a + " expects a value");
+            return argv[++i];
+        };
+        auto count = [&](int lo) {
+            const std::string v = value();
+            const int x = std::atoi(v.c_str());
+            if (x < lo) throw Error(a + " expects an integer >= " + std::to_string(lo) + ", got '" + v + "'");
+            return x;
+        };
+        if (a == "--scene") cfg.scene = value();
+        else if (a == "--csv") cfg.csv = value();
+        else if (a == "--size") cfg.size = count(4);
+        else if (a == "--spp") cfg.spp = count(1);
+        else if (a == "--light-samples") cfg.light_samples = count(2);
+        else if (a == "--renders") cfg.renders = count(3);
+        else if (a == "--ref-spp") cfg.ref_spp = count(1);
+        else if (a == "--depth") cfg.depth = count(1);
+        else if (a == "--seed") cfg.seed = std::strtoull(value().c_str(), nullptr, 10);
+        else if (a == "--quick") cfg.size = 16, cfg.renders = 8, cfg.ref_spp = 16;
+        else throw Error("unknown option '" + a + "' (--scene NAME --csv FILE --size N --spp N --light-samples N "
+                         "--renders N --ref-spp N --depth N --seed N --quick)");
+    }
+    // Jackknife groups of equal size: at most 32, renders rounded up to a multiple.
+    cfg.groups = std::min(32, cfg.renders);
+    cfg.renders = (cfg.renders + cfg.groups - 1) / cfg.groups * cfg.groups;
+    return cfg;
+}
+
+/// Pixel-band indices of the whole image and of the penumbra (fractional visibility in
+/// (0.02, 0.98), from the lambda layer of a visibility-lambda render at 64 light samples).
+std::array<std::vector<std::size_t>, 2> regions(const Scene<float>& scene, const Accel& accel, RenderSettings s) {
+    s.light_samples = 64;
+    s.spp = 16;
+    const RenderResult v = render(scene, accel, s, {"visibility", "visibility", DirectEstimator::combined,
+                                                    LambdaSource::visibility, 0}, 0x5eed0001);
+    std::array<std::vector<std::size_t>, 2> out;
+    for (std::size_t p = 0; p < v.lambda.size(); ++p)
+        for (std::size_t c = 0; c < 3; ++c) {
+            out[0].push_back(3 * p + c);
+            const float f = v.lambda.pixels[p];
+            if (f > 0.02f && f < 0.98f) out[1].push_back(3 * p + c);
+        }
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        const Config cfg = parse(argc, argv);
+        const Scene<float> scene = builtin_scene<float>(cfg.scene);
+        if (scene.features().environment || scene.features().point_lights || !scene.features().area_lights)
+            throw Error("bench_lambda: the scene '" + cfg.scene + "' must have area lights and no environment or point lights");
+        const Accel accel(scene.triangles);
+        RenderSettings s;
+        s.width = s.height = cfg.size;
+        s.spp = cfg.spp;
+        s.threads = 1;
+        s.pixel_jitter = false;
+        s.max_depth = cfg.depth;
+        s.light_samples = cfg.light_samples;
+
+        RenderSettings rs = s;
+        rs.spp = cfg.ref_spp;
+        rs.light_samples = 64;
+        const RenderResult ref = render(scene, accel, rs, methods()[1], 0x5eed0000 + cfg.seed);
+        std::vector<double> ref_v(3 * ref.image.size());
+        for (std::size_t i = 0; i < ref_v.size(); ++i) ref_v[i] = ref.variance.pixels[i / 3][i % 3];
+        const auto region = regions(scene, accel, s);
+        std::printf("%s: %dx%d, spp %d x %d light samples, %d renders, depth %d; reference %d spp x 64 (%.1f s); "
+                    "penumbra %zu of %zu pixels\n",
+                    cfg.scene.c_str(), cfg.size, cfg.size, cfg.spp, cfg.light_samples, cfg.renders, cfg.depth,
+                    cfg.ref_spp, ref.seconds, region[1].size() / 3, region[0].size() / 3);
+
+        const std::vector<Method> ms = methods();
+        std::vector<Renders> all(ms.size(), Renders(ref_v.size(), cfg.groups));
+        for (int r = 0; r < cfg.renders; ++r)  // renders outer, methods inner: load drifts hit all alike
+            for (std::size_t j = 0; j < ms.size(); ++j) {
+                const RenderResult img = render(scene, accel, s, ms[j], 100000 * cfg.seed + std::uint64_t(r));
+                for (std::size_t i = 0; i < ref_v.size(); ++i)
+                    all[j].add(r % cfg.groups, i, double(img.image.pixels[i / 3][i % 3]) - double(ref.image.pixels[i / 3][i % 3]));
+                ++all[j].n;
+            }
+
+        std::ofstream csv;
+        if (!cfg.csv.empty()) {
+            csv.open(cfg.csv);
+            if (!csv) throw Error("bench_lambda: cannot write " + cfg.csv);
+            csv << "scene,region,method,lambda,radius,renders,spp,light_samples,variance,variance_se,bias2,bias2_se,"
+                   "mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share\n";
+        }
+        const char* names[2] = {"all", "penumbra"};
+        for (int g = 0; g < 2; ++g) {
+            std::printf("\n%s pixels\n| method | variance | bias^2 | mean bias | MSE | RMSE | bias^2/MSE |\n"
+                        "|---|---|---|---|---|---|---|\n", names[g]);
+            for (std::size_t j = 0; j < ms.size(); ++j) {
+                const Summary x = summarize(all[j], region[std::size_t(g)], ref_v);
+                std::printf("| %s | %.4g ± %.2g | %.3g ± %.2g | %.3g ± %.2g | %.4g ± %.2g | %.4g ± %.2g | %.1f%% |\n",
+                            ms[j].name.c_str(), x.variance.value, x.variance.se, x.bias2.value, x.bias2.se,
+                            x.mean_bias.value, x.mean_bias.se, x.mse.value, x.mse.se, x.rmse.value, x.rmse.se,
+                            100.0 * x.bias2.value / x.mse.value);
+                if (csv)
+                    csv << cfg.scene << ',' << names[g] << ',' << ms[j].name << ',' << ms[j].lambda << ',' << ms[j].radius
+                        << ',' << cfg.renders << ',' << cfg.spp << ',' << cfg.light_samples << ',' << x.variance.value
+                        << ',' << x.variance.se << ',' << x.bias2.value << ',' << x.bias2.se << ',' << x.mean_bias.value
+                        << ',' << x.mean_bias.se << ',' << x.mse.value << ',' << x.mse.se << ',' << x.rmse.value << ','
+                        << x.rmse.se << ',' << x.bias2.value / x.mse.value << '\n';
+            }
+        }
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bench_lambda: %s\n", e.what());
+        return 1;
+    }
+}
