@@ -3,14 +3,15 @@
 // and statistical lambda (eq. 3.3) against lambda = the fractional visibility (000 section
 // 3.2, lines 2079-2086).
 //
-//   taskset -c 1 ./build/benchmarks/bench_lambda --csv docs/lambda.csv
-//   ./build/benchmarks/bench_lambda --scene cornell --size 48 --renders 128
+//   taskset -c 1 ./build/benchmarks/bench_lambda --csv docs/lambda_arealight.csv
+//   taskset -c 1 ./build/benchmarks/bench_lambda --scene cornell --csv docs/lambda_cornell.csv
 //
 // Direct illumination only (max depth 1, as bench_convergence's arealight comparison): the
 // rest of the path is noise every method shares and would hide what lambda does. Camera rays
 // through pixel centres, so each pixel estimates one integral, from spp x light-samples light
 // points (000 compares at 10 light samples). Every method renders `renders` independent
-// images (seed r for render r, the same seeds for every method: common random numbers).
+// images (render r has the same hashed seed for every method, see series_seed: common random
+// numbers).
 // Per pixel p and band, with d_r = Y_r - ref (ref: the reference image):
 //   variance  s_p^2 = the sample variance of Y_r over the renders (one render's variance)
 //   bias^2    U_p = (sum_{r != r'} d_r d_r') / (R (R - 1)), unbiased for (E Y - ref)^2, minus
@@ -18,19 +19,23 @@
 //             U_p = (mean d)^2 - s_p^2 / R, i.e. bias^2 = MSE - variance
 //   MSE       mean_r d_r^2 minus the reference's variance = variance + bias^2
 //   mean bias mean d (signed; averaged over pixels, biases of opposite sign cancel)
-// each averaged over the pixels (all, and the penumbra: reference fractional visibility
-// strictly between 0.02 and 0.98) and the three bands. Standard errors: the delete-a-group
-// jackknife over the renders in 32 groups (renders are independent, so it holds the
-// correlation between pooled neighbours), plus the
-// reference's noise in quadrature (its cross term 4 (m - ref)^2 v_ref and 2 v_ref^2 per pixel).
-// The reference is unbiased: lambda = 1 (correlated sampling, eq. 3.1 with lambda constant;
-// its variance is 1/50 of importance sampling's on arealight, zero where the light is fully
-// visible) at 64 light samples x --ref-spp, another seed. Methods: importance (lambda = 0) and correlated (lambda = 1)
-// are unbiased, so their bias^2 must be zero within its standard error -- the check that the
-// measurement separates bias from variance; then combined with statistical and visibility
-// lambda at radius 0, 1, 2.
+// each averaged over the pixels and the three bands, over all pixels and over the penumbra
+// (fractional visibility strictly between 0.02 and 0.98, from a render of 16 x 64 light
+// samples). Standard errors: the delete-a-group jackknife (Efron and Tibshirani 1993, ch. 11)
+// over the renders in 32 groups (the renders are independent, so it holds the correlation
+// between pooled neighbours), with the reference's noise added in quadrature (per pixel-band
+// 4 (m - ref)^2 v_ref + 2 v_ref^2 for bias^2 and MSE, v_ref for the mean bias).
+// The reference is unbiased: lambda = 1 (correlated sampling, eq. 3.1 with a constant lambda;
+// its variance a fiftieth of importance sampling's or less on arealight, zero where the light is fully
+// visible) from --ref-renders independent renders of 64 light samples, its own seeds. Methods: importance (lambda = 0) and
+// correlated (lambda = 1) are unbiased, so their bias^2 must be zero within its standard
+// error -- the check that the measurement separates bias from variance; then combined with
+// statistical and visibility lambda at radius 0, 1, 2.
 // CSV columns: scene,region,method,lambda,radius,renders,spp,light_samples,variance,
-// variance_se,bias2,bias2_se,mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share.
+// variance_se,bias2,bias2_se,mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share,
+// bias2_minus_correlated, bias2_minus_correlated_se (bias^2 minus that of lambda = 1, paired:
+// the reference's own error cancels but for a cross term, so a bias pooling adds is resolved
+// more finely than by the bias^2 column).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -57,7 +62,7 @@ using Tracer = PathTracer<Accel, RandomSampler<float>, ClassicRoulette<float, 3>
 
 struct Config {
     std::string scene = "arealight", csv;
-    int size = 64, spp = 1, light_samples = 10, renders = 1024, ref_spp = 1024, depth = 1, groups = 32;
+    int size = 64, spp = 1, light_samples = 10, renders = 1024, ref_renders = 1024, depth = 1, groups = 32;
     std::uint64_t seed = 0;
 };
 
@@ -165,6 +170,32 @@ Summary summarize(const Renders& rs, const std::vector<std::size_t>& idx, const 
     return out;
 }
 
+/// bias^2 of `a` minus bias^2 of `b` (an unbiased method), paired: the reference's own error,
+/// common to both, cancels but for the cross term -2 (m_a - m_b)(ref - I), whose variance
+/// 4 (m_a - m_b)^2 v_ref per pixel-band is added in quadrature to the jackknife's.
+Estimate paired_bias2(const Renders& a, const Renders& b, const std::vector<std::size_t>& idx,
+                      const std::vector<double>& ref_v) {
+    const double n = double(a.n), groups = double(a.g1.size()), k = double(idx.size());
+    auto u = [&](auto&& sum1a, auto&& sum2a, auto&& sum1b, auto&& sum2b, double m) {
+        double d = 0;
+        for (std::size_t i : idx)
+            d += (sum1a(i) * sum1a(i) - sum2a(i) - sum1b(i) * sum1b(i) + sum2b(i)) / (m * (m - 1.0));
+        return d / k;
+    };
+    const double full = u([&](std::size_t i) { return a.s1[i]; }, [&](std::size_t i) { return a.s2[i]; },
+                          [&](std::size_t i) { return b.s1[i]; }, [&](std::size_t i) { return b.s2[i]; }, n);
+    std::vector<double> loo;
+    for (std::size_t g = 0; g < a.g1.size(); ++g)
+        loo.push_back(u([&](std::size_t i) { return a.s1[i] - a.g1[g][i]; }, [&](std::size_t i) { return a.s2[i] - a.g2[g][i]; },
+                        [&](std::size_t i) { return b.s1[i] - b.g1[g][i]; }, [&](std::size_t i) { return b.s2[i] - b.g2[g][i]; },
+                        n - n / groups));
+    double mean = 0, ss = 0, ref = 0;
+    for (double l : loo) mean += l / groups;
+    for (double l : loo) ss += (l - mean) * (l - mean);
+    for (std::size_t i : idx) ref += 4.0 * std::pow((a.s1[i] - b.s1[i]) / n, 2) * ref_v[i];
+    return {full, std::hypot(std::sqrt((groups - 1.0) / groups * ss), std::sqrt(ref) / k)};
+}
+
 Config parse(int argc, char** argv) {
     Config cfg;
     for (int i = 1; i < argc; ++i) {
@@ -185,17 +216,33 @@ Config parse(int argc, char** argv) {
         else if (a == "--spp") cfg.spp = count(1);
         else if (a == "--light-samples") cfg.light_samples = count(2);
         else if (a == "--renders") cfg.renders = count(3);
-        else if (a == "--ref-spp") cfg.ref_spp = count(1);
+        else if (a == "--ref-renders") cfg.ref_renders = count(1);
         else if (a == "--depth") cfg.depth = count(1);
         else if (a == "--seed") cfg.seed = std::strtoull(value().c_str(), nullptr, 10);
-        else if (a == "--quick") cfg.size = 16, cfg.renders = 8, cfg.ref_spp = 16;
+        else if (a == "--quick") cfg.size = 16, cfg.renders = 8, cfg.ref_renders = 16;
         else throw Error("unknown option '" + a + "' (--scene NAME --csv FILE --size N --spp N --light-samples N "
-                         "--renders N --ref-spp N --depth N --seed N --quick)");
+                         "--renders N --ref-renders N --depth N --seed N --quick)");
     }
     // Jackknife groups of equal size: at most 32, renders rounded up to a multiple.
     cfg.groups = std::min(32, cfg.renders);
     cfg.renders = (cfg.renders + cfg.groups - 1) / cfg.groups * cfg.groups;
     return cfg;
+}
+
+/// The seed of render r of a series (splitmix64, Steele, Lea, Flood 2014, applied twice).
+/// RandomSampler seeds that are related (consecutive integers, or the pixel-sample indices it
+/// XORs into one seed) start PCG32 states that differ by a fixed amount and give dependent
+/// streams: measured here, the mean of a dimension's first uniform over 1024 consecutive seeds
+/// varies only 0.34-0.76 times as much as for independent draws (hashed seeds: 0.97-1.02), which
+/// made bias^2 of unbiased methods come out several standard errors below 0.
+std::uint64_t series_seed(std::uint64_t series, std::uint64_t r) {
+    auto mix = [](std::uint64_t z) {
+        z += 0x9e3779b97f4a7c15ULL;
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+        return z ^ (z >> 31);
+    };
+    return mix(mix(series) ^ r);
 }
 
 /// Pixel-band indices of the whole image and of the penumbra (fractional visibility in
@@ -204,7 +251,7 @@ std::array<std::vector<std::size_t>, 2> regions(const Scene<float>& scene, const
     s.light_samples = 64;
     s.spp = 16;
     const RenderResult v = render(scene, accel, s, {"visibility", "visibility", DirectEstimator::combined,
-                                                    LambdaSource::visibility, 0}, 0x5eed0001);
+                                                    LambdaSource::visibility, 0}, series_seed(0x5e6104, 0));
     std::array<std::vector<std::size_t>, 2> out;
     for (std::size_t p = 0; p < v.lambda.size(); ++p)
         for (std::size_t c = 0; c < 3; ++c) {
@@ -232,25 +279,40 @@ int main(int argc, char** argv) {
         s.max_depth = cfg.depth;
         s.light_samples = cfg.light_samples;
 
+        // The reference: the mean of --ref-renders independent renders of 1 spp (each its own hashed
+        // seed, see series_seed), and the variance of that mean.
         RenderSettings rs = s;
-        rs.spp = cfg.ref_spp;
+        rs.spp = 1;
         rs.light_samples = 64;
-        const RenderResult ref = render(scene, accel, rs, methods()[1], 0x5eed0000 + cfg.seed);
-        std::vector<double> ref_v(3 * ref.image.size());
-        for (std::size_t i = 0; i < ref_v.size(); ++i) ref_v[i] = ref.variance.pixels[i / 3][i % 3];
+        const std::size_t size = 3 * std::size_t(cfg.size) * std::size_t(cfg.size);
+        std::vector<double> ref(size, 0.0), ref_v(size, 0.0);
+        double ref_seconds = 0;
+        for (int r = 0; r < cfg.ref_renders; ++r) {
+            const RenderResult img = render(scene, accel, rs, methods()[1], series_seed(2 * cfg.seed + 1, std::uint64_t(r)));
+            ref_seconds += img.seconds;
+            for (std::size_t i = 0; i < size; ++i) {
+                const double y = img.image.pixels[i / 3][i % 3];
+                ref[i] += y, ref_v[i] += y * y;
+            }
+        }
+        const double nr = double(cfg.ref_renders);
+        for (std::size_t i = 0; i < size; ++i) {
+            ref[i] /= nr;
+            ref_v[i] = nr > 1 ? std::max(0.0, ref_v[i] / nr - ref[i] * ref[i]) / (nr - 1.0) : 0.0;
+        }
         const auto region = regions(scene, accel, s);
-        std::printf("%s: %dx%d, spp %d x %d light samples, %d renders, depth %d; reference %d spp x 64 (%.1f s); "
-                    "penumbra %zu of %zu pixels\n",
+        std::printf("%s: %dx%d, spp %d x %d light samples, %d renders, depth %d; reference %d x 64 light samples "
+                    "(%.1f s); penumbra %zu of %zu pixels\n",
                     cfg.scene.c_str(), cfg.size, cfg.size, cfg.spp, cfg.light_samples, cfg.renders, cfg.depth,
-                    cfg.ref_spp, ref.seconds, region[1].size() / 3, region[0].size() / 3);
+                    cfg.ref_renders, ref_seconds, region[1].size() / 3, region[0].size() / 3);
 
         const std::vector<Method> ms = methods();
         std::vector<Renders> all(ms.size(), Renders(ref_v.size(), cfg.groups));
         for (int r = 0; r < cfg.renders; ++r)  // renders outer, methods inner: load drifts hit all alike
             for (std::size_t j = 0; j < ms.size(); ++j) {
-                const RenderResult img = render(scene, accel, s, ms[j], 100000 * cfg.seed + std::uint64_t(r));
-                for (std::size_t i = 0; i < ref_v.size(); ++i)
-                    all[j].add(r % cfg.groups, i, double(img.image.pixels[i / 3][i % 3]) - double(ref.image.pixels[i / 3][i % 3]));
+                const RenderResult img = render(scene, accel, s, ms[j], series_seed(2 * cfg.seed, std::uint64_t(r)));
+                for (std::size_t i = 0; i < size; ++i)
+                    all[j].add(r % cfg.groups, i, double(img.image.pixels[i / 3][i % 3]) - ref[i]);
                 ++all[j].n;
             }
 
@@ -259,24 +321,27 @@ int main(int argc, char** argv) {
             csv.open(cfg.csv);
             if (!csv) throw Error("bench_lambda: cannot write " + cfg.csv);
             csv << "scene,region,method,lambda,radius,renders,spp,light_samples,variance,variance_se,bias2,bias2_se,"
-                   "mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share\n";
+                   "mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share,bias2_minus_correlated,"
+                   "bias2_minus_correlated_se\n";
         }
         const char* names[2] = {"all", "penumbra"};
         for (int g = 0; g < 2; ++g) {
-            std::printf("\n%s pixels\n| method | variance | bias^2 | mean bias | MSE | RMSE | bias^2/MSE |\n"
-                        "|---|---|---|---|---|---|---|\n", names[g]);
+            std::printf("\n%s pixels\n| method | variance | bias^2 | bias^2 - lambda=1's | mean bias | MSE | RMSE | "
+                        "bias^2/MSE |\n|---|---|---|---|---|---|---|---|\n", names[g]);
             for (std::size_t j = 0; j < ms.size(); ++j) {
                 const Summary x = summarize(all[j], region[std::size_t(g)], ref_v);
-                std::printf("| %s | %.4g ± %.2g | %.3g ± %.2g | %.3g ± %.2g | %.4g ± %.2g | %.4g ± %.2g | %.1f%% |\n",
-                            ms[j].name.c_str(), x.variance.value, x.variance.se, x.bias2.value, x.bias2.se,
-                            x.mean_bias.value, x.mean_bias.se, x.mse.value, x.mse.se, x.rmse.value, x.rmse.se,
+                const Estimate paired = paired_bias2(all[j], all[1], region[std::size_t(g)], ref_v);
+                std::printf("| %s | %.4g ± %.2g | %.3g ± %.2g | %.3g ± %.2g | %.3g ± %.2g | %.4g ± %.2g | %.4g ± %.2g | %.2f%% |\n",
+                            ms[j].name.c_str(), x.variance.value, x.variance.se, x.bias2.value, x.bias2.se, paired.value,
+                            paired.se, x.mean_bias.value, x.mean_bias.se, x.mse.value, x.mse.se, x.rmse.value, x.rmse.se,
                             100.0 * x.bias2.value / x.mse.value);
                 if (csv)
                     csv << cfg.scene << ',' << names[g] << ',' << ms[j].name << ',' << ms[j].lambda << ',' << ms[j].radius
                         << ',' << cfg.renders << ',' << cfg.spp << ',' << cfg.light_samples << ',' << x.variance.value
                         << ',' << x.variance.se << ',' << x.bias2.value << ',' << x.bias2.se << ',' << x.mean_bias.value
                         << ',' << x.mean_bias.se << ',' << x.mse.value << ',' << x.mse.se << ',' << x.rmse.value << ','
-                        << x.rmse.se << ',' << x.bias2.value / x.mse.value << '\n';
+                        << x.rmse.se << ',' << x.bias2.value / x.mse.value << ',' << paired.value << ',' << paired.se
+                        << '\n';
             }
         }
         return 0;
