@@ -1,7 +1,7 @@
 // bench_lambda: bias and variance of the combined correlated estimator (000 section 3.1) as
 // its weight lambda is pooled over pixel neighbourhoods of radius 0, 1, 2 (000 section 3.1.1),
 // and statistical lambda (eq. 3.3) against lambda = the fractional visibility (000 section
-// 3.2, lines 2079-2086).
+// 3.2, where it sets the weight of direct lighting).
 //
 //   taskset -c 1 ./build/benchmarks/bench_lambda --csv docs/lambda_arealight.csv
 //   taskset -c 1 ./build/benchmarks/bench_lambda --scene cornell --csv docs/lambda_cornell.csv
@@ -31,6 +31,8 @@
 // correlated (lambda = 1) are unbiased, so their bias^2 must be zero within its standard
 // error -- the check that the measurement separates bias from variance; then combined with
 // statistical and visibility lambda at radius 0, 1, 2.
+// --seed-check (alone) prints how dependent RandomSampler's streams from related seeds are
+// (see series_seed), the reason every render here has a hashed seed.
 // CSV columns: scene,region,method,lambda,radius,renders,spp,light_samples,variance,
 // variance_se,bias2,bias2_se,mean_bias,mean_bias_se,mse,mse_se,rmse,rmse_se,bias2_share,
 // bias2_minus_correlated, bias2_minus_correlated_se (bias^2 minus that of lambda = 1, paired:
@@ -221,7 +223,7 @@ Config parse(int argc, char** argv) {
         else if (a == "--seed") cfg.seed = std::strtoull(value().c_str(), nullptr, 10);
         else if (a == "--quick") cfg.size = 16, cfg.renders = 8, cfg.ref_renders = 16;
         else throw Error("unknown option '" + a + "' (--scene NAME --csv FILE --size N --spp N --light-samples N "
-                         "--renders N --ref-renders N --depth N --seed N --quick)");
+                         "--renders N --ref-renders N --depth N --seed N --quick, or --seed-check alone)");
     }
     // Jackknife groups of equal size: at most 32, renders rounded up to a multiple.
     cfg.groups = std::min(32, cfg.renders);
@@ -245,6 +247,29 @@ std::uint64_t series_seed(std::uint64_t series, std::uint64_t r) {
     return mix(mix(series) ^ r);
 }
 
+/// --seed-check: how dependent RandomSampler's streams are. For 4096 pixels and the first four
+/// dimensions, the variance of the mean of u - 1/2 over 1024 streams, relative to independent
+/// draws' 1/(12 * 1024): streams from consecutive seeds (index 0), from consecutive
+/// pixel-sample indices of one seed, and from series_seed's hashed seeds.
+void seed_check() {
+    const int R = 1024, P = 4096;
+    const char* names[3] = {"consecutive seeds", "consecutive pixel-sample indices", "hashed seeds"};
+    for (int mode = 0; mode < 3; ++mode) {
+        std::array<double, 4> v{};
+        for (int p = 0; p < P; ++p) {
+            std::array<double, 4> sum{};
+            for (int r = 0; r < R; ++r) {
+                RandomSampler<float> sampler(mode == 0 ? std::uint64_t(r) : mode == 1 ? 1 : series_seed(7, std::uint64_t(r)));
+                sampler.start_pixel_sample(p % 64, p / 64, mode == 1 ? std::uint64_t(r) : 0);
+                for (double& x : sum) x += double(sampler.get_1d()) - 0.5;
+            }
+            for (std::size_t k = 0; k < 4; ++k) v[k] += (sum[k] / R) * (sum[k] / R) / P;
+        }
+        std::printf("%-34s variance of the mean / independent, dimensions 0-3: %.3f %.3f %.3f %.3f (SE about 0.02)\n",
+                    names[mode], v[0] * 12 * R, v[1] * 12 * R, v[2] * 12 * R, v[3] * 12 * R);
+    }
+}
+
 /// Pixel-band indices of the whole image and of the penumbra (fractional visibility in
 /// (0.02, 0.98), from the lambda layer of a visibility-lambda render at 64 light samples).
 std::array<std::vector<std::size_t>, 2> regions(const Scene<float>& scene, const Accel& accel, RenderSettings s) {
@@ -266,6 +291,10 @@ std::array<std::vector<std::size_t>, 2> regions(const Scene<float>& scene, const
 
 int main(int argc, char** argv) {
     try {
+        if (argc == 2 && std::string(argv[1]) == "--seed-check") {
+            seed_check();
+            return 0;
+        }
         const Config cfg = parse(argc, argv);
         const Scene<float> scene = builtin_scene<float>(cfg.scene);
         if (scene.features().environment || scene.features().point_lights || !scene.features().area_lights)

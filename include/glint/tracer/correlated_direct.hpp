@@ -12,8 +12,8 @@
 // for the pooled lambda, mean and second moment from the per-pixel sums of X, a, b and their
 // products.
 //
-// The weight's source (000 section 3.2, lines 2079-2086): lambda estimated from the samples
-// (eq. 3.3, above), or "a more drastic approach", lambda = the fractional visibility, the
+// The weight's source (000 section 3.2, on setting the weight): lambda estimated from the
+// samples (eq. 3.3, above), or "a more drastic approach", lambda = the fractional visibility, the
 // share of the shadow rays (the samples with G > 0) that reach the light, pooled over the same
 // neighbourhood. 000 reports the statistical lambda "slightly better"; bench_lambda measures
 // both (docs/tracer.md). Either lambda comes from the samples it weights, so either makes the
@@ -38,7 +38,7 @@ namespace glint {
 /// lambda estimated from the samples (eq. 3.3).
 enum class DirectEstimator { importance, correlated, combined };
 
-/// Where the combined estimator's lambda comes from (000 section 3.2, lines 2079-2086):
+/// Where the combined estimator's lambda comes from (000 section 3.2):
 /// eq. 3.3's statistical estimate, or the fractional visibility of the light samples.
 enum class LambdaSource { statistical, visibility };
 
