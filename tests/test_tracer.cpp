@@ -366,7 +366,8 @@ TEST_CASE("lambda = fractional visibility (000 section 3.2): the visible share o
             sampler.start_pixel_sample(0, 0, std::uint64_t(i));
             pooled.radiance(down, sampler, states[0]);
         }
-        Film film{Image<Rgb<float>>(1, 1), Image<Rgb<float>>(1, 1), Image<float>(1, 1)};
+        Film film;
+        film.resize(1, 1);
         pooled.finish(film, std::span<const Tracer::pixel_state>(states));
         CHECK(film.lambda.at(0, 0) == doctest::Approx(mean).epsilon(1e-5));
     }
