@@ -238,13 +238,7 @@ Config parse(int argc, char** argv) {
 /// varies only 0.34-0.76 times as much as for independent draws (hashed seeds: 0.97-1.02), which
 /// made bias^2 of unbiased methods come out several standard errors below 0.
 std::uint64_t series_seed(std::uint64_t series, std::uint64_t r) {
-    auto mix = [](std::uint64_t z) {
-        z += 0x9e3779b97f4a7c15ULL;
-        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-        z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-        return z ^ (z >> 31);
-    };
-    return mix(mix(series) ^ r);
+    return detail::mix_bits(detail::mix_bits(series + 0x9e3779b97f4a7c15ULL) ^ r);
 }
 
 /// --seed-check: how dependent RandomSampler's streams are. For 4096 pixels and the first four

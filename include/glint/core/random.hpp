@@ -7,6 +7,20 @@
 #include <cstdint>
 
 namespace glint {
+namespace detail {
+
+/// SplitMix64's finalizer (Steele, Lea, Flood 2014): a bijective 64-bit mixer, for hashing
+/// seeds and scramble keys.
+constexpr std::uint64_t mix_bits(std::uint64_t v) {
+    v ^= v >> 31;
+    v *= 0x7fb5d329728ea185ULL;
+    v ^= v >> 27;
+    v *= 0x81dadef4bc2dd44dULL;
+    v ^= v >> 33;
+    return v;
+}
+
+}  // namespace detail
 
 class Pcg32 {
 public:
@@ -24,6 +38,15 @@ public:
         next_u32();
         state_ += seed;
         next_u32();
+    }
+
+    /// A generator for the key (seed, stream) with both hashed first. PCG32 started from related
+    /// seeds (consecutive integers: states a fixed offset apart) or related streams (increments
+    /// a fixed offset apart) gives dependent sequences; every seed derived from pixel, sample
+    /// or path indices goes through here.
+    static constexpr Pcg32 hashed(std::uint64_t seed, std::uint64_t stream) {
+        const std::uint64_t s = detail::mix_bits(stream ^ 0x6a09e667f3bcc909ULL);
+        return Pcg32(detail::mix_bits(seed ^ s), detail::mix_bits(s + 0x9e3779b97f4a7c15ULL));
     }
 
     constexpr std::uint32_t next_u32() {

@@ -307,7 +307,7 @@ private:
         if (!tail_started_) {
             const std::uint64_t pixel =
                 (std::uint64_t(std::uint32_t(cached_x_)) << 32) | std::uint64_t(std::uint32_t(cached_y_));
-            tail_.seed_with(sample_index_ ^ detail::mix_bits(seed_ ^ 0x68616c746f6e7461ULL), pixel);
+            tail_ = Pcg32::hashed(sample_index_ ^ detail::mix_bits(seed_ ^ 0x68616c746f6e7461ULL), pixel);
             tail_started_ = true;
         }
         return tail_.uniform<T>();

@@ -18,6 +18,8 @@
 #include <cstdint>
 #include <limits>
 
+#include <glint/core/random.hpp>
+
 #include <glint/core/math.hpp>
 
 namespace glint {
@@ -50,16 +52,6 @@ constexpr std::uint64_t reverse_bits_64(std::uint64_t v) {
     v = ((v >> 8) & 0x00FF00FF00FF00FFULL) | ((v & 0x00FF00FF00FF00FFULL) << 8);
     v = ((v >> 16) & 0x0000FFFF0000FFFFULL) | ((v & 0x0000FFFF0000FFFFULL) << 16);
     return (v >> 32) | (v << 32);
-}
-
-/// SplitMix64 finalizer: a bijective 64-bit mixer for hashing scramble keys.
-constexpr std::uint64_t mix_bits(std::uint64_t v) {
-    v ^= v >> 31;
-    v *= 0x7fb5d329728ea185ULL;
-    v ^= v >> 27;
-    v *= 0x81dadef4bc2dd44dULL;
-    v ^= v >> 33;
-    return v;
 }
 
 /// Element i of a pseudo-random permutation of {0, ..., n-1} chosen by `key` (Kensler,

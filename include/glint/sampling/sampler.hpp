@@ -25,7 +25,8 @@ concept Sampler = Scalar<T> && requires(S s, int x, int y, std::uint64_t i) {
 };
 
 /// Independent uniform samples from PCG32; the stream of pixel sample (x, y, i) depends only on
-/// (seed, x, y, i), so results do not depend on the order pixels are rendered in.
+/// (seed, x, y, i), hashed (Pcg32::hashed), so results do not depend on the order pixels are
+/// rendered in and neighbouring pixels, samples or seeds give independent streams.
 template <Scalar T>
 class RandomSampler {
 public:
@@ -34,7 +35,7 @@ public:
     void start_pixel_sample(int x, int y, std::uint64_t index) {
         const std::uint64_t pixel =
             (std::uint64_t(std::uint32_t(x)) << 32) | std::uint64_t(std::uint32_t(y));
-        rng_.seed_with(index ^ (seed_ * 0x9e3779b97f4a7c15ULL), pixel);
+        rng_ = Pcg32::hashed(index ^ detail::mix_bits(seed_), pixel);
     }
     T get_1d() { return rng_.uniform<T>(); }
     Vec2<T> get_2d() {

@@ -126,7 +126,7 @@ void run_rows(int rows, int threads, const Worker& worker) {
 
 /// Pixel (x, y)'s own random stream for `seed`.
 inline Pcg32 pixel_rng(int x, int y, std::uint64_t seed) {
-    return Pcg32(seed * 0x9e3779b97f4a7c15ULL + 0x51ed, (std::uint64_t(std::uint32_t(y)) << 32) | std::uint32_t(x));
+    return Pcg32::hashed(seed ^ 0x51ed, (std::uint64_t(std::uint32_t(y)) << 32) | std::uint32_t(x));
 }
 
 }  // namespace detail

@@ -172,7 +172,7 @@ LightAnimation<T> shoot_light_animation(const Scene<T>& s, const A& accel, const
     const Rgb<T> power = intensity * (T(4) * pi<T> / T(opt.paths_per_frame));
     for (std::size_t f = 0; f < positions.size(); ++f)
         for (std::size_t k = 0; k < opt.paths_per_frame; ++k) {
-            Pcg32 rng(opt.seed, opt.dependent ? k : f * opt.paths_per_frame + k);
+            Pcg32 rng = Pcg32::hashed(opt.seed, opt.dependent ? k : f * opt.paths_per_frame + k);
             a.paths.push_back(shoot_animation_path(s, accel, roulette, positions[f], power, rng, opt));
             a.paths.back().frame = std::uint32_t(f);
         }

@@ -245,7 +245,7 @@ LightPathMap<T> build_light_path_map(const Scene<T>& s, const A& accel, const R&
     std::vector<std::vector<Vpl<T>>> trees(map.entries.size());
     for (std::size_t k = 0; k < map.entries.size(); ++k) {
         const EntryPoint<T>& e = map.entries[k];
-        Pcg32 walk(opt.seed, 0x1000000 + k);
+        Pcg32 walk = Pcg32::hashed(opt.seed, 0x1000000 + k);
         shoot_path_tree(s, accel, roulette, e.x, e.n, s.materials[s.material_of[e.triangle]], power, opt.branches, walk,
                         opt.shooting.max_depth, trees[k]);
     }
