@@ -96,7 +96,7 @@ bool is_floor_of_ratio(double r, std::uint64_t p, std::uint64_t q) {
 // Radical inverse and Halton
 // ---------------------------------------------------------------------------------------------
 
-TEST_CASE("exact: radical inverse check values of 003 section 6 (lines 2170-2172, eq. 6.2)") {
+TEST_CASE("exact: radical inverse check values of 003 section 6 (eq. 6.2)") {
     // Phi_10(1234) = 0.4321, Phi_10(524) = 0.425, Phi_10(2) = 0.2, Phi_10(23) = 0.32, each the
     // largest double not above the exact decimal.
     CHECK(is_floor_of_ratio(radical_inverse<double>(10, 1234), 4321, 10000));
@@ -609,7 +609,7 @@ using Rgbd = Rgb<double>;
 /// normal and covers the hemisphere: the exact reflected radiance is
 /// kd (1 + 2/3) tint + ks (1 + (e+2)/(e+3)) tint.
 /// W divides the whole w by the selected lobe's density: with the glossy lobe selected,
-/// w_d / p_g ~ cos^(1-e), whose variance is infinite for e >= 3 (000 line 1210: "the specular
+/// w_d / p_g ~ cos^(1-e), whose variance is infinite for e >= 3 (000 section 2.1: "the specular
 /// sampling cannot sample the whole domain of the diffuse reflection"), so a finite-sample mean
 /// cannot be tested against standard errors. W is therefore tested with e = 2, DIS and MIS
 /// with a sharp e = 20.
@@ -694,7 +694,7 @@ TEST_CASE("exact: spectral roulette stops blue light on a yellow surface, equals
     const SpectralRoulette<double, 3> spectral;
     const ClassicRoulette<double, 3> classic;
     const Rgbd yellow(1, 1, 0), blue(0, 0, 1);
-    // 000 lines 1250-1256: classic continues with the mean albedo (2/3 for uniform weights).
+    // 000 section 2.2: classic continues with the mean albedo (2/3 for uniform weights).
     CHECK(spectral.selection_weight(blue, yellow) == 0.0);
     CHECK(ClassicRoulette<double, 3>::mean().selection_weight(blue, yellow) == doctest::Approx(2.0 / 3.0));
     const std::array<Rgbd, 1> lobes = {yellow};
@@ -760,7 +760,7 @@ TEST_CASE("exact: pilot fit, goodness and its floor; no roulette never terminate
 
 namespace {
 
-/// The furnace of 000 section 2.2 (lines 1355-1362) as a toy walk: every surface has albedo a
+/// The furnace of 000 section 2.2 as a toy walk: every surface has albedo a
 /// and emission 1 - a per band, so the radiance is 1 everywhere. Returns the per-walk
 /// estimates of the H-weighted radiance; `steps` counts the reflections.
 template <class R>

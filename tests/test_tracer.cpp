@@ -1059,11 +1059,11 @@ TEST_CASE("ReducedContinuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 
     const ReducedContinuation<double, 3, decltype(est)> same{est, 1.0}, shorter{est, 0.25};
     CHECK(same.continuation(F, a, 0) == doctest::Approx(0.6));
     CHECK(shorter.continuation(F, a, 0) == doctest::Approx(0.6 * 0.25 / (1.0 - 0.75 * 0.6)));
-    // What s_new is for (000 lines 1500-1520): the variance termination adds, (1/s - 1) E[..^2],
+    // What s_new is for (000 section 2.3): the variance termination adds, (1/s - 1) E[..^2],
     // is the same with the estimate at goodness d and s_new as without it at s_old.
     const double s_new = shorter.continuation(F, a, 0), d = 0.25;
     CHECK((1.0 / s_new - 1.0) * d == doctest::Approx(1.0 / 0.6 - 1.0));
-    // The speedup of 000 line 1530, measured: walks continued with probability s (walk
+    // The speedup 000 section 2.3 predicts, measured: walks continued with probability s (walk
     // length = number of continuations + 1, geometric) at s_old and s_new, fixed seed; the
     // ratio of mean lengths must be 1 / (1 - (1 - d) s_old) within 4 standard errors (delta
     // method on the two means, variance s / (1 - s)^2 each).

@@ -84,7 +84,7 @@ struct RenderOptions {
     /// everywhere, the pilot finds L~ = 1 and the roulette adds almost no variance.
     std::string radiance_estimate = "pilot";
     /// Radiance-estimate roulettes: shorten walks by the goodness d of the estimate measured
-    /// on pilot paths (ReducedContinuation, 000 section 2.3 lines 1495-1530).
+    /// on pilot paths (ReducedContinuation, 000 section 2.3).
     bool reduce_continuation = false;
     /// Pilot camera paths for "pilot" and reduce_continuation; their time is part of the
     /// render's time. 0: 1/32 of the render's camera paths, at least 1024, at most 4096.

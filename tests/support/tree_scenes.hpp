@@ -2,7 +2,7 @@
 // benchmarks (a fixture, not part of the library and not installed; tests, benchmarks and
 // examples find it through glint_build's include path): a tessellated sphere, a torus knot
 // (000 section 5 uses one of 2880 triangles), a random triangle soup, "teapot in a stadium"
-// (000 section 4.2, line 2593: a huge ground plane with a small dense object), a flat grid;
+// (000 section 4.2: a huge ground plane with a small dense object), a flat grid;
 // primary camera rays and incoherent diffuse rays leaving surface points on both sides.
 #pragma once
 

@@ -4,8 +4,8 @@
 // 000 chapter 6. The ray engine tests every ray against
 // every triangle. Section 6.1 splits the ray array into tiles and, for
 // every triangle and tile, first tests the triangle's enclosing sphere against the tile's
-// enclosing cone; only tiles that pass run the ray-triangle tests. Section 6.3 (lines
-// 3333-3390, 3438-3455) iterates passes for multiple refractions and reflections: in every
+// enclosing cone; only tiles that pass run the ray-triangle tests. Section 6.3
+// iterates passes for multiple refractions and reflections: in every
 // pass the cones are rebuilt for the new generation of rays, and rays whose path has
 // terminated (no hit, or the shader ends it) drop out (000 section 6.4 uses the stencil buffer
 // for this; here an active flag per ray). Per 000 section 6.3.1 the triangle record

@@ -1,8 +1,8 @@
 // glint/sampling/correlated.hpp: multiple correlated sampling, the combination of correlated
 // sampling (a main part g with known integral J) and importance sampling (density p).
 //
-// 000 section 3.1 (lines 1649-1977): from each sample u ~ p the combined primary estimator is
-//   I^ = f/p + lambda (J - g/p)                                        (line 1760)
+// 000 section 3.1: from each sample u ~ p the combined primary estimator is
+//   I^ = f/p + lambda (J - g/p)
 // (lambda = 0: importance sampling, lambda = 1: correlated sampling). The variance-optimal
 //   lambda = E[(J - g/p)(I - f/p)] / E[(J - g/p)^2]                     (eq. 3.2)
 // is estimated from the M samples (eq. 3.3, whose sums and 1/M were scattered by the extraction:
@@ -14,11 +14,11 @@
 // same quantity (E[g/p] = J) estimated with lower variance, and with the property 000 claims for
 // a fully visible diffuse light -- f = g gives lambda = 1 exactly and I^ = J with zero variance
 // (with eq33, lambda = 1 - O(1/M) and I^ carries a residual O(M^-1.5) error).
-// lambda estimated from the same samples makes I^ consistent, not unbiased (lines 1937-1951);
-// filter_lambda pools the statistics of neighbouring pixels (section 3.1.1, lines 1944-1962)
+// lambda estimated from the same samples makes I^ consistent, not unbiased;
+// filter_lambda pools the statistics of neighbouring pixels (section 3.1.1)
 // and a fixed or independently estimated lambda makes it unbiased.
 //
-// 000 section 3.2 (lines 1978-2119): direct illumination from a polygon light: f = Le fr nu G,
+// 000 section 3.2: direct illumination from a polygon light: f = Le fr nu G,
 // main part g = Le~ fr~ G with the visibility nu dropped, and J = Le~ fr~ integral_L G dy given in
 // closed form by the point-to-polygon form factor (eq. 3.4):
 //   integral_L G(x, y) dy = 1/2 sum_l angle(R_l, R_l+1) (R_l x R_l+1)/|R_l x R_l+1| . n_x
@@ -28,7 +28,7 @@
 // front of x, matching G with cos(theta'_x) clamped at zero). The point-to-polygon form factor is
 // this integral divided by pi.
 //
-// 000 section 3.3 (lines 2120-2300): environment lighting over a decomposition of the sphere of
+// 000 section 3.3: environment lighting over a decomposition of the sphere of
 // directions into cells Omega_d, each estimated by the combined estimator with one of two main
 // parts that neglect visibility:
 //   eq. 3.5  g1(w) = L_env(w) a_d / |Omega_d|,  a_d = integral_{Omega_d} fr cos  (the BRDF*cos

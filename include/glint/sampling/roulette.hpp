@@ -1,25 +1,25 @@
 // glint/sampling/roulette.hpp: Russian roulette and random BRDF-lobe selection as policies any
 // random walk can use, over Spectrum<T, N>.
 //
-// 000 section 2.1 (lines 948-1226): at a scattering point with w = w_1 + ... + w_n (w_i = the
+// 000 section 2.1: at a scattering point with w = w_1 + ... + w_n (w_i = the
 // elementary BRDF times the cosine, sampled by density p_i), lobe i is selected with
 // probability s_i and the walk stops with probability 1 - sum_i s_i. The reflected-radiance
 // estimate is L_rr = (W_i / s_i) L_in with, for the three estimators of 000,
 //   DIS (decomposition)      W_i = w_i / p_i
 //   W   (weighted)           W_i = w s_i / (p_i sum_j s_j)
 //   MIS (balance heuristic)  W_i = w s_i / (sum_j s_j p_j)
-// (lines 1222-1226; the extraction lost the fraction bars and sum limits: repaired from the
-// derivations on lines 1088-1200). W is unbiased only where every p_i covers the support of w
-// (000 line 1210: "the specular sampling cannot sample the whole domain of the diffuse
+// (000 section 2.1; the extraction lost the fraction bars and sum limits: repaired from the
+// section's derivations). W is unbiased only where every p_i covers the support of w
+// (000 section 2.1: "the specular sampling cannot sample the whole domain of the diffuse
 // reflection"); DIS and MIS need only that p_i covers w_i, resp. the mixture covers w.
 //
 // Roulette policies choose the s_i in two parts: the probability s of continuing at all
 // (continuation(F, a, depth), a = sum_i a_i the local albedo, depth = scattering vertices
 // before this one) and each lobe's share of it (selection_weight(F, a_i)): s_i = s w_i / sum w_j.
-//   ClassicRoulette   s_i = <a_i, H>, the weighted mean of the lobe's albedo (lines 1236-1248);
+//   ClassicRoulette   s_i = <a_i, H>, the weighted mean of the lobe's albedo;
 //   SpectralRoulette  s_i = sum_l F(l) W_i(l) H(l) / sum_l F(l) H(l)  (000 section 2.2, lines
 //                     1227-1384, with W_i approximated by the lobe albedo a_i, its expectation
-//                     under ideal BRDF sampling, line 1127), F = the walk's throughput so far;
+//                     under ideal BRDF sampling), F = the walk's throughput so far;
 //                     a walk carrying blue light meeting a yellow surface stops;
 //   ThroughputRoulette the field's standard rule (pbrt-v4, Mitsuba 3, Cycles): no termination
 //                     before a minimum depth k, then s = min(cap, |F a|), a norm of the
@@ -28,12 +28,12 @@
 //                     the camera, is the spectral rule deferred to depth k);
 //   NoRoulette        continue while |F a| stays above a cut-off (biased by what the cut-off
 //                     drops; 0: only the tracer's depth cap ends walks);
-//   RadianceEstimateRoulette (000 section 2.3, lines 1385-1545): with an estimate L~ of the
+//   RadianceEstimateRoulette (000 section 2.3): with an estimate L~ of the
 //                     incoming radiance, a terminated walk returns a L~ instead of 0 and a
 //                     continued one (W_i/s_i) L_in - (1 - s)/s a L~, where a = sum_i a_i is the
-//                     local albedo and s = sum_i s_i (alpha = 1/s, beta = -(1-s)/s, line 1430).
-// The scene-wide estimate L~ = a~ Phi_e / (pi S (1 - a~)) (lines 1596-1602) counts only the
-// reflected power, not the direct emission, so it stays an underestimate (line 1606).
+//                     local albedo and s = sum_i s_i (alpha = 1/s, beta = -(1-s)/s).
+// The scene-wide estimate L~ = a~ Phi_e / (pi S (1 - a~)) counts only the
+// reflected power, not the direct emission, so it stays an underestimate.
 //
 // A step returns ScatterSample{lobe, direction, weight, offset}: the reflected radiance is
 // weight * L_in + offset, and the walk multiplies its throughput by `weight` and adds
@@ -181,7 +181,7 @@ struct RadianceEstimateRoulette {
     }
 };
 
-/// Scene-wide incoming-radiance estimate of 000 section 2.3 (lines 1580-1606), per band:
+/// Scene-wide incoming-radiance estimate of 000 section 2.3, per band:
 /// L~ = a~ Phi_e / (pi S (1 - a~)) from the emitted power Phi_e, the total surface area S and
 /// the mean albedo a~ of a closed scene. Only reflected light is counted (not Phi_e itself),
 /// which keeps it an underestimate as 000 recommends.
@@ -214,8 +214,8 @@ struct RoulettePilotSample {
     Spectrum<T, N> reflected{};
 };
 
-/// 000 section 2.3 allows L~ to come "from the data gathered during a preprocessing phase"
-/// (line 1594). Per band, the constant L~ that minimizes the added variance of termination,
+/// 000 section 2.3 allows L~ to come "from the data gathered during a preprocessing phase".
+/// Per band, the constant L~ that minimizes the added variance of termination,
 /// sum (x - a L~)^2 over pilot samples, is L~ = sum x a / sum a^2 (least squares; clamped at
 /// 0, since 000 asks for a non-negative estimate). Unlike the closed-scene formula below it
 /// needs no closed scene: light escaping an open scene makes that formula an overestimate.
@@ -233,7 +233,7 @@ Spectrum<T, N> fitted_radiance_estimate(std::span<const RoulettePilotSample<T, N
     return out;
 }
 
-/// 000 section 2.3's goodness d = E[(x - a L~)^2] / E[x^2] of the estimate L~ (line 1520), in
+/// 000 section 2.3's goodness d = E[(x - a L~)^2] / E[x^2] of the estimate L~, in
 /// the H-weighted sum over bands, from pilot samples. 1 when there is nothing to measure;
 /// above 1 when L~ is worse than the zero guess.
 template <Scalar T, std::size_t N>
@@ -272,13 +272,13 @@ T estimate_goodness_floor(std::span<const RoulettePilotSample<T, N>> samples, st
     return second > 0 ? T(within / second) : T(1);
 }
 
-/// 000 section 2.3 (lines 1495-1530): the radiance estimate "can be used to reduce the
+/// 000 section 2.3: the radiance estimate "can be used to reduce the
 /// continuation probability and thus increase the speed". With goodness
 /// d = E[((w/p) L_in - a L~)^2] / E[((w/p) L_in)^2] of the estimate, the continuation
 /// probability s_new that gives the roulette the same variance as s_old without it solves
 /// (1/s_old - 1) E[((w/p) L)^2] = (1/s_new - 1) E[((w/p) L - a L~)^2], so
 ///   s_new = s_old d / (1 - (1 - d) s_old),
-/// and walks get shorter by the factor 1 / (1 - (1 - d) s_old) (the speedup of line 1530).
+/// and walks get shorter by the factor 1 / (1 - (1 - d) s_old) (000's speedup).
 /// (Repaired: the extracted formula reads s_old / ((1 - s_old)/d + 1), which does not give
 /// s_new = s_old at d = 1; the form above follows from the equation the text solves.)
 /// Wraps a radiance-estimate roulette; d in (0, 1] is measured by the renderer (a pilot

@@ -1,7 +1,7 @@
 // glint/tracer/path_tracer.hpp: the bundled reference path tracer, an integrator composed of
 // policies.
 //
-// 000 section 1.3 (lines 200-735): the rendering equation L = Le + T L is estimated by random
+// 000 section 1.3: the rendering equation L = Le + T L is estimated by random
 // walks; at every diffuse or glossy vertex the direct illumination is estimated by a
 // direct-lighting policy (next-event estimation) and an environment-lighting policy, and the
 // walk continues or stops by a Russian-roulette policy with a BRDF-selection estimator (000

@@ -3,7 +3,7 @@
 // pinhole camera; plus the scene features the tracer checks once, before rendering, to
 // choose the variant that skips what the scene does not need.
 //
-// Materials (000 section 1.3, lines 200-735, and section 2.1 for the combined BRDF):
+// Materials (000 section 1.3, and section 2.1 for the combined BRDF):
 //   lambertian  f = kd / pi;
 //   glossy      kd / pi + ks (n + 2) / (2 pi) cos^n(alpha), alpha = angle to the mirror
 //               direction (the energy-normalized Phong lobe, Lafortune and Willems 1994):

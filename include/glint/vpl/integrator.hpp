@@ -1,7 +1,7 @@
 // glint/vpl/integrator.hpp: the virtual light sources method as an integrator over the
 // ordinary Scene: shooting (vpl/shooting.hpp), then gathering at the points the camera sees.
 //
-// 000 section 1.4 (lines 860-945), gathering: a shading point x seen through a pixel (after
+// 000 section 1.4, gathering: a shading point x seen through a pixel (after
 // any mirror or dielectric vertices, followed deterministically with a Fresnel choice) gets
 //   L(x) = Le(x) + L_direct(x) + sum_vpl f_r(x, wi) dPhi (kd_y / pi) cos(theta_x) cos(theta_y) / |x - y|^2 V(x, y)
 // where f_r(x) is the hit material's full BRDF (SurfaceBrdf) and the VPL reflects diffusely.

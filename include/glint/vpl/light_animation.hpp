@@ -1,5 +1,5 @@
-// glint/vpl/light_animation.hpp: light animation with path reuse (000 chapter 7, lines
-// 3531-3963): a small light moves through F frames of a static scene; every frame's shooting
+// glint/vpl/light_animation.hpp: light animation with path reuse (000 chapter 7):
+// a small light moves through F frames of a static scene; every frame's shooting
 // paths are reused in every frame by connecting their first hit z_1 to that frame's light
 // (Sbert, Szécsi and Szirmay-Kalos 2004; the balance heuristic of Veach and Guibas 1995).
 //

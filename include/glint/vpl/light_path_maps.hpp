@@ -1,5 +1,5 @@
-// glint/vpl/light_path_maps.hpp: precomputed light path maps (000 chapter 8, lines
-// 3964-4700) for diffuse scenes: the indirect illumination caused by any small light, moved
+// glint/vpl/light_path_maps.hpp: precomputed light path maps (000 chapter 8)
+// for diffuse scenes: the indirect illumination caused by any small light, moved
 // or recoloured at run time, from one visibility test per entry point and a weighted sum.
 //
 // Preprocessing (000 sections 8.1.3-8.2): E entry points z1 are sampled uniformly on the
