@@ -288,7 +288,7 @@ struct WideBoxTest<4, false> {
 
 /// Whether traversal can give the ray any hit (see the file comment): x * 0 is 0 for a
 /// finite x and NaN otherwise, so one comparison checks all six coordinates.
-inline bool wide_ray_valid(const Ray<float>& r) {
+[[gnu::always_inline]] inline bool wide_ray_valid(const Ray<float>& r) {
     const Vec3f& o = r.origin;
     const Vec3f& d = r.direction;
     const float z = (o.x * 0.0f + o.y * 0.0f) + (o.z * 0.0f + d.x * 0.0f) + (d.y * 0.0f + d.z * 0.0f);
@@ -491,17 +491,17 @@ public:
                     }
                     const int i1 = std::countr_zero(mask);
                     mask &= mask - 1;
-                    prefetch(n.child[i0]);
-                    prefetch(n.child[i1]);
                     const bool later = !(tn[i0] < tn[i1]);
                     Entry near{n.child[later ? i1 : i0], tn[later ? i1 : i0]};
                     stack[sp++] = Entry{n.child[later ? i0 : i1], tn[later ? i0 : i1]};
-                    if (mask == 0) {  // two children
+                    prefetch(stack[sp - 1].ref);
+                    if (mask == 0) {  // two children: the nearer is read next, without a prefetch
                         ref = near.ref;
                         continue;
                     }
                     const int first = sp - 1;
                     stack[sp++] = near;
+                    prefetch(near.ref);
                     for (; mask; mask &= mask - 1) {  // insertion by distance, nearest on top
                         const int i = std::countr_zero(mask);
                         int j = sp++;
