@@ -94,11 +94,9 @@ public:
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     /// With `counters`, counts nodes, leaves and records tested.
+    /// (Two instances of one traversal: without counters the counting is compiled out.)
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters = nullptr) const {
-        return leaves_.closest_hit(
-            ray, hit,
-            [&](Ray<float>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return bvh_.template intersect<false>(r, leaf, counters); },
-            counters ? &counters->records : nullptr);
+        return counters ? closest<true>(ray, hit, counters) : closest<false>(ray, hit, nullptr);
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
@@ -112,6 +110,15 @@ public:
     std::size_t total_bytes() const { return bvh_.stats().node_bytes + leaves_.bytes(); }
 
 private:
+    template <bool Counted>
+    [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters) const {
+        if constexpr (!Counted) counters = nullptr;  // a constant: the counting disappears
+        return leaves_.closest_hit(
+            ray, hit,
+            [&](Ray<float>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return bvh_.template intersect<false>(r, leaf, counters); },
+            counters ? &counters->records : nullptr);
+    }
+
     template <class Get>
     void build(std::size_t n, Get&& tri, const BvhBuildOptions& opt) {
         if (n > std::size_t(detail::wide_max_first))

@@ -288,7 +288,7 @@ struct WideBoxTest<4, false> {
 
 /// Whether traversal can give the ray any hit (see the file comment): x * 0 is 0 for a
 /// finite x and NaN otherwise, so one comparison checks all six coordinates.
-inline bool wide_ray_valid(const Ray<float>& r) {
+[[gnu::always_inline]] inline bool wide_ray_valid(const Ray<float>& r) {
     const Vec3f& o = r.origin;
     const Vec3f& d = r.direction;
     const float z = (o.x * 0.0f + o.y * 0.0f) + (o.z * 0.0f + d.x * 0.0f) + (d.y * 0.0f + d.z * 0.0f);
@@ -480,24 +480,39 @@ public:
                 const Node& n = nodes_[ref];
                 if (counters) ++counters->nodes;
                 unsigned mask = box.test(n, ray.tmin, ray.tmax, tn);
-                if (mask != 0 && (mask & (mask - 1)) == 0) {  // one child: no stack
-                    ref = n.child[std::countr_zero(mask)];
+                if (mask != 0) {
+                    // The nearest child is visited next without a trip through the stack (as
+                    // Embree's BVH-N traversal does); on equal distances the later child first.
+                    const int i0 = std::countr_zero(mask);
+                    mask &= mask - 1;
+                    if (mask == 0) {  // one child
+                        ref = n.child[i0];
+                        continue;
+                    }
+                    const int i1 = std::countr_zero(mask);
+                    mask &= mask - 1;
+                    const bool later = !(tn[i0] < tn[i1]);
+                    Entry near{n.child[later ? i1 : i0], tn[later ? i1 : i0]};
+                    stack[sp++] = Entry{n.child[later ? i0 : i1], tn[later ? i0 : i1]};
+                    prefetch(stack[sp - 1].ref);
+                    if (mask == 0) {  // two children: the nearer is read next, without a prefetch
+                        ref = near.ref;
+                        continue;
+                    }
+                    const int first = sp - 1;
+                    stack[sp++] = near;
+                    prefetch(near.ref);
+                    for (; mask; mask &= mask - 1) {  // insertion by distance, nearest on top
+                        const int i = std::countr_zero(mask);
+                        int j = sp++;
+                        for (; j > first && stack[j - 1].t < tn[i]; --j) stack[j] = stack[j - 1];
+                        stack[j] = Entry{n.child[i], tn[i]};
+                        prefetch(n.child[i]);
+                    }
+                    assert(sp <= max_stack);
+                    ref = stack[--sp].ref;  // the nearest: within the interval, no test
                     continue;
                 }
-                const int first = sp;
-                for (; mask; mask &= mask - 1) {  // insertion by distance, nearest on top
-                    const int i = std::countr_zero(mask);
-                    int j = sp++;
-                    for (; j > first && stack[j - 1].t < tn[i]; --j) stack[j] = stack[j - 1];
-                    stack[j] = Entry{n.child[i], tn[i]};
-#if defined(__SSE2__)
-                    if (!detail::wide_is_leaf(n.child[i])) {
-                        const char* p = reinterpret_cast<const char*>(&nodes_[n.child[i]]);
-                        for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
-                    }
-#endif
-                }
-                assert(sp <= max_stack);
             } else if (counters && ++counters->leaves,
                        leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
                 found = true;
@@ -513,6 +528,16 @@ public:
 
 private:
     static constexpr std::uint32_t empty_ref = 0xffffffffu;
+
+    /// Asks for the cache lines of inner node `ref` (a child about to be visited or pushed).
+    [[gnu::always_inline]] void prefetch([[maybe_unused]] std::uint32_t ref) const {
+#if defined(__SSE2__)
+        if (!detail::wide_is_leaf(ref)) {
+            const char* p = reinterpret_cast<const char*>(&nodes_[ref]);
+            for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+        }
+#endif
+    }
 
     static WideBvhNode<N> empty_node() {
         WideBvhNode<N> n;
