@@ -1134,7 +1134,9 @@ struct EnvScene {
     std::vector<Rgbd> averages, albedo;
     Rgbd rho{0.8, 0.6, 0.4};
     template <class Env>
-    explicit EnvScene(Env&& env) : averages(cells.count()), albedo(cells.count()) {
+    explicit EnvScene(Env&& env) {
+        averages.resize(cells.count());
+        albedo.resize(cells.count());
         environment_cell_averages<double, 3>(cells, env, averages);
         for (std::size_t d = 0; d < cells.count(); ++d) albedo[d] = rho / pi<double> * cells.cosine_integral(d);
     }
