@@ -272,7 +272,7 @@ int main(int argc, char** argv) {
         }
     }
 
-    // Headline checks of issue 4 and where Halton degrades with dimension.
+    // Headline checks of the Halton sampler and where Halton degrades with dimension.
     const double random2 = fit_slope(rows, "random_pcg", "smooth_poly", 2);
     std::printf("\nsmooth 2D: random slope %+.3f (expected about -0.5)\n", random2);
     for (const SamplerSpec& s : kSamplers) {

@@ -619,7 +619,7 @@ void check_memory(const BuiltTree<float>& t, const std::string& name) {
     CHECK(h.leaf_nodes == t.leaf_count());
     CHECK(c.leaf_nodes == t.leaf_count());
     CHECK(c.node_bytes() <= h.node_bytes());
-    // 000 Fig. 4.6: 20% less memory, 47% at 31-node subtrees (issue 3: >= 20% at K >= 7,
+    // 000 Fig. 4.6: 20% less memory, 47% at 31-node subtrees (glint checks >= 20% at K >= 7,
     // >= 40% at K = 31).
     if (K >= 7) CHECK(saving >= 0.20);
     if (K == 31) CHECK(saving >= 0.40);

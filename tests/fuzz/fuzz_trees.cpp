@@ -7,10 +7,15 @@
 // any_hit must agree with its own closest_hit.
 //
 // These agreements are checked where float resolves the geometry: every triangle and origin
-// coordinate within [-2^16, 2^16], every direction component 0 or of magnitude in
-// [2^-16, 2^16]. Outside (origins at 1e17, say) the trees' box clipping is not conservative
-// and may miss a hit brute force finds: tests/fuzz/findings/trees_far_coordinates.bin, an
-// open finding (docs/hardening.md). There the target checks only that nothing crashes.
+// coordinate within [-2^16, 2^16], every direction component and both ends of the ray's
+// interval 0 (or infinite, for the ends) or of magnitude in [2^-16, 2^16]. Outside (origins
+// at 1e17, say) the trees' box clipping is not conservative and may miss a hit brute force
+// finds: tests/fuzz/findings/trees_far_coordinates.bin, an open finding (docs/hardening.md).
+// An interval end within the triangle test's rounding of the true hit decides differently
+// too: brute force accepts a rounded t the trees' exact box clip has already excluded
+// (tests/fuzz/findings/trees_interval_end_below_t_rounding.bin: tmax = -1.2e-37, the true
+// hit at -6.8e-38, Watertight's t = -3.5e-10). There the target checks only that nothing
+// crashes.
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -27,6 +32,8 @@ namespace {
 bool resolved(float x) { return std::abs(x) <= 65536.0f; }
 bool resolved_direction(float x) { return x == 0.0f || (std::abs(x) >= 1.0f / 65536.0f && std::abs(x) <= 65536.0f); }
 
+bool resolved_end(float t) { return std::isinf(t) || resolved_direction(t); }
+
 bool resolved(const glint::Vec3f& p) { return resolved(p.x) && resolved(p.y) && resolved(p.z); }
 
 template <class P, bool Exact>
@@ -40,7 +47,8 @@ void check(const std::vector<glint::TriangleVertices<float>>& tris, const std::v
         glint::StoreHit<float> a, b, c;
         const bool fa = bf.closest_hit(r, a), fb = kd.closest_hit(r, b), fc = bih.closest_hit(r, c);
         if (!in_range || !resolved(r.origin) || !resolved_direction(r.direction.x) ||
-            !resolved_direction(r.direction.y) || !resolved_direction(r.direction.z))
+            !resolved_direction(r.direction.y) || !resolved_direction(r.direction.z) || !resolved_end(r.tmin) ||
+            !resolved_end(r.tmax))
             continue;
         if (bf.any_hit(r) != fa || kd.any_hit(r) != fb || bih.any_hit(r) != fc) __builtin_trap();
         if constexpr (Exact) {

@@ -62,7 +62,7 @@ inline constexpr std::size_t batch_width = 8;
 /// data[(i / W) * W * F + k * W + i % W], W = batch_width). So the records a batch kernel
 /// reads (one block) are one contiguous run of F * W scalars, a few cache lines, instead of
 /// F lines from F separate arrays; for the 128k-triangle knot's 12 MB of records that is
-/// what decides how many misses a leaf costs (issue 3).
+/// what decides how many misses a leaf costs.
 template <class T, int F>
 struct SoaView {
     const T* data = nullptr;

@@ -11,7 +11,7 @@
 // Repair: the extracted text stops at a leaf "if we have found a suitable hit"; glint
 // stops only when the stack holds nothing nearer, which also covers BIH cells that overlap.
 //
-// Robustness (issue 3): the segment [t0, t1] starts as the ray's (tmin, tmax) clipped to the
+// Robustness: the segment [t0, t1] starts as the ray's (tmin, tmax) clipped to the
 // scene box, so rays starting inside the scene and finite tmin/tmax work unchanged. A cell
 // is entered unless its plane distance proves the segment misses it; comparisons are
 // written !(t < t0) so that the NaN of a ray parallel to a split plane and lying in it

@@ -167,7 +167,7 @@ template <class T> using BihNode = EncodedNode<T, 2>;
 static_assert(sizeof(KdNode<float>) == 8, "kd nodes are 8 bytes for float");
 static_assert(sizeof(BihNode<float>) == 12, "BIH nodes are 12 bytes for float");
 
-/// Accounting of an encoded tree (issue 3: node count, node bytes, wasted slots, bytes per
+/// Accounting of an encoded tree (node count, node bytes, wasted slots, bytes per
 /// triangle). `slots` is the allocated array length; every slot is one node in size.
 struct LayoutStats {
     std::size_t slots = 0;          // allocated nodes (node count)
