@@ -84,6 +84,20 @@ double pass_clock() {
     return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
+/// Seconds of one closest-hit pass of `acc` over `rays` (pass_clock).
+template <class Accel>
+double closest_hit_pass(const Accel& acc, const std::vector<Ray<float>>& rays) {
+    std::size_t hits = 0;
+    const double t0 = pass_clock();
+    for (const auto& r : rays) {
+        StoreHit<float> h;
+        hits += acc.closest_hit(r, h);
+    }
+    const double t = pass_clock() - t0;
+    if (hits == std::size_t(-1)) std::puts("");  // keep the loop
+    return t;
+}
+
 /// Minimal OBJ reader: `v x y z` and `f i j k ...` (i, i/t, i//n, i/t/n, negative indices),
 /// polygons fan-triangulated; every other line is ignored.
 Mesh<float> read_obj(const std::string& path) {
@@ -273,15 +287,8 @@ void time_sets(const Scene& sc, const Accel& acc, const Peer* peer, const Option
             continue;
         }
         for (int rep = 0; rep < opt.reps; ++rep) {
-            std::size_t hits = 0;
-            const double t1 = pass_clock();
-            for (const auto& r : rays) {
-                StoreHit<float> h;
-                hits += acc.closest_hit(r, h);
-            }
-            const double ours = pass_clock() - t1;
+            const double ours = closest_hit_pass(acc, rays);
             best = std::min(best, ours);
-            if (hits == std::size_t(-1)) std::puts("");  // keep the loop
             if (peer) {
                 const double t2 = pass_clock();
                 peer->trace(rays, peer_t);
@@ -397,27 +404,16 @@ void compare_spatial(const Scene& sc, const Options& opt) {
     build_start = Clock::now();
     const MeshBvh<MollerTrumbore<float>, 8> split(sc.mesh, bo);
     const double split_s = seconds_since(build_start);
-    const auto pass = [](const MeshBvh<MollerTrumbore<float>, 8>& acc, const std::vector<Ray<float>>& rays) {
-        std::size_t hits = 0;
-        const double t0 = pass_clock();
-        for (const auto& r : rays) {
-            StoreHit<float> h;
-            hits += acc.closest_hit(r, h);
-        }
-        const double t = pass_clock() - t0;
-        if (hits == std::size_t(-1)) std::puts("");  // keep the loop
-        return t;
-    };
     for (const auto& set : sc.sets) {
         std::vector<double> ratios;
         for (int rep = 0; rep < opt.reps; ++rep) {
             double without = 0, with = 0;
             if (rep % 2 == 0) {
-                without = pass(plain, set.rays);
-                with = pass(split, set.rays);
+                without = closest_hit_pass(plain, set.rays);
+                with = closest_hit_pass(split, set.rays);
             } else {
-                with = pass(split, set.rays);
-                without = pass(plain, set.rays);
+                with = closest_hit_pass(split, set.rays);
+                without = closest_hit_pass(plain, set.rays);
             }
             ratios.push_back(without / with);
         }
