@@ -39,6 +39,8 @@
 #include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 
+#include "support/args.hpp"
+
 using namespace glint;
 
 namespace {
@@ -137,19 +139,11 @@ std::vector<Ray<float>> camera_rays(const AABB<float>& box, int size) {
 Options parse(int argc, char** argv) {
     Options o;
     bool counts_given = false, size_given = false;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) usage(("missing value after " + a).c_str());
-            return argv[++i];
-        };
-        auto number = [&]() {
-            const std::string v = value();
-            char* end = nullptr;
-            const long x = std::strtol(v.c_str(), &end, 10);
-            if (*end || x <= 0 || x > 1 << 20) usage(("bad number '" + v + "' after " + a).c_str());
-            return int(x);
-        };
+    bench::Args args(argc, argv);
+    while (args.next()) try {
+        const std::string& a = args.flag();
+        auto number = [&] { return args.number(1, 1 << 20); };
+        auto value = [&] { return args.value(); };
         if (a == "--csv") o.csv = value();
         else if (a == "--plot") o.plot = value();
         else if (a == "--quick") o.quick = true;
@@ -173,6 +167,8 @@ Options parse(int argc, char** argv) {
             }
             counts_given = true;
         } else usage(("unknown argument " + a).c_str());
+    } catch (const Error& e) {
+        usage(e.what());
     }
     if (o.quick) {
         if (!size_given) o.size = 64;

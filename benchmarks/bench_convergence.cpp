@@ -70,6 +70,8 @@
 
 #include "dispatch_impl.hpp"
 
+#include "support/args.hpp"
+
 using namespace glint;
 using namespace glint_cli;
 
@@ -532,34 +534,31 @@ double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& b
 int main(int argc, char** argv) {
     try {
         Config cfg;
-        for (int i = 1; i < argc; ++i) {
-            const std::string a = argv[i];
-            auto value = [&]() -> std::string {
-                if (i + 1 >= argc) throw Error(a + " expects a value");
-                return argv[++i];
-            };
-            if (a == "--scene") cfg.scene = value();
-            else if (a == "--csv") cfg.csv = value();
-            else if (a == "--cache") cfg.cache = value();
-            else if (a == "--plot") cfg.plot = value();
-            else if (a == "--size") cfg.size = std::max(4, std::atoi(value().c_str()));
-            else if (a == "--max-spp") cfg.max_spp = std::max(1, std::atoi(value().c_str()));
-            else if (a == "--threads") cfg.threads = std::max(0, std::atoi(value().c_str()));
+        bench::Args args(argc, argv);
+        while (args.next()) {
+            const std::string& a = args.flag();
+            if (a == "--scene") cfg.scene = args.value();
+            else if (a == "--csv") cfg.csv = args.value();
+            else if (a == "--cache") cfg.cache = args.value();
+            else if (a == "--plot") cfg.plot = args.value();
+            else if (a == "--size") cfg.size = args.number(4, 1 << 14);
+            else if (a == "--max-spp") cfg.max_spp = args.number(1, 1 << 20);
+            else if (a == "--threads") cfg.threads = args.number(0, 1 << 20);
             else if (a == "--quick") cfg.quick = true;
-            else if (a == "--direct") cfg.direct = value();
-            else if (a == "--estimate") cfg.radiance_estimate = value();
+            else if (a == "--direct") cfg.direct = args.value();
+            else if (a == "--estimate") cfg.radiance_estimate = args.value();
             else if (a == "--reduce") cfg.reduce = true;
             else if (a == "--analysis") cfg.analysis = true;
             else if (a == "--jitter") cfg.jitter = true;
-            else if (a == "--sampler") cfg.sampler = value();
-            else if (a == "--seed") cfg.seed = std::strtoull(value().c_str(), nullptr, 10);
-            else if (a == "--light-samples") cfg.light_samples = std::max(1, std::atoi(value().c_str()));
-            else if (a == "--weights") cfg.weights = value();
-            else if (a == "--compare") cfg.compare = value();
-            else if (a == "--rr-depth") cfg.rr_depth = std::max(0, std::atoi(value().c_str()));
-            else throw Error("unknown option '" + a + "' (--scene NAME|all --csv FILE --size N --max-spp N "
+            else if (a == "--sampler") cfg.sampler = args.value();
+            else if (a == "--seed") cfg.seed = args.number<std::uint64_t>();
+            else if (a == "--light-samples") cfg.light_samples = args.number(1, 1 << 20);
+            else if (a == "--weights") cfg.weights = args.value();
+            else if (a == "--compare") cfg.compare = args.value();
+            else if (a == "--rr-depth") cfg.rr_depth = args.number(0, 1 << 20);
+            else args.unknown("bench_convergence --scene NAME|all --csv FILE --size N --max-spp N "
                              "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce "
-                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-owen|halton-cp --seed N --compare roulette --rr-depth N)");
+                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-owen|halton-cp --seed N --compare roulette --rr-depth N");
         }
         if (!cfg.compare.empty() && cfg.compare != "roulette")
             throw Error("--compare expects roulette, not '" + cfg.compare + "'");

@@ -54,6 +54,8 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
+#include "support/args.hpp"
+
 using namespace glint;
 
 namespace {
@@ -200,30 +202,22 @@ Estimate paired_bias2(const Renders& a, const Renders& b, const std::vector<std:
 
 Config parse(int argc, char** argv) {
     Config cfg;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw Error(a + " expects a value");
-            return argv[++i];
-        };
-        auto count = [&](int lo) {
-            const std::string v = value();
-            const int x = std::atoi(v.c_str());
-            if (x < lo) throw Error(a + " expects an integer >= " + std::to_string(lo) + ", got '" + v + "'");
-            return x;
-        };
-        if (a == "--scene") cfg.scene = value();
-        else if (a == "--csv") cfg.csv = value();
+    bench::Args args(argc, argv);
+    while (args.next()) {
+        const std::string& a = args.flag();
+        auto count = [&](int lo) { return args.number(lo, 1 << 20); };
+        if (a == "--scene") cfg.scene = args.value();
+        else if (a == "--csv") cfg.csv = args.value();
         else if (a == "--size") cfg.size = count(4);
         else if (a == "--spp") cfg.spp = count(1);
         else if (a == "--light-samples") cfg.light_samples = count(2);
         else if (a == "--renders") cfg.renders = count(3);
         else if (a == "--ref-renders") cfg.ref_renders = count(1);
         else if (a == "--depth") cfg.depth = count(1);
-        else if (a == "--seed") cfg.seed = std::strtoull(value().c_str(), nullptr, 10);
+        else if (a == "--seed") cfg.seed = args.number<std::uint64_t>();
         else if (a == "--quick") cfg.size = 16, cfg.renders = 8, cfg.ref_renders = 16;
-        else throw Error("unknown option '" + a + "' (--scene NAME --csv FILE --size N --spp N --light-samples N "
-                         "--renders N --ref-renders N --depth N --seed N --quick, or --seed-check alone)");
+        else args.unknown("bench_lambda --scene NAME --csv FILE --size N --spp N --light-samples N "
+                         "--renders N --ref-renders N --depth N --seed N --quick, or --seed-check alone");
     }
     // Jackknife groups of equal size: at most 32, renders rounded up to a multiple.
     cfg.groups = std::min(32, cfg.renders);

@@ -41,6 +41,8 @@
 #include <glint/trees/mesh_bvh.hpp>
 #include "tree_scenes.hpp"
 
+#include "support/args.hpp"
+
 using namespace glint;
 
 namespace {
@@ -174,7 +176,7 @@ Mesh<double> read_obj(const std::string& path) {
     Mesh<double> m(obj.triangles.size());
     for (std::size_t i = 0; i < m.size(); ++i)
         for (std::size_t k = 0; k < 3; ++k) m[i][k] = Vec3d(obj.triangles[i][k]);
-    if (m.empty()) throw Error("bench_occluders: " + path + " has no faces");
+    if (m.empty()) throw Error("" + path + " has no faces");
     return m;
 }
 
@@ -380,7 +382,7 @@ int run(const Options& o) {
     if (!mesh.empty()) render_scene(mesh_name, mesh, o, rows);
     if (!o.csv.empty()) {
         std::ofstream f(o.csv);
-        if (!f) throw Error("bench_occluders: cannot write " + o.csv);
+        if (!f) throw Error("cannot write " + o.csv);
         f << "scene,visibility,spheres,seconds,rel_rmse\n";
         for (const auto& r : rows)
             f << r.scene << ',' << r.visibility << ',' << r.spheres << ',' << r.seconds << ',' << r.rel_rmse << '\n';
@@ -394,23 +396,19 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
     Options o;
     try {
-        for (int i = 1; i < argc; ++i) {
-            const std::string a = argv[i];
-            auto value = [&]() -> std::string {
-                if (i + 1 >= argc) throw Error("bench_occluders: " + a + " needs a value");
-                return argv[++i];
-            };
+        bench::Args args(argc, argv);
+        while (args.next()) {
+            const std::string& a = args.flag();
             if (a == "--fit-gssa") return fit_gssa(400000);
             if (a == "--quick") o.quick = true;
-            else if (a == "--csv") o.csv = value();
-            else if (a == "--mesh") o.mesh = value();
-            else if (a == "--images") o.images = value();
-            else throw Error("bench_occluders: unknown option " + a +
-                             " (use --quick, --csv FILE, --mesh FILE.obj, --images DIR, --fit-gssa)");
+            else if (a == "--csv") o.csv = args.value();
+            else if (a == "--mesh") o.mesh = args.value();
+            else if (a == "--images") o.images = args.value();
+            else args.unknown("bench_occluders [--quick] [--csv FILE] [--mesh FILE.obj] [--images DIR] [--fit-gssa]");
         }
         return run(o);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        std::fprintf(stderr, "bench_occluders: %s\n", e.what());
         return 1;
     }
 }

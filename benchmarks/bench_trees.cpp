@@ -60,8 +60,10 @@
 #include <glint/intersection/watertight.hpp>
 #include <glint/trees/layouts.hpp>
 #include <glint/trees/mesh_bvh.hpp>
-#include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
+
+#include "support/args.hpp"
+#include "tree_scenes.hpp"
 
 #ifdef GLINT_HAVE_EMBREE
 #include <embree3/rtcore.h>
@@ -102,7 +104,7 @@ double closest_hit_pass(const Accel& acc, const std::vector<Ray<float>>& rays) {
 /// polygons fan-triangulated; every other line is ignored.
 Mesh<float> read_obj(const std::string& path) {
     std::ifstream in(path);
-    if (!in) throw Error("bench_trees: cannot open mesh '" + path + "'");
+    if (!in) throw Error("cannot open mesh '" + path + "'");
     std::vector<Vec3f> v;
     Mesh<float> m;
     std::string line;
@@ -137,7 +139,7 @@ Mesh<float> read_obj(const std::string& path) {
             for (std::size_t j = 1; j + 1 < idx.size(); ++j) m.push_back({v[idx[0]], v[idx[j]], v[idx[j + 1]]});
         }
     }
-    if (m.empty()) throw Error("bench_trees: '" + path + "' has no faces");
+    if (m.empty()) throw Error("'" + path + "' has no faces");
     return m;
 }
 
@@ -157,7 +159,7 @@ class Embree {
 public:
     explicit Embree(const Mesh<float>& m) {
         device_ = rtcNewDevice("threads=1");
-        if (!device_) throw Error("bench_trees: rtcNewDevice failed");
+        if (!device_) throw Error("rtcNewDevice failed");
         rtcSetDeviceMemoryMonitorFunction(
             device_,
             [](void* user, ssize_t delta, bool) {
@@ -532,49 +534,46 @@ void memory_table(const std::vector<std::pair<std::string, Mesh<float>>>& scenes
 
 Options parse(int argc, char** argv) {
     Options o;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw Error("bench_trees: " + a + " needs a value");
-            return argv[++i];
-        };
-        if (a == "--mesh") o.meshes.push_back(value());
-        else if (a == "--csv") o.csv = value();
+    bench::Args args(argc, argv);
+    while (args.next()) {
+        const std::string& a = args.flag();
+        if (a == "--mesh") o.meshes.push_back(args.value());
+        else if (a == "--csv") o.csv = args.value();
         else if (a == "--quick") o.quick = true;
         else if (a == "--all") o.all = true;
         else if (a == "--few") o.few = true;
         else if (a == "--no-generated") o.generated = false;
-        else if (a == "--only") o.only = value();
+        else if (a == "--only") o.only = args.value();
         else if (a == "--memory") o.memory = true;
         else if (a == "--wide") o.wide = true;
         else if (a == "--cpu-time") use_cpu_time = true;
-        else if (a == "--set") o.set = value();
+        else if (a == "--set") o.set = args.value();
         else if (a == "--big") o.big = true;
-        else if (a == "--solo") o.solo = value();
+        else if (a == "--solo") o.solo = args.value();
         else if (a == "--no-build-table") o.build_table = false;
         else if (a == "--quantized") o.quantized = true;
         else if (a == "--sbvh") o.sbvh = true;
-        else if (a == "--sbvh-alpha") o.bvh.spatial_alpha = std::stof(value());
-        else if (a == "--sbvh-budget") o.bvh.spatial_budget = std::stof(value());
+        else if (a == "--sbvh-alpha") o.bvh.spatial_alpha = args.number<float>();
+        else if (a == "--sbvh-budget") o.bvh.spatial_budget = args.number<float>();
         else if (a == "--compact-subtrees") o.compact = true;
-        else if (a == "--bvh-siblings") o.bvh.node_order = std::stoi(value()) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
-        else if (a == "--build-threads") o.build_threads = unsigned(std::stoul(value()));
-        else if (a == "--bvh-ct") o.bvh.traversal_cost = std::stof(value());
-        else if (a == "--bvh-ci") o.bvh.intersection_cost = std::stof(value());
-        else if (a == "--bvh-block") o.bvh.leaf_block = std::uint32_t(std::stoul(value()));
-        else if (a == "--bvh-leaf") o.bvh.max_leaf = std::uint32_t(std::stoul(value()));
-        else if (a == "--bvh-bins") o.bvh.bins = std::uint32_t(std::stoul(value()));
-        else if (a == "--rays") o.rays = std::stoul(value());
-        else if (a == "--reps") o.reps = std::max(1, std::stoi(value()));
-        else if (a == "--ki") o.kd.intersection_cost = std::stod(value());
-        else if (a == "--empty-bonus") o.kd.empty_bonus = std::stod(value());
+        else if (a == "--bvh-siblings") o.bvh.node_order = args.number(0, 1) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
+        else if (a == "--build-threads") o.build_threads = args.number(1u, 1024u);
+        else if (a == "--bvh-ct") o.bvh.traversal_cost = args.number<float>();
+        else if (a == "--bvh-ci") o.bvh.intersection_cost = args.number<float>();
+        else if (a == "--bvh-block") o.bvh.leaf_block = args.number<std::uint32_t>();
+        else if (a == "--bvh-leaf") o.bvh.max_leaf = args.number<std::uint32_t>();
+        else if (a == "--bvh-bins") o.bvh.bins = args.number<std::uint32_t>();
+        else if (a == "--rays") o.rays = args.number<std::size_t>(1, std::size_t(1) << 40);
+        else if (a == "--reps") o.reps = args.number(1, 1000);
+        else if (a == "--ki") o.kd.intersection_cost = args.number<double>();
+        else if (a == "--empty-bonus") o.kd.empty_bonus = args.number<double>();
         else if (a == "--help" || a == "-h") {
             std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
                       "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
                       "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] [--sbvh-budget X] [--compact-subtrees]");
             std::exit(0);
         } else {
-            throw Error("bench_trees: unknown option '" + a + "' (try --help)");
+            args.unknown("try --help");
         }
     }
     if (o.quick) {
@@ -617,7 +616,7 @@ int main(int argc, char** argv) try {
             sc.sets.push_back({"primary", make_primary_rays<float>(sc.mesh, width, height)});
         if (opt.set.empty() || opt.set == "incoherent")
             sc.sets.push_back({"incoherent", make_incoherent_rays<float>(sc.mesh, opt.rays)});
-        if (sc.sets.empty()) throw Error("bench_trees: --set " + opt.set + ": no such ray set");
+        if (sc.sets.empty()) throw Error("--set " + opt.set + ": no such ray set");
         std::printf("# scene %s: %zu triangles, %zu %s rays%s\n", sc.name.c_str(), sc.mesh.size(), sc.sets[0].rays.size(),
                     sc.sets[0].name.c_str(),
                     sc.sets.size() > 1 ? (", " + std::to_string(sc.sets[1].rays.size()) + " incoherent rays").c_str() : "");
@@ -673,7 +672,7 @@ int main(int argc, char** argv) try {
     }
     if (!opt.csv.empty()) {
         std::ofstream out(opt.csv);
-        if (!out) throw Error("bench_trees: cannot write '" + opt.csv + "'");
+        if (!out) throw Error("cannot write '" + opt.csv + "'");
         out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,build_threads\n";
         for (const Row& r : rows) {
             out << r.scene << ',' << r.rays << ',' << r.tree << ',' << r.layout << ',' << r.intersector << ',' << r.mrays
@@ -685,6 +684,6 @@ int main(int argc, char** argv) try {
     }
     return 0;
 } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
+    std::fprintf(stderr, "bench_trees: %s\n", e.what());
     return 1;
 }
