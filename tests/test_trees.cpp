@@ -62,9 +62,11 @@ struct Scene {
 
 /// A mix of ray kinds over one scene. Generic: incoherent surface rays, primary camera
 /// rays, rays starting anywhere in (and around) the scene box in random directions, half of
-/// them with finite random tmin/tmax. Then (one ray in six) adversarial axis-parallel rays
-/// whose other two coordinates are vertex coordinates, so that they lie in split planes and
-/// run through triangle edges and vertices.
+/// them with finite random tmin/tmax (half of those starting below 0, so that boxes behind
+/// the origin are entered). Then (one ray in six) adversarial axis-parallel rays whose other
+/// two coordinates are vertex coordinates, so that they lie in split planes and run through
+/// triangle edges and vertices, and through flat boxes; a quarter of them are whole lines
+/// (tmin = -inf).
 std::vector<Ray<float>> ray_mix(const Mesh<float>& m, std::size_t n, std::uint64_t seed, std::size_t& generic) {
     std::vector<Ray<float>> rays = make_incoherent_rays<float>(m, n / 4, seed);
     const auto prim = make_primary_rays<float>(m, 100, int(n / 8 / 100) + 1, seed + 1);
@@ -91,8 +93,9 @@ std::vector<Ray<float>> ray_mix(const Mesh<float>& m, std::size_t n, std::uint64
             r.direction = Vec3f(0);
             r.direction[a] = u() < 0.5f ? -1.f : 1.f;
             if (u() < 0.5f) r.direction[(a + 1) % 3] = -0.f;
-        } else if (u() < 0.5f) {  // finite interval
-            r.tmin = u() * 0.5f * size;
+            if (u() < 0.25f) r.tmin = -infinity<float>;
+        } else if (u() < 0.5f) {  // finite interval, half of them starting below 0
+            r.tmin = (u() - 0.5f) * size;
             r.tmax = r.tmin + u() * size;
         }
         rays.push_back(r);

@@ -17,7 +17,9 @@
 // a stack with their entry distance and are dropped when popped beyond the closest hit.
 // The slab test is conservative (Ize, "Robust BVH Ray Traversal", JCGT 2013): the exit
 // distance is enlarged by 1 + 2 gamma_3 (the bound on the rounding of (plane - o) / d), so
-// a box the ray meets is never rejected by rounding; a NaN slab distance (a ray lying in a
+// a box the ray meets is never rejected by rounding; for an interval starting below 0
+// (tmin < 0), whose boxes behind the origin have negative distances, both ends are moved
+// outward instead (wide_lower, wide_upper); a NaN slab distance (a ray lying in a
 // box face) constrains nothing. Rays with NaN or infinite coordinates, a zero direction or
 // an interval that is not ordered (tmin <= tmax, false for a NaN) hit nothing.
 //
@@ -154,10 +156,29 @@ inline std::uint32_t wide_leaf(std::uint32_t first, std::uint32_t count) {
 
 /// 1 + 2 gamma_3 rounded up, gamma_n = n u / (1 - n u), u = 2^-24 (Ize 2013; pbrt-v3 3.9).
 inline constexpr float wide_exit_scale = 1.0f + 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f)) + 0x1p-23f;
+/// 1 - (wide_exit_scale - 1), exactly (Sterbenz).
+inline constexpr float wide_entry_scale = 2.0f - wide_exit_scale;
+
+/// Ize's enlarged exit distance t1 * wide_exit_scale holds for t1 >= 0, which every box the
+/// ray may enter has when the interval starts at tmin >= 0 (rounding keeps a distance's
+/// sign). An interval reaching below 0 (tmin < 0) can enter boxes behind the origin, where
+/// that product would shrink a negative exit: a computed distance c (three roundings, within
+/// gamma_3 |c| of the true one) is moved away from the box on both ends instead, the entry
+/// down to c * (c < 0 ? wide_exit_scale : wide_entry_scale) and the exit up to c * (c < 0 ?
+/// wide_entry_scale : wide_exit_scale), each beyond the true distance by more than the
+/// product's own rounding.
+[[gnu::always_inline]] inline float wide_lower(float c) { return c * (c < 0.0f ? wide_exit_scale : wide_entry_scale); }
+[[gnu::always_inline]] inline float wide_upper(float c) { return c * (c < 0.0f ? wide_entry_scale : wide_exit_scale); }
+/// An exit distance (or the interval's end) as the test enlarges it.
+template <bool Signed>
+[[gnu::always_inline]] inline float wide_exit_bound(float t) {
+    if constexpr (Signed) return wide_upper(t);
+    else return t * wide_exit_scale;
+}
 
 /// The per-ray data of the slab test, and the test of one node's N boxes: a bit mask of the
 /// children entered within (tmin, tmax), their entry distances in tn.
-template <int N, bool Portable>
+template <int N, bool Portable, bool Signed = false>
 struct WideBoxTest {
     float o[3], inv[3];
     int near[3], far[3];  // bounds rows of the entry and exit planes per axis
@@ -181,8 +202,9 @@ struct WideBoxTest {
                 t0 = tl > t0 ? tl : t0;  // max, keeping t0 for a NaN slab (as maxps)
                 t1 = th < t1 ? th : t1;
             }
+            if constexpr (Signed) t0 = wide_lower(t0);
             tn[i] = t0;
-            mask |= unsigned(t0 <= t1 * wide_exit_scale) << i;
+            mask |= unsigned(t0 <= wide_exit_bound<Signed>(t1)) << i;
         }
         return mask;
     }
@@ -194,8 +216,8 @@ struct WideBoxTest {
 
 #if defined(__AVX__)
 /// 8-wide nodes with AVX: the same operations as the portable loop, in the same order.
-template <>
-struct WideBoxTest<8, false> {
+template <bool Signed>
+struct WideBoxTest<8, false, Signed> {
     __m256 o[3], inv[3];
     std::size_t near[3], far[3];  // byte offsets of the rows in a node
 
@@ -220,9 +242,7 @@ struct WideBoxTest<8, false> {
             t0 = _mm256_max_ps(tl, t0);  // tl > t0 ? tl : t0
             t1 = _mm256_min_ps(th, t1);  // th < t1 ? th : t1
         }
-        _mm256_storeu_ps(tn, t0);
-        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
-        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+        return finish(t0, t1, tn);
     }
 #if defined(__AVX2__)
     [[gnu::always_inline]] unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
@@ -239,23 +259,35 @@ struct WideBoxTest<8, false> {
             t0 = _mm256_max_ps(tl, t0);
             t1 = _mm256_min_ps(th, t1);
         }
-        _mm256_storeu_ps(tn, t0);
-        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
         const unsigned used = (1u << n.count) - 1u;
-        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ))) & used;
+        return finish(t0, t1, tn) & used;
     }
 #else
     unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
         return test(wide_decode(n), tmin, tmax, tn);
     }
 #endif
+
+private:
+    /// Entry distances to tn, and the mask of children entered (the portable test's ends).
+    [[gnu::always_inline]] unsigned finish(__m256 t0, __m256 t1, float* tn) const {
+        const __m256 up = _mm256_set1_ps(wide_exit_scale), down = _mm256_set1_ps(wide_entry_scale);
+        if constexpr (Signed) {  // blendv picks its second operand where the sign bit is set
+            t0 = _mm256_mul_ps(t0, _mm256_blendv_ps(down, up, t0));
+            t1 = _mm256_mul_ps(t1, _mm256_blendv_ps(up, down, t1));
+        } else {
+            t1 = _mm256_mul_ps(t1, up);
+        }
+        _mm256_storeu_ps(tn, t0);
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+    }
 };
 #endif
 
 #if defined(__SSE2__)
 /// 4-wide nodes with SSE.
-template <>
-struct WideBoxTest<4, false> {
+template <bool Signed>
+struct WideBoxTest<4, false, Signed> {
     __m128 o[3], inv[3];
     int near[3], far[3];
 
@@ -276,8 +308,15 @@ struct WideBoxTest<4, false> {
             t0 = _mm_max_ps(tl, t0);
             t1 = _mm_min_ps(th, t1);
         }
+        const __m128 up = _mm_set1_ps(wide_exit_scale), down = _mm_set1_ps(wide_entry_scale);
+        if constexpr (Signed) {  // -0 takes the scale of +0, as in the portable test (either keeps -0)
+            const __m128 n0 = _mm_cmplt_ps(t0, _mm_setzero_ps()), n1 = _mm_cmplt_ps(t1, _mm_setzero_ps());
+            t0 = _mm_mul_ps(t0, _mm_or_ps(_mm_and_ps(n0, up), _mm_andnot_ps(n0, down)));
+            t1 = _mm_mul_ps(t1, _mm_or_ps(_mm_and_ps(n1, down), _mm_andnot_ps(n1, up)));
+        } else {
+            t1 = _mm_mul_ps(t1, up);
+        }
         _mm_storeu_ps(tn, t0);
-        t1 = _mm_mul_ps(t1, _mm_set1_ps(wide_exit_scale));
         return unsigned(_mm_movemask_ps(_mm_cmple_ps(t0, t1)));
     }
     unsigned test(const WideBvhQNode<4>& n, float tmin, float tmax, float* tn) const {
@@ -465,7 +504,20 @@ public:
     template <bool Any, bool Portable = false, WideLeafTest Leaf>
     [[gnu::always_inline]] bool intersect(Ray<float>& ray, Leaf&& leaf, WideBvhCounters* counters = nullptr) const {
         if (nodes_.empty() || !detail::wide_ray_valid(ray)) return false;
-        const detail::WideBoxTest<N, Portable> box(ray);
+        // Intervals starting below 0 take the box test that widens both ends (see the file
+        // comment); the usual ones keep the cheaper test, with no per-node check of which.
+        if (ray.tmin < 0.0f) [[unlikely]]
+            return traverse<Any, Portable, true>(ray, leaf, counters);
+        return traverse<Any, Portable, false>(ray, leaf, counters);
+    }
+
+private:
+    static constexpr std::uint32_t empty_ref = 0xffffffffu;
+
+    /// intersect() for a valid ray, with the box test for intervals starting below 0 or not.
+    template <bool Any, bool Portable, bool Signed, class Leaf>
+    [[gnu::always_inline]] bool traverse(Ray<float>& ray, Leaf& leaf, WideBvhCounters* counters) const {
+        const detail::WideBoxTest<N, Portable, Signed> box(ray);
         struct Entry {
             std::uint32_t ref;
             float t;
@@ -521,13 +573,10 @@ public:
             do {
                 if (sp == 0) return found;
                 --sp;
-            } while (!Any && !(stack[sp].t <= ray.tmax * detail::wide_exit_scale));
+            } while (!Any && !(stack[sp].t <= detail::wide_exit_bound<Signed>(ray.tmax)));
             ref = stack[sp].ref;
         }
     }
-
-private:
-    static constexpr std::uint32_t empty_ref = 0xffffffffu;
 
     /// Asks for the cache lines of inner node `ref` (a child about to be visited or pushed).
     [[gnu::always_inline]] void prefetch([[maybe_unused]] std::uint32_t ref) const {
