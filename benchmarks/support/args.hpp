@@ -31,12 +31,12 @@ public:
         if (i_ + 1 >= argc_) fail("needs a value");
         return argv_[++i_];
     }
-    /// value() parsed as a whole number of type N (checks the options struct makes are its own).
+    /// value() parsed as an N, all of its text (for options whose own struct checks the range).
     template <class N>
     N number() {
         return parse<N>(std::numeric_limits<N>::lowest(), std::numeric_limits<N>::max(), "a number");
     }
-    /// value() parsed as a whole number of type N in [lo, hi].
+    /// value() parsed as an N, all of its text, in [lo, hi].
     template <class N>
     N number(N lo, N hi) {
         return parse<N>(lo, hi, "a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
