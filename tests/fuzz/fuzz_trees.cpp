@@ -1,4 +1,5 @@
-// libFuzzer target: kd-tree and BIH closest and any hits against brute force, for fuzzed
+// libFuzzer target: kd-tree, BIH and wide BVH (8 and 4 wide) closest and any hits against
+// brute force, for fuzzed
 // triangles and rays. The input is read as floats: the triangle count (1..64), 9 per
 // triangle, then rays of 8 floats (origin, direction, tmin, tmax). With Watertight (no
 // per-group frames: every triangle test computes the same numbers in a tree as in brute
@@ -25,6 +26,7 @@
 #include <glint/intersection/watertight.hpp>
 #include <glint/trees/brute_force.hpp>
 #include <glint/trees/layouts.hpp>
+#include <glint/trees/mesh_bvh.hpp>
 #include <glint/trees/traversal.hpp>
 
 namespace {
@@ -43,17 +45,22 @@ void check(const std::vector<glint::TriangleVertices<float>>& tris, const std::v
     const glint::BruteForce<P> bf(tris);
     const glint::KdTree<float, P, glint::CompactSubtrees<7>> kd(tris);
     const glint::Bih<float, P, glint::PointerLayout> bih(tris);
+    const glint::MeshBvh<P, 8> bvh8{std::span<const glint::TriangleVertices<float>>(tris)};
+    const glint::MeshBvh<P, 4> bvh4{std::span<const glint::TriangleVertices<float>>(tris)};
     for (const auto& r : rays) {
-        glint::StoreHit<float> a, b, c;
+        glint::StoreHit<float> a, b, c, d, e;
         const bool fa = bf.closest_hit(r, a), fb = kd.closest_hit(r, b), fc = bih.closest_hit(r, c);
+        const bool fd = bvh8.closest_hit(r, d), fe = bvh4.closest_hit(r, e);
         if (!in_range || !resolved(r.origin) || !resolved_direction(r.direction.x) ||
             !resolved_direction(r.direction.y) || !resolved_direction(r.direction.z) || !resolved_end(r.tmin) ||
             !resolved_end(r.tmax))
             continue;
-        if (bf.any_hit(r) != fa || kd.any_hit(r) != fb || bih.any_hit(r) != fc) __builtin_trap();
+        if (bf.any_hit(r) != fa || kd.any_hit(r) != fb || bih.any_hit(r) != fc || bvh8.any_hit(r) != fd ||
+            bvh4.any_hit(r) != fe)
+            __builtin_trap();
         if constexpr (Exact) {
-            if (fa != fb || fa != fc) __builtin_trap();
-            if (fa && (a.t != b.t || a.t != c.t)) __builtin_trap();
+            if (fa != fb || fa != fc || fa != fd || fa != fe) __builtin_trap();
+            if (fa && (a.t != b.t || a.t != c.t || a.t != d.t || a.t != e.t)) __builtin_trap();
         }
     }
 }
