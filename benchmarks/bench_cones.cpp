@@ -143,12 +143,11 @@ Options parse(int argc, char** argv) {
     while (args.next()) try {
         const std::string& a = args.flag();
         auto number = [&] { return args.number(1, 1 << 20); };
-        auto value = [&] { return args.value(); };
-        if (a == "--csv") o.csv = value();
-        else if (a == "--plot") o.plot = value();
+        if (a == "--csv") o.csv = args.value();
+        else if (a == "--plot") o.plot = args.value();
         else if (a == "--quick") o.quick = true;
         else if (a == "--scene") {
-            o.scene = value();
+            o.scene = args.value();
             if (o.scene != "sphere" && o.scene != "knot") usage("--scene is sphere or knot");
         }
         else if (a == "--size") o.size = number(), size_given = true;
@@ -157,7 +156,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--reps") o.reps = number();
         else if (a == "--counts") {
             o.counts.clear();
-            const std::string v = value();
+            const std::string v = args.value();
             for (std::size_t p = 0; p < v.size();) {
                 const std::size_t q = std::min(v.find(',', p), v.size());
                 const int c = std::atoi(v.substr(p, q - p).c_str());

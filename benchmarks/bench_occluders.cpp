@@ -176,7 +176,7 @@ Mesh<double> read_obj(const std::string& path) {
     Mesh<double> m(obj.triangles.size());
     for (std::size_t i = 0; i < m.size(); ++i)
         for (std::size_t k = 0; k < 3; ++k) m[i][k] = Vec3d(obj.triangles[i][k]);
-    if (m.empty()) throw Error("" + path + " has no faces");
+    if (m.empty()) throw Error(path + " has no faces");
     return m;
 }
 

@@ -532,6 +532,13 @@ void memory_table(const std::vector<std::pair<std::string, Mesh<float>>>& scenes
     }
 }
 
+constexpr const char* usage =
+    "bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
+    "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
+    "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] "
+    "[--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] "
+    "[--sbvh-budget X] [--compact-subtrees]";
+
 Options parse(int argc, char** argv) {
     Options o;
     bench::Args args(argc, argv);
@@ -568,12 +575,10 @@ Options parse(int argc, char** argv) {
         else if (a == "--ki") o.kd.intersection_cost = args.number<double>();
         else if (a == "--empty-bonus") o.kd.empty_bonus = args.number<double>();
         else if (a == "--help" || a == "-h") {
-            std::puts("bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
-                      "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-                      "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] [--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] [--sbvh-budget X] [--compact-subtrees]");
+            std::puts(usage);
             std::exit(0);
         } else {
-            args.unknown("try --help");
+            args.unknown(usage);
         }
     }
     if (o.quick) {

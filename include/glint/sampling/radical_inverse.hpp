@@ -18,9 +18,8 @@
 #include <cstdint>
 #include <limits>
 
-#include <glint/core/random.hpp>
-
 #include <glint/core/math.hpp>
+#include <glint/core/random.hpp>
 
 namespace glint {
 
