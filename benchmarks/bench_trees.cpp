@@ -23,7 +23,8 @@
 // CPU time instead of wall time (both peers alike); --wide --few: only bvh8 with Moller-Trumbore
 // (float child boxes, layout soa; --quantized adds quantized boxes, soa-q8, which every run
 // without --few includes); --no-build-table skips the build timing. --bvh-ct / --bvh-ci / --bvh-block /
-// --bvh-leaf / --bvh-bins set its SAH constants (BvhBuildOptions); --build-threads N builds the
+// --bvh-leaf / --bvh-bins / --bvh-cn set its SAH constants (BvhBuildOptions; --bvh-cn: C_N of the
+// wide collapse); --build-threads N builds the
 // timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
 // children side by side (WideNodeOrder::sibling_blocks); --compact-subtrees adds bvh8 and bvh4
 // (Moller-Trumbore) in 000's compact subtrees of 4 KiB (WideCompactSubtrees<18> and <36>,
@@ -535,7 +536,7 @@ void memory_table(const std::vector<std::pair<std::string, Mesh<float>>>& scenes
 constexpr const char* usage =
     "bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
     "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-    "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] "
+    "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--bvh-cn C_N] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] "
     "[--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] "
     "[--sbvh-budget X] [--compact-subtrees]";
 
@@ -567,6 +568,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--build-threads") o.build_threads = args.number(1u, 1024u);
         else if (a == "--bvh-ct") o.bvh.traversal_cost = args.number<float>();
         else if (a == "--bvh-ci") o.bvh.intersection_cost = args.number<float>();
+        else if (a == "--bvh-cn") o.bvh.wide_node_cost = args.number<float>();
         else if (a == "--bvh-block") o.bvh.leaf_block = args.number<std::uint32_t>();
         else if (a == "--bvh-leaf") o.bvh.max_leaf = args.number<std::uint32_t>();
         else if (a == "--bvh-bins") o.bvh.bins = args.number<std::uint32_t>();

@@ -59,6 +59,7 @@ struct BvhBuildOptions {
     std::uint32_t bins = 16;         // centre bins per axis (2 ... 64)
     unsigned threads = 1;            // build threads; 0: std::thread::hardware_concurrency()
     WideNodeOrder node_order = WideNodeOrder::depth_first;  // the wide nodes' order in memory
+    float wide_node_cost = 1.0f;     // C_N, per wide node, in the wide collapse (wide_bvh.hpp)
     // Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
     // where the best object split's two boxes overlap by more than spatial_alpha times the
     // root's surface area; references stay at most spatial_budget times the primitives.
@@ -68,10 +69,11 @@ struct BvhBuildOptions {
 
     void check() const {
         auto bad = [](const std::string& what) { throw Error("BvhBuildOptions: " + what); };
-        if (!(traversal_cost >= 0) || !(intersection_cost > 0) || !std::isfinite(traversal_cost) ||
-            !std::isfinite(intersection_cost))
-            bad("costs must be finite, traversal_cost >= 0 and intersection_cost > 0 (got " +
-                std::to_string(traversal_cost) + ", " + std::to_string(intersection_cost) + ")");
+        if (!(traversal_cost >= 0) || !(intersection_cost > 0) || !(wide_node_cost >= 0) ||
+            !std::isfinite(traversal_cost) || !std::isfinite(intersection_cost) || !std::isfinite(wide_node_cost))
+            bad("costs must be finite, traversal_cost >= 0, intersection_cost > 0 and wide_node_cost >= 0 (got " +
+                std::to_string(traversal_cost) + ", " + std::to_string(intersection_cost) + ", " +
+                std::to_string(wide_node_cost) + ")");
         if (leaf_block < 1 || max_leaf < 1 || max_leaf > 16)
             bad("leaf_block >= 1 and max_leaf in 1 ... 16 (got " + std::to_string(leaf_block) + ", " +
                 std::to_string(max_leaf) + ")");

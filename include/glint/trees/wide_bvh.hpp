@@ -1,13 +1,12 @@
 // glint/trees/wide_bvh.hpp: the wide (4- or 8-ary) BVH, its nodes and its traversal, for
 // any primitives: the leaf test is the caller's callable.
 //
-// Collapse: the binned SAH binary tree (bvh_builder.hpp) becomes N-wide top-down; a wide
-// node starts with the binary node's two children and repeatedly opens the inner child of
-// largest surface area (the one the SAH expects most rays to enter) until it has N
-// children or only leaves (as Embree's BVH-N builders do; Wald, Benthin, Boulos, "Getting
-// rid of packets", 2008, Dammertz, Hanika, Keller, "Shallow bounding volume hierarchies",
-// 2008, and Ernst and Greiner, "Multi bounding volume hierarchies", 2008, introduced N-ary
-// BVHs for single rays).
+// Collapse: the binned SAH binary tree (bvh_builder.hpp) becomes N-wide by the collapse of
+// least SAH cost (Ylitie, Karras, Laine 2017; detail::WideCollapse), chosen by dynamic
+// programming over the binary nodes: which binary subtrees become a wide node's children,
+// and which become one leaf. (Wald, Benthin, Boulos, "Getting rid of packets", 2008,
+// Dammertz, Hanika, Keller, "Shallow bounding volume hierarchies", 2008, and Ernst and
+// Greiner, "Multi bounding volume hierarchies", 2008, introduced N-ary BVHs for single rays.)
 //
 // Nodes: the N child boxes structure-of-arrays, one array of N floats per box plane, so that
 // one step tests every child with a few SIMD instructions (AVX for N = 8, SSE for N = 4, a
@@ -350,7 +349,94 @@ struct WideBvhCounters {
 struct WideBvhStats {
     std::size_t nodes = 0, leaves = 0, node_bytes = 0;
     std::uint32_t depth = 0;  // wide levels on the longest path, leaves included
+    float sah_cost = 0;       // the collapse's SAH cost per ray entering the root's box (WideCollapse)
 };
+
+namespace detail {
+/// The collapse of a binary SAH tree into an N-wide one that minimizes the wide tree's SAH
+/// cost (Ylitie, Karras, Laine 2017, section 3.1), by dynamic programming over the binary
+/// nodes. A binary subtree s fills one or more child slots of a wide node; as one slot it
+/// is a wide leaf (the whole subtree's primitives, at most max_leaf of them, costing C_I per
+/// started block of leaf_block) or a wide node (C_N, BvhBuildOptions::wide_node_cost, then
+/// its children, in 2 ... N slots); every cost is weighted by the surface area of its box,
+/// the SAH's estimate of the rays that enter it. cost(s, i), s in at most i slots, is the
+/// cheapest of s in i - 1 slots and of i slots shared between s's two children; the
+/// solution is read back top-down. Unlike opening children greedily by area, this fills
+/// nodes whose children would otherwise be few, and merges small sibling leaves into one.
+template <int N>
+class WideCollapse {
+public:
+    WideCollapse(const BinaryBvh& bin, const BvhBuildOptions& opt) : at_(bin.nodes.size()) {
+        // Children sit at higher slots than their parent: one sweep from the end.
+        for (std::size_t s = bin.nodes.size(); s-- > 0;)
+            if (bin.nodes[s].count != 0) solve(bin, std::uint32_t(s), opt);  // else a slot the build left unused
+    }
+    /// Binary subtree s, placed in one slot: a wide leaf (or else a wide node).
+    bool is_leaf(std::uint32_t s) const { return at_[s].leaf; }
+    /// The children of the wide node made of binary inner node s; returns how many (2 ... N).
+    int children(const BinaryBvh& bin, std::uint32_t s, std::uint32_t* kids) const {
+        int k = 0;
+        place(bin, s + 1, at_[s].node_left, kids, k);
+        place(bin, bin.nodes[s].right, at_[s].node_slots - at_[s].node_left, kids, k);
+        return k;
+    }
+    /// The SAH cost of the whole wide tree (binary inner node 0 as the root's wide node),
+    /// not yet divided by the root's area.
+    float root_cost() const { return at_[0].node_cost; }
+
+private:
+    struct Slot {
+        float cost[N];          // s in at most 1 ... N slots
+        std::uint8_t left[N];   // s in i slots (index i - 1): 0 = as in i - 1, else the left child's slots
+        bool leaf = true;       // s in one slot: a wide leaf, else a wide node
+        std::uint8_t node_left = 0, node_slots = 0;  // s as a wide node: its children's slots
+        float node_cost = 0;    // s as a wide node
+    };
+
+    void solve(const BinaryBvh& bin, std::uint32_t s, const BvhBuildOptions& opt) {
+        const BinaryBvhNode& b = bin.nodes[s];
+        Slot& o = at_[s];
+        const float area = b.box.surface_area();
+        const float leaf_cost = b.leaf() || b.count <= opt.max_leaf
+            ? opt.intersection_cost * float((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
+            : infinity<float>;
+        for (int i = 0; i < N; ++i) o.cost[i] = leaf_cost, o.left[i] = 0;
+        if (b.leaf()) return;
+        const Slot& l = at_[s + 1];
+        const Slot& r = at_[b.right];
+        float shared[N + 1];  // the cheapest sharing of exactly i slots between the children
+        std::uint8_t shared_left[N + 1];
+        o.node_cost = infinity<float>;
+        for (int i = 2; i <= N; ++i) {
+            shared[i] = infinity<float>;
+            for (int k = 1; k < i; ++k)
+                if (const float c = l.cost[k - 1] + r.cost[i - k - 1]; c < shared[i])
+                    shared[i] = c, shared_left[i] = std::uint8_t(k);
+            if (shared[i] < o.node_cost) o.node_cost = shared[i], o.node_slots = std::uint8_t(i), o.node_left = shared_left[i];
+        }
+        o.node_cost += opt.wide_node_cost * area;
+        o.leaf = leaf_cost <= o.node_cost;
+        o.cost[0] = std::min(leaf_cost, o.node_cost);
+        for (int i = 2; i <= N; ++i) {
+            o.cost[i - 1] = o.cost[i - 2];
+            if (shared[i] < o.cost[i - 1]) o.cost[i - 1] = shared[i], o.left[i - 1] = shared_left[i];
+        }
+    }
+    /// Appends the slots binary subtree s takes when it may take i of them.
+    void place(const BinaryBvh& bin, std::uint32_t s, int i, std::uint32_t* kids, int& k) const {
+        while (i > 1 && at_[s].left[i - 1] == 0) --i;
+        if (i == 1) {
+            kids[k++] = s;
+            return;
+        }
+        const int left = at_[s].left[i - 1];
+        place(bin, s + 1, left, kids, k);
+        place(bin, bin.nodes[s].right, i - left, kids, k);
+    }
+
+    std::vector<Slot> at_;
+};
+}  // namespace detail
 
 /// A wide node layout policy: where the nodes of a collapsed wide BVH go in its node array.
 /// `arrange<N>(nodes)` gets the nodes in the collapse's order (root first; a child word
@@ -464,7 +550,9 @@ public:
             set_child(wide[0], 0, bin.nodes[0], detail::wide_leaf(bin.nodes[0].begin, bin.nodes[0].count));
             stats_.leaves = 1;
         } else {
-            fill(bin, wide, 0, 0, 1);
+            const detail::WideCollapse<N> collapse(bin, opt);
+            stats_.sah_cost = collapse.root_cost() / bin.nodes[0].box.surface_area();
+            fill(bin, collapse, wide, 0, 0, 1);
         }
         if constexpr (!std::same_as<L, WideBuildOrder>) arrange(wide);
         if constexpr (B == WideBoxes::floats) {
@@ -630,30 +718,16 @@ private:
     }
 
     /// Fills wide node `node` of `wide` from binary inner node `slot` (depth: of this wide
-    /// node); children take slots 0 ... k - 1.
-    void fill(const BinaryBvh& bin, FloatNodes& wide, std::uint32_t slot, std::uint32_t node, std::uint32_t depth) {
-        std::uint32_t kids[N] = {slot + 1, bin.nodes[slot].right};
-        int k = 2;
-        while (k < N) {  // open the inner child of largest area
-            int best = -1;
-            float area = -1;
-            for (int i = 0; i < k; ++i) {
-                const BinaryBvhNode& c = bin.nodes[kids[i]];
-                if (!c.leaf() && c.box.surface_area() > area) {
-                    area = c.box.surface_area();
-                    best = i;
-                }
-            }
-            if (best < 0) break;
-            const std::uint32_t s = kids[best];
-            kids[best] = s + 1;
-            kids[k++] = bin.nodes[s].right;
-        }
+    /// node) with the children `collapse` chose; they take slots 0 ... k - 1.
+    void fill(const BinaryBvh& bin, const detail::WideCollapse<N>& collapse, FloatNodes& wide, std::uint32_t slot,
+              std::uint32_t node, std::uint32_t depth) {
+        std::uint32_t kids[N];
+        const int k = collapse.children(bin, slot, kids);
         stats_.depth = std::max(stats_.depth, depth + 1);  // its leaves, at least
         std::uint32_t first_child = 0;
         for (int i = 0; i < k; ++i) {
             const BinaryBvhNode& c = bin.nodes[kids[i]];
-            if (c.leaf()) {
+            if (collapse.is_leaf(kids[i])) {
                 set_child(wide[node], i, c, detail::wide_leaf(c.begin, c.count));
                 ++stats_.leaves;
                 continue;
@@ -662,11 +736,11 @@ private:
             if (first_child == 0) first_child = child;
             wide.emplace_back(empty_node());
             set_child(wide[node], i, c, child);
-            if (order_ == WideNodeOrder::depth_first) fill(bin, wide, kids[i], child, depth + 1);
+            if (order_ == WideNodeOrder::depth_first) fill(bin, collapse, wide, kids[i], child, depth + 1);
         }
         if (order_ == WideNodeOrder::sibling_blocks)  // the inner children were placed side by side
             for (int i = 0; i < k; ++i)
-                if (!bin.nodes[kids[i]].leaf()) fill(bin, wide, kids[i], first_child++, depth + 1);
+                if (!collapse.is_leaf(kids[i])) fill(bin, collapse, wide, kids[i], first_child++, depth + 1);
     }
 
     std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
