@@ -27,6 +27,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cassert>
 #include <cmath>
@@ -366,11 +367,8 @@ namespace detail {
 template <int N>
 class WideCollapse {
 public:
-    WideCollapse(const BinaryBvh& bin, const BvhBuildOptions& opt) : at_(bin.nodes.size()) {
-        // Children sit at higher slots than their parent: one sweep from the end.
-        for (std::size_t s = bin.nodes.size(); s-- > 0;)
-            if (bin.nodes[s].count != 0) solve(bin, std::uint32_t(s), opt);  // else a slot the build left unused
-    }
+    /// Solves the collapse of binary tree `bin`, whose root is an inner node.
+    WideCollapse(const BinaryBvh& bin, const BvhBuildOptions& opt) : at_(bin.nodes.size()) { solve(bin, 0, opt); }
     /// Binary subtree s, placed in one slot: a wide leaf (or else a wide node).
     bool is_leaf(std::uint32_t s) const { return at_[s].leaf; }
     /// The children of the wide node made of binary inner node s; returns how many (2 ... N).
@@ -380,47 +378,49 @@ public:
         place(bin, bin.nodes[s].right, at_[s].node_slots - at_[s].node_left, kids, k);
         return k;
     }
-    /// The SAH cost of the whole wide tree (binary inner node 0 as the root's wide node),
-    /// not yet divided by the root's area.
-    float root_cost() const { return at_[0].node_cost; }
+    /// The SAH cost of the whole wide tree (binary node 0 as the root's wide node), not yet
+    /// divided by the root's area.
+    float root_cost() const { return root_cost_; }
 
 private:
-    struct Slot {
-        float cost[N];          // s in at most 1 ... N slots
-        std::uint8_t left[N];   // s in i slots (index i - 1): 0 = as in i - 1, else the left child's slots
-        bool leaf = true;       // s in one slot: a wide leaf, else a wide node
+    struct Slot {                 // the decisions for binary subtree s (its costs live on the stack)
+        std::uint8_t left[N];     // s in at most i slots (index i - 1): 0 = as in i - 1, else the left child's slots
+        bool leaf = true;         // s in one slot: a wide leaf, else a wide node
         std::uint8_t node_left = 0, node_slots = 0;  // s as a wide node: its children's slots
-        float node_cost = 0;    // s as a wide node
     };
+    using Costs = std::array<float, N>;  // s in at most 1 ... N slots
 
-    void solve(const BinaryBvh& bin, std::uint32_t s, const BvhBuildOptions& opt) {
+    /// The costs of subtree s, after its children's (post-order; recursion as deep as the tree).
+    Costs solve(const BinaryBvh& bin, std::uint32_t s, const BvhBuildOptions& opt) {
         const BinaryBvhNode& b = bin.nodes[s];
         Slot& o = at_[s];
         const float area = b.box.surface_area();
         const float leaf_cost = b.leaf() || b.count <= opt.max_leaf
             ? opt.intersection_cost * float((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
             : infinity<float>;
-        for (int i = 0; i < N; ++i) o.cost[i] = leaf_cost, o.left[i] = 0;
-        if (b.leaf()) return;
-        const Slot& l = at_[s + 1];
-        const Slot& r = at_[b.right];
+        Costs cost;
+        cost.fill(leaf_cost);
+        std::fill(o.left, o.left + N, std::uint8_t(0));
+        if (b.leaf()) return cost;
+        const Costs l = solve(bin, s + 1, opt), r = solve(bin, b.right, opt);
         float shared[N + 1];  // the cheapest sharing of exactly i slots between the children
         std::uint8_t shared_left[N + 1];
-        o.node_cost = infinity<float>;
+        float node_cost = infinity<float>;
         for (int i = 2; i <= N; ++i) {
             shared[i] = infinity<float>;
             for (int k = 1; k < i; ++k)
-                if (const float c = l.cost[k - 1] + r.cost[i - k - 1]; c < shared[i])
-                    shared[i] = c, shared_left[i] = std::uint8_t(k);
-            if (shared[i] < o.node_cost) o.node_cost = shared[i], o.node_slots = std::uint8_t(i), o.node_left = shared_left[i];
+                if (const float c = l[k - 1] + r[i - k - 1]; c < shared[i]) shared[i] = c, shared_left[i] = std::uint8_t(k);
+            if (shared[i] < node_cost) node_cost = shared[i], o.node_slots = std::uint8_t(i), o.node_left = shared_left[i];
         }
-        o.node_cost += opt.wide_node_cost * area;
-        o.leaf = leaf_cost <= o.node_cost;
-        o.cost[0] = std::min(leaf_cost, o.node_cost);
+        node_cost += opt.wide_node_cost * area;
+        if (s == 0) root_cost_ = node_cost;
+        o.leaf = leaf_cost <= node_cost;
+        cost[0] = std::min(leaf_cost, node_cost);
         for (int i = 2; i <= N; ++i) {
-            o.cost[i - 1] = o.cost[i - 2];
-            if (shared[i] < o.cost[i - 1]) o.cost[i - 1] = shared[i], o.left[i - 1] = shared_left[i];
+            cost[i - 1] = cost[i - 2];
+            if (shared[i] < cost[i - 1]) cost[i - 1] = shared[i], o.left[i - 1] = shared_left[i];
         }
+        return cost;
     }
     /// Appends the slots binary subtree s takes when it may take i of them.
     void place(const BinaryBvh& bin, std::uint32_t s, int i, std::uint32_t* kids, int& k) const {
@@ -435,6 +435,7 @@ private:
     }
 
     std::vector<Slot> at_;
+    float root_cost_ = 0;
 };
 }  // namespace detail
 
