@@ -886,6 +886,26 @@ TEST_CASE("wide BVH: the collapse's SAH cost is what it solved, never above open
     const WideBvh<8> t(boxes, opt);
     INFO("knot, 25600 triangles: cost " << t.stats().sah_cost << ", opening by area " << by_area);
     CHECK(t.stats().sah_cost * 1.01 < by_area);
+    // Scaled by 2^40 (exact in float): the same tree and cost. By 2^100, where box areas
+    // overflow float (and the triangle tests' products would too), the collapse, which sums
+    // areas in double, still gives leaves that tile the primitives and a finite cost.
+    auto scaled = [&](int e) {
+        Mesh<float> m = knot;
+        for (auto& tri : m)
+            for (auto& p : tri) p *= std::ldexp(1.0f, e);
+        return WideBvh<8>(triangle_boxes(m), opt);
+    };
+    const WideBvh<8> big = scaled(40), huge = scaled(100);
+    REQUIRE(big.nodes().size() == t.nodes().size());
+    CHECK(big.prims() == t.prims());
+    bool same_children = true;
+    for (std::size_t n = 0; n < t.nodes().size(); ++n)
+        for (int i = 0; i < 8; ++i) same_children &= big.nodes()[n].child[i] == t.nodes()[n].child[i];
+    CHECK(same_children);
+    CHECK(std::abs(big.stats().sah_cost - t.stats().sah_cost) <= 1e-5f * t.stats().sah_cost);
+    CHECK(leaves_tile(huge, opt));
+    CHECK(std::isfinite(huge.stats().sah_cost));
+    CHECK(huge.stats().sah_cost >= opt.wide_node_cost);
 }
 
 TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree does not depend on the thread count") {

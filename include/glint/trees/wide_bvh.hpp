@@ -378,9 +378,9 @@ public:
         place(bin, bin.nodes[s].right, at_[s].node_slots - at_[s].node_left, kids, k);
         return k;
     }
-    /// The SAH cost of the whole wide tree (binary node 0 as the root's wide node), not yet
-    /// divided by the root's area.
-    float root_cost() const { return root_cost_; }
+    /// The SAH cost of the whole wide tree (binary node 0 as the root's wide node) per ray
+    /// entering the root's box.
+    double root_cost() const { return root_cost_; }
 
 private:
     struct Slot {                 // the decisions for binary subtree s (its costs live on the stack)
@@ -388,32 +388,39 @@ private:
         bool leaf = true;         // s in one slot: a wide leaf, else a wide node
         std::uint8_t node_left = 0, node_slots = 0;  // s as a wide node: its children's slots
     };
-    using Costs = std::array<float, N>;  // s in at most 1 ... N slots
+    using Costs = std::array<double, N>;  // s in at most 1 ... N slots
+
+    /// A box's surface area in double: finite for every finite float box (in float it
+    /// overflows from coordinates of about 10^19).
+    static double area_of(const AABB<float>& b) {
+        const double x = double(b.hi[0]) - b.lo[0], y = double(b.hi[1]) - b.lo[1], z = double(b.hi[2]) - b.lo[2];
+        return 2 * (x * y + y * z + z * x);
+    }
 
     /// The costs of subtree s, after its children's (post-order; recursion as deep as the tree).
     Costs solve(const BinaryBvh& bin, std::uint32_t s, const BvhBuildOptions& opt) {
         const BinaryBvhNode& b = bin.nodes[s];
         Slot& o = at_[s];
-        const float area = b.box.surface_area();
-        const float leaf_cost = b.leaf() || b.count <= opt.max_leaf
-            ? opt.intersection_cost * float((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
-            : infinity<float>;
+        const double area = area_of(b.box);
+        const double leaf_cost = b.leaf() || b.count <= opt.max_leaf
+            ? opt.intersection_cost * double((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
+            : infinity<double>;
         Costs cost;
         cost.fill(leaf_cost);
         std::fill(o.left, o.left + N, std::uint8_t(0));
         if (b.leaf()) return cost;
         const Costs l = solve(bin, s + 1, opt), r = solve(bin, b.right, opt);
-        float shared[N + 1];  // the cheapest sharing of exactly i slots between the children
+        double shared[N + 1];  // the cheapest sharing of exactly i slots between the children
         std::uint8_t shared_left[N + 1];
-        float node_cost = infinity<float>;
+        double node_cost = infinity<double>;
         for (int i = 2; i <= N; ++i) {
-            shared[i] = infinity<float>;
+            shared[i] = infinity<double>;
             for (int k = 1; k < i; ++k)
-                if (const float c = l[k - 1] + r[i - k - 1]; c < shared[i]) shared[i] = c, shared_left[i] = std::uint8_t(k);
+                if (const double c = l[k - 1] + r[i - k - 1]; c < shared[i]) shared[i] = c, shared_left[i] = std::uint8_t(k);
             if (shared[i] < node_cost) node_cost = shared[i], o.node_slots = std::uint8_t(i), o.node_left = shared_left[i];
         }
         node_cost += opt.wide_node_cost * area;
-        if (s == 0) root_cost_ = node_cost;
+        if (s == 0) root_cost_ = area > 0 ? node_cost / area : 0;  // a root box of no area: no rays
         o.leaf = leaf_cost <= node_cost;
         cost[0] = std::min(leaf_cost, node_cost);
         for (int i = 2; i <= N; ++i) {
@@ -435,7 +442,7 @@ private:
     }
 
     std::vector<Slot> at_;
-    float root_cost_ = 0;
+    double root_cost_ = 0;
 };
 }  // namespace detail
 
@@ -552,7 +559,7 @@ public:
             stats_.leaves = 1;
         } else {
             const detail::WideCollapse<N> collapse(bin, opt);
-            stats_.sah_cost = collapse.root_cost() / bin.nodes[0].box.surface_area();
+            stats_.sah_cost = float(collapse.root_cost());
             fill(bin, collapse, wide, 0, 0, 1);
         }
         if constexpr (!std::same_as<L, WideBuildOrder>) arrange(wide);
