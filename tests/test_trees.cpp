@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <random>
 #include <string>
 #include <utility>
@@ -754,6 +755,53 @@ bool leaves_tile(const WideBvh<N>& t, const BvhBuildOptions& opt) {
     return next == t.prims().size();
 }
 
+/// Every wide node has 2 ... N children (a one-leaf tree's root: 1).
+template <int N>
+bool nodes_full(const WideBvh<N>& t) {
+    for (const auto& n : t.nodes()) {
+        const auto k = std::count_if(n.child, n.child + N, [](std::uint32_t c) { return c != 0xffffffffu; });
+        if (k < (t.nodes().size() == 1 && t.stats().leaves == 1 ? 1 : 2)) return false;
+    }
+    return true;
+}
+
+/// The least SAH cost of a collapse of `bin`, by trying, for every wide node, every set of
+/// at most N binary subtrees that cuts it (exponential: small trees only); an oracle for
+/// the dynamic programme, with the same costs (C_N per wide node, C_I per started block).
+template <int N>
+struct BruteCollapse {
+    const BinaryBvh& bin;
+    const BvhBuildOptions& opt;
+    double area(std::uint32_t s) const { return double(bin.nodes[s].box.surface_area()); }
+    std::vector<std::vector<std::uint32_t>> cuts(std::uint32_t s, int m) const {
+        std::vector<std::vector<std::uint32_t>> all{{s}};
+        if (bin.nodes[s].leaf() || m < 2) return all;
+        for (const auto& l : cuts(s + 1, m - 1))
+            for (const auto& r : cuts(bin.nodes[s].right, m - int(l.size()))) {
+                all.push_back(l);
+                all.back().insert(all.back().end(), r.begin(), r.end());
+            }
+        return all;
+    }
+    double as_leaf(std::uint32_t s) const {
+        const BinaryBvhNode& b = bin.nodes[s];
+        if (!b.leaf() && b.count > opt.max_leaf) return infinity<double>;
+        return opt.intersection_cost * double((b.count + opt.leaf_block - 1) / opt.leaf_block) * area(s);
+    }
+    double as_node(std::uint32_t s) {
+        if (const auto known = memo.find(s); known != memo.end()) return known->second;
+        double best = infinity<double>;
+        for (const auto& cut : cuts(s, N)) {
+            if (cut.size() < 2) continue;
+            double c = 0;
+            for (std::uint32_t k : cut) c += bin.nodes[k].leaf() ? as_leaf(k) : std::min(as_leaf(k), as_node(k));
+            best = std::min(best, c);
+        }
+        return memo[s] = best + opt.wide_node_cost * area(s);
+    }
+    std::map<std::uint32_t, double> memo;  // as_node, per binary subtree
+};
+
 template <int N, WideBoxes B>
 void check_portable_and_user_leaf(const Scene& sc) {
     const WideBvh<N, B> bvh(triangle_boxes(sc.mesh));
@@ -906,6 +954,63 @@ TEST_CASE("wide BVH: the collapse's SAH cost is what it solved, never above open
     CHECK(leaves_tile(huge, opt));
     CHECK(std::isfinite(huge.stats().sah_cost));
     CHECK(huge.stats().sah_cost >= opt.wide_node_cost);
+}
+
+TEST_CASE("wide BVH: the collapse is the cheapest one, by exhaustive search on small trees") {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    int compared = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        Mesh<float> m;  // small random triangles, one in five a sliver of no area
+        for (std::uint32_t i = 0, n = 5 + rng() % 60; i < n; ++i) {
+            const Vec3f p(u(rng), u(rng), u(rng));
+            const float e = 0.3f * u(rng) * u(rng);
+            m.push_back({p, p + Vec3f(e * u(rng), e * u(rng), 0), p + Vec3f(0, e * u(rng), e * u(rng))});
+            if (rng() % 5 == 0) m.back() = {p, p, p + Vec3f(e, 0, 0)};
+        }
+        const float c_n[] = {0, 0.3f, 1, 4};
+        const BvhBuildOptions opt{.intersection_cost = rng() % 2 ? 1.0f : 0.3f, .leaf_block = std::uint32_t(1 + rng() % 8),
+                                  .max_leaf = std::uint32_t(1 + rng() % 16), .wide_node_cost = c_n[rng() % 4]};
+        const auto boxes = triangle_boxes(m);
+        const BinaryBvh bin = build_binary_bvh(std::span<const AABB<float>>(boxes), opt);
+        if (bin.nodes[0].leaf()) continue;
+        auto check = [&]<int N>() {
+            const WideBvh<N> t(boxes, opt);
+            const double brute = BruteCollapse<N>{bin, opt, {}}.as_node(0) / double(bin.nodes[0].box.surface_area());
+            INFO("trial " << trial << " width " << N << " triangles " << m.size() << ": collapse " << t.stats().sah_cost
+                          << ", exhaustive " << brute);
+            CHECK(std::abs(t.stats().sah_cost - brute) <= 1e-5 * brute);
+            CHECK(nodes_full(t));
+            CHECK(leaves_tile(t, opt));
+        };
+        check.template operator()<4>();
+        check.template operator()<8>();
+        ++compared;
+    }
+    CHECK(compared > 300);
+}
+
+TEST_CASE("wide BVH: boxes of no area (points, segments on a line) give full, shallow trees") {
+    // 65536 copies of one point: 4096 leaves of 16, which 585 nodes of 8 (the fewest
+    // possible, (4096 - 1) / 7 rounded up) hold in 4 levels above the leaves.
+    const std::vector<AABB<float>> points(1 << 16, AABB<float>{Vec3f(1, 2, 3), Vec3f(1, 2, 3)});
+    const WideBvh<8> p(points);
+    CHECK(p.stats().leaves == 4096);
+    CHECK(p.stats().nodes == 585);
+    CHECK(p.stats().depth == 5);
+    CHECK(nodes_full(p));
+    // Collinear segments (every box a line): every node holds at least two children.
+    std::vector<AABB<float>> segments(16000);
+    for (std::size_t i = 0; i < segments.size(); ++i)
+        segments[i] = AABB<float>{Vec3f(float(i), 0, 0), Vec3f(float(i) + 0.5f, 0, 0)};
+    const WideBvh<8> s8(segments);
+    const WideBvh<4> s4(segments);
+    CHECK(nodes_full(s8));
+    CHECK(nodes_full(s4));
+    CHECK(leaves_tile(s8, BvhBuildOptions{}));
+    INFO("segments: 8 wide depth " << s8.stats().depth << " nodes " << s8.stats().nodes << ", 4 wide depth "
+                                   << s4.stats().depth << " nodes " << s4.stats().nodes);
+    CHECK(s8.stats().nodes * 7 < s8.stats().leaves * 2);  // nodes hold 4.5 children or more on average
 }
 
 TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree does not depend on the thread count") {

@@ -350,7 +350,9 @@ struct WideBvhCounters {
 struct WideBvhStats {
     std::size_t nodes = 0, leaves = 0, node_bytes = 0;
     std::uint32_t depth = 0;  // wide levels on the longest path, leaves included
-    float sah_cost = 0;       // the collapse's SAH cost per ray entering the root's box (WideCollapse)
+    // The collapse's SAH cost per ray entering the root's box (WideCollapse) with the float
+    // boxes (quantized ones round them outward); 0 for a one-leaf tree or a root box of no area.
+    float sah_cost = 0;
 };
 
 namespace detail {
@@ -361,9 +363,10 @@ namespace detail {
 /// started block of leaf_block) or a wide node (C_N, BvhBuildOptions::wide_node_cost, then
 /// its children, in 2 ... N slots); every cost is weighted by the surface area of its box,
 /// the SAH's estimate of the rays that enter it. cost(s, i), s in at most i slots, is the
-/// cheapest of s in i - 1 slots and of i slots shared between s's two children; the
-/// solution is read back top-down. Unlike opening children greedily by area, this fills
-/// nodes whose children would otherwise be few, and merges small sibling leaves into one.
+/// cheapest of s in i - 1 slots and of i slots shared between s's two children; equal
+/// costs go to fewer wide nodes. The solution is read back top-down. Unlike opening
+/// children greedily by area, this fills nodes whose children would otherwise be few, and
+/// merges small sibling leaves into one.
 template <int N>
 class WideCollapse {
 public:
@@ -388,7 +391,15 @@ private:
         bool leaf = true;         // s in one slot: a wide leaf, else a wide node
         std::uint8_t node_left = 0, node_slots = 0;  // s as a wide node: its children's slots
     };
-    using Costs = std::array<double, N>;  // s in at most 1 ... N slots
+    /// A subtree's cost, and its wide nodes to break ties: where boxes have no area (points,
+    /// segments) every cost is 0, and the fewest nodes keep the tree full and shallow.
+    struct Cost {
+        double sah = 0;
+        std::uint32_t nodes = 0;
+        Cost operator+(const Cost& o) const { return {sah + o.sah, nodes + o.nodes}; }
+        bool operator<(const Cost& o) const { return sah < o.sah || (sah == o.sah && nodes < o.nodes); }
+    };
+    using Costs = std::array<Cost, N>;  // s in at most 1 ... N slots
 
     /// A box's surface area in double: finite for every finite float box (in float it
     /// overflows from coordinates of about 10^19).
@@ -402,27 +413,28 @@ private:
         const BinaryBvhNode& b = bin.nodes[s];
         Slot& o = at_[s];
         const double area = area_of(b.box);
-        const double leaf_cost = b.leaf() || b.count <= opt.max_leaf
-            ? opt.intersection_cost * double((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
-            : infinity<double>;
+        const Cost leaf{b.leaf() || b.count <= opt.max_leaf
+                            ? opt.intersection_cost * double((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
+                            : infinity<double>,
+                        0};
         Costs cost;
-        cost.fill(leaf_cost);
+        cost.fill(leaf);
         std::fill(o.left, o.left + N, std::uint8_t(0));
         if (b.leaf()) return cost;
         const Costs l = solve(bin, s + 1, opt), r = solve(bin, b.right, opt);
-        double shared[N + 1];  // the cheapest sharing of exactly i slots between the children
+        Cost shared[N + 1];  // the cheapest sharing of exactly i slots between the children
         std::uint8_t shared_left[N + 1];
-        double node_cost = infinity<double>;
+        Cost node{infinity<double>, 0};
         for (int i = 2; i <= N; ++i) {
-            shared[i] = infinity<double>;
-            for (int k = 1; k < i; ++k)
-                if (const double c = l[k - 1] + r[i - k - 1]; c < shared[i]) shared[i] = c, shared_left[i] = std::uint8_t(k);
-            if (shared[i] < node_cost) node_cost = shared[i], o.node_slots = std::uint8_t(i), o.node_left = shared_left[i];
+            shared[i] = l[0] + r[i - 2], shared_left[i] = 1;
+            for (int k = 2; k < i; ++k)
+                if (const Cost c = l[k - 1] + r[i - k - 1]; c < shared[i]) shared[i] = c, shared_left[i] = std::uint8_t(k);
+            if (shared[i] < node) node = shared[i], o.node_slots = std::uint8_t(i), o.node_left = shared_left[i];
         }
-        node_cost += opt.wide_node_cost * area;
-        if (s == 0) root_cost_ = area > 0 ? node_cost / area : 0;  // a root box of no area: no rays
-        o.leaf = leaf_cost <= node_cost;
-        cost[0] = std::min(leaf_cost, node_cost);
+        node = node + Cost{opt.wide_node_cost * area, 1};
+        if (s == 0) root_cost_ = area > 0 ? node.sah / area : 0;  // a root box of no area: no rays
+        o.leaf = !(node < leaf);
+        cost[0] = o.leaf ? leaf : node;
         for (int i = 2; i <= N; ++i) {
             cost[i - 1] = cost[i - 2];
             if (shared[i] < cost[i - 1]) cost[i - 1] = shared[i], o.left[i - 1] = shared_left[i];
