@@ -707,7 +707,7 @@ double wide_tree_cost(const WideBvh<N>& t, const BvhBuildOptions& opt) {
                 box.hi[a] = t.nodes()[n].bounds[2 * a + 1][i];
             }
             if (n == 0) root.extend(box);
-            const double blocks = (detail::wide_leaf_count(c) + opt.leaf_block - 1) / opt.leaf_block;
+            const double blocks = opt.blocks(detail::wide_leaf_count(c));
             cost += double(box.surface_area()) * (detail::wide_is_leaf(c) ? opt.intersection_cost * blocks : opt.wide_node_cost);
         }
     return cost / double(root.surface_area()) + opt.wide_node_cost;
@@ -732,7 +732,7 @@ double area_collapse_cost(const BinaryBvh& bin, std::uint32_t slot, const BvhBui
     double cost = opt.wide_node_cost * double(bin.nodes[slot].box.surface_area());
     for (std::uint32_t k : kids) {
         const BinaryBvhNode& c = bin.nodes[k];
-        cost += c.leaf() ? opt.intersection_cost * double((c.count + opt.leaf_block - 1) / opt.leaf_block) * c.box.surface_area()
+        cost += c.leaf() ? opt.intersection_cost * double(opt.blocks(c.count)) * c.box.surface_area()
                          : area_collapse_cost<N>(bin, k, opt);
     }
     return cost;
@@ -786,7 +786,7 @@ struct BruteCollapse {
     double as_leaf(std::uint32_t s) const {
         const BinaryBvhNode& b = bin.nodes[s];
         if (!b.leaf() && b.count > opt.max_leaf) return infinity<double>;
-        return opt.intersection_cost * double((b.count + opt.leaf_block - 1) / opt.leaf_block) * area(s);
+        return opt.intersection_cost * double(opt.blocks(b.count)) * area(s);
     }
     double as_node(std::uint32_t s) {
         if (const auto known = memo.find(s); known != memo.end()) return known->second;

@@ -82,6 +82,8 @@ struct BvhBuildOptions {
             bad("spatial_alpha in 0 ... 1 and spatial_budget in 1 ... 4 (got " + std::to_string(spatial_alpha) + ", " +
                 std::to_string(spatial_budget) + ")");
     }
+    /// Leaf blocks started by n primitives: the unit in which the SAH counts C_I.
+    std::uint32_t blocks(std::uint32_t n) const { return (n + leaf_block - 1) / leaf_block; }
     unsigned thread_count() const {
         return threads ? threads : std::max(1u, std::thread::hardware_concurrency());
     }
@@ -211,7 +213,7 @@ public:
         SahSplit sp;  // Stich et al. §4: spatial splits only where the object split's boxes overlap
         if (spatial && spatial_ && cap > e && (s.axis < 0 || overlap_area(s.left, s.right) > min_overlap_))
             sp = find_spatial(b, e, cap - e, box, inv_area);
-        if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(blocks(n)))) return;
+        if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(opt_.blocks(n)))) return;
         if (sp.cost < s.cost) {
             if (!split_spatial(slot, b, e, cap, box, sp)) node(slot, b, e, cap, box, false);  // a side came out empty
             return;
@@ -235,7 +237,6 @@ public:
 
 private:
     Vec3f centre(std::uint32_t i) const { return refs_[i].box.center(); }
-    std::uint32_t blocks(std::uint32_t n) const { return (n + opt_.leaf_block - 1) / opt_.leaf_block; }
     static float overlap_area(const AABB<float>& a, const AABB<float>& b) {
         AABB<float> o;
         o.lo = glm::max(a.lo, b.lo);
@@ -331,7 +332,7 @@ private:
             acc.extend(bin_box[j]);
             cnt += leave[j];
             right_n[j] = cnt;
-            right_cost[j] = cnt ? acc.surface_area() * float(blocks(cnt)) : infinity<float>;
+            right_cost[j] = cnt ? acc.surface_area() * float(opt_.blocks(cnt)) : infinity<float>;
         }
         acc = AABB<float>{};
         cnt = 0;
@@ -341,7 +342,7 @@ private:
             cnt += enter[j - 1];
             if (cnt == 0 || right_n[j] == 0 || cnt + right_n[j] > n + room) continue;
             const float c = opt_.traversal_cost +
-                            opt_.intersection_cost * (acc.surface_area() * float(blocks(cnt)) + right_cost[j]) * inv_area;
+                            opt_.intersection_cost * (acc.surface_area() * float(opt_.blocks(cnt)) + right_cost[j]) * inv_area;
             if (c < best.cost) {
                 best = SahSplit{a, j, c, acc, {}, cnt, right_n[j]};
                 improved = true;

@@ -371,14 +371,14 @@ template <int N>
 class WideCollapse {
 public:
     /// Solves the collapse of binary tree `bin`, whose root is an inner node.
-    WideCollapse(const BinaryBvh& bin, const BvhBuildOptions& opt) : at_(bin.nodes.size()) { solve(bin, 0, opt); }
+    WideCollapse(const BinaryBvh& bin, const BvhBuildOptions& opt) : bin_(bin), at_(bin.nodes.size()) { solve(0, opt); }
     /// Binary subtree s, placed in one slot: a wide leaf (or else a wide node).
     bool is_leaf(std::uint32_t s) const { return at_[s].leaf; }
     /// The children of the wide node made of binary inner node s; returns how many (2 ... N).
-    int children(const BinaryBvh& bin, std::uint32_t s, std::uint32_t* kids) const {
+    int children(std::uint32_t s, std::uint32_t* kids) const {
         int k = 0;
-        place(bin, s + 1, at_[s].node_left, kids, k);
-        place(bin, bin.nodes[s].right, at_[s].node_slots - at_[s].node_left, kids, k);
+        place(s + 1, at_[s].node_left, kids, k);
+        place(bin_.nodes[s].right, at_[s].node_slots - at_[s].node_left, kids, k);
         return k;
     }
     /// The SAH cost of the whole wide tree (binary node 0 as the root's wide node) per ray
@@ -401,27 +401,21 @@ private:
     };
     using Costs = std::array<Cost, N>;  // s in at most 1 ... N slots
 
-    /// A box's surface area in double: finite for every finite float box (in float it
-    /// overflows from coordinates of about 10^19).
-    static double area_of(const AABB<float>& b) {
-        const double x = double(b.hi[0]) - b.lo[0], y = double(b.hi[1]) - b.lo[1], z = double(b.hi[2]) - b.lo[2];
-        return 2 * (x * y + y * z + z * x);
-    }
-
     /// The costs of subtree s, after its children's (post-order; recursion as deep as the tree).
-    Costs solve(const BinaryBvh& bin, std::uint32_t s, const BvhBuildOptions& opt) {
-        const BinaryBvhNode& b = bin.nodes[s];
+    Costs solve(std::uint32_t s, const BvhBuildOptions& opt) {
+        const BinaryBvhNode& b = bin_.nodes[s];
         Slot& o = at_[s];
-        const double area = area_of(b.box);
-        const Cost leaf{b.leaf() || b.count <= opt.max_leaf
-                            ? opt.intersection_cost * double((b.count + opt.leaf_block - 1) / opt.leaf_block) * area
-                            : infinity<double>,
+        // In double: finite for every finite float box (a float area overflows from
+        // coordinates of about 10^19).
+        const double area = AABB<double>{Vec3<double>(b.box.lo), Vec3<double>(b.box.hi)}.surface_area();
+        const Cost leaf{b.leaf() || b.count <= opt.max_leaf ? opt.intersection_cost * double(opt.blocks(b.count)) * area
+                                                            : infinity<double>,
                         0};
         Costs cost;
         cost.fill(leaf);
         std::fill(o.left, o.left + N, std::uint8_t(0));
         if (b.leaf()) return cost;
-        const Costs l = solve(bin, s + 1, opt), r = solve(bin, b.right, opt);
+        const Costs l = solve(s + 1, opt), r = solve(b.right, opt);
         Cost shared[N + 1];  // the cheapest sharing of exactly i slots between the children
         std::uint8_t shared_left[N + 1];
         Cost node{infinity<double>, 0};
@@ -442,17 +436,18 @@ private:
         return cost;
     }
     /// Appends the slots binary subtree s takes when it may take i of them.
-    void place(const BinaryBvh& bin, std::uint32_t s, int i, std::uint32_t* kids, int& k) const {
+    void place(std::uint32_t s, int i, std::uint32_t* kids, int& k) const {
         while (i > 1 && at_[s].left[i - 1] == 0) --i;
         if (i == 1) {
             kids[k++] = s;
             return;
         }
         const int left = at_[s].left[i - 1];
-        place(bin, s + 1, left, kids, k);
-        place(bin, bin.nodes[s].right, i - left, kids, k);
+        place(s + 1, left, kids, k);
+        place(bin_.nodes[s].right, i - left, kids, k);
     }
 
+    const BinaryBvh& bin_;  // outlives the collapse: both live in WideBvh's constructor
     std::vector<Slot> at_;
     double root_cost_ = 0;
 };
@@ -742,7 +737,7 @@ private:
     void fill(const BinaryBvh& bin, const detail::WideCollapse<N>& collapse, FloatNodes& wide, std::uint32_t slot,
               std::uint32_t node, std::uint32_t depth) {
         std::uint32_t kids[N];
-        const int k = collapse.children(bin, slot, kids);
+        const int k = collapse.children(slot, kids);
         stats_.depth = std::max(stats_.depth, depth + 1);  // its leaves, at least
         std::uint32_t first_child = 0;
         for (int i = 0; i < k; ++i) {
