@@ -1,6 +1,6 @@
 // glint/cones/cone.hpp: infinite cones that enclose bundles of rays, built incrementally.
 //
-// 000 section 6.2: a bundle of coherent rays is enclosed in an infinite
+// Szécsi 2009, §6.2: a bundle of coherent rays is enclosed in an infinite
 // cone (apex a, unit axis x, half opening angle phi). Starting from the zero-angle cone of
 // the first ray, every ray is added in two steps:
 //   (a) if its direction r is outside the cone's solid angle (x . r < cos phi), the cone is
@@ -39,12 +39,12 @@
 //   Translating along any direction inside the cone (e, or x) keeps the old cone inside
 //   the new one, and widening about the apex does too, so both steps are conservative.
 //
-// Order. 000 interleaves (a) and (b) ray by ray (ConeOrder::interleaved). Then an early
+// Order. Szécsi 2009 interleaves (a) and (b) ray by ray (ConeOrder::interleaved). Then an early
 // translation made with a narrow opening pushes the apex far back, and a later widening
 // about that distant apex makes the cone wide where the rays are. ConeOrder::directions_first
 // (the default) runs step (a) over all rays, then step (b) over all origins with the final
 // opening, so that the apex moves only as far as the final opening needs. Both are the
-// same two steps of 000; only the order differs.
+// same two steps of Szécsi 2009; only the order differs.
 //
 // Numerical safety. After either order a last pass makes the cone exact and safe: for the
 // apex and axis found, it computes the smallest opening that holds every direction and
@@ -97,7 +97,7 @@ struct Cone {
     }
 };
 
-/// Which order the two steps of 000 section 6.2 are applied in (see the header comment).
+/// Which order the two steps of Szécsi 2009, §6.2 are applied in (see the header comment).
 enum class ConeOrder : std::uint8_t { directions_first, interleaved };
 
 struct ConeOptions {
@@ -170,7 +170,7 @@ struct ConeState {
     }
 };
 
-/// Step (a): widen the opening to hold the unit direction r (000 section 6.2, repaired
+/// Step (a): widen the opening to hold the unit direction r (Szécsi 2009, §6.2, repaired
 /// as described in the header comment).
 template <class T>
 void extend_to_direction(ConeState<T>& s, const Vec3<T>& r, const ConeOptions& opt) {
@@ -188,7 +188,7 @@ void extend_to_direction(ConeState<T>& s, const Vec3<T>& r, const ConeOptions& o
     s.set_phi(phi_new);
 }
 
-/// Step (b): translate the apex so that the cone holds the point o (000 section 6.2,
+/// Step (b): translate the apex so that the cone holds the point o (Szécsi 2009, §6.2,
 /// repaired as described in the header comment).
 template <class T>
 void translate_to_point(ConeState<T>& s, const Vec3<T>& o, const ConeOptions& opt) {
@@ -252,7 +252,7 @@ Cone<T> finish_cone(const ConeState<T>& s, std::size_t n, Get&& ray_at, const Co
     return cone;
 }
 
-/// Enclosing cone of the n rays ray_at(0 .. n-1) (000 section 6.2).
+/// Enclosing cone of the n rays ray_at(0 .. n-1) (Szécsi 2009, §6.2).
 template <class T, class Get>
 Cone<T> enclosing_cone_of(std::size_t n, Get&& ray_at, const ConeOptions& opt) {
     std::size_t first = 0;
@@ -288,7 +288,7 @@ Cone<T> enclosing_cone_of(std::size_t n, Get&& ray_at, const ConeOptions& opt) {
 
 }  // namespace detail
 
-/// Enclosing cone of a bundle of rays (000 section 6.2): every ray that can hit anything
+/// Enclosing cone of a bundle of rays (Szécsi 2009, §6.2): every ray that can hit anything
 /// lies inside it (origin within `slack` of the cone, direction within the opening).
 template <Scalar T>
 Cone<T> enclosing_cone(std::span<const Ray<T>> rays, const ConeOptions& opt = {}) {

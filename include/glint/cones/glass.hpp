@@ -1,8 +1,8 @@
-// glint/cones/glass.hpp: the shader of 000's refraction passes: a ray that hits the glass
+// glint/cones/glass.hpp: the shader of the refraction passes of Szécsi 2009: a ray that hits the glass
 // continues as its refracted ray, or as its reflected ray under total internal reflection;
-// a ray that misses ends (and reads the environment map, 000 sections 6.3 and 6.4).
+// a ray that misses ends (and reads the environment map, Szécsi 2009, §6.3 and §6.4).
 //
-// 000 section 6.3: "the pixel shader performing the intersection tests
+// Szécsi 2009, §6.3: "the pixel shader performing the intersection tests
 // outputs the refracted ray", and section 6.4 also computes a refracted
 // direction for every hit. Snell's law with the geometric normal of the hit triangle: with
 // unit direction d, unit normal n facing the incoming ray (d . n < 0) and eta = n_from / n_to,

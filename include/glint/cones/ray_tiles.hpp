@@ -1,14 +1,14 @@
 // glint/cones/ray_tiles.hpp: the hierarchical ray engine on the CPU: a hierarchy over rays
 // (tiles of an image, one enclosing cone each) instead of over objects.
 //
-// 000 chapter 6. The ray engine tests every ray against
+// Szécsi 2009, ch. 6. The ray engine tests every ray against
 // every triangle. Section 6.1 splits the ray array into tiles and, for
 // every triangle and tile, first tests the triangle's enclosing sphere against the tile's
 // enclosing cone; only tiles that pass run the ray-triangle tests. Section 6.3
 // iterates passes for multiple refractions and reflections: in every
 // pass the cones are rebuilt for the new generation of rays, and rays whose path has
-// terminated (no hit, or the shader ends it) drop out (000 section 6.4 uses the stencil buffer
-// for this; here an active flag per ray). Per 000 section 6.3.1 the triangle record
+// terminated (no hit, or the shader ends it) drop out (Szécsi 2009, §6.4 uses the stencil buffer
+// for this; here an active flag per ray). Per Szécsi 2009, §6.3.1 the triangle record
 // is the IVM (any TriangleIntersector policy works) plus its bounding sphere (sphere.hpp).
 //
 // CPU form of the GPU passes: the loop is tile-major (for every tile: its cone, then every
@@ -45,7 +45,7 @@ namespace glint {
 
 /// A width x height array of rays (row-major, ray (x, y) at index y * width + x) split into
 /// square tiles of `tile` x `tile` rays (the last row and column of tiles may be partial).
-/// 000 section 6.4 uses 256 x 256 rays in 16 x 16 tiles.
+/// Szécsi 2009, §6.4 uses 256 x 256 rays in 16 x 16 tiles.
 struct TileGrid {
     int width = 0, height = 0, tile = 16;
 
@@ -63,15 +63,15 @@ struct TileGrid {
 
 /// Options of the ray-tile engine.
 ///
-/// 000's hierarchy has two levels (rays and tiles). Adaptive split is an extension in the
-/// direction of 000 section 6.7 (multi-level ray hierarchies of Roger et
-/// al.): a tile of m rays whose cone passes P of the N triangles' spheres is split into
+/// Szécsi's hierarchy (Szécsi 2009, ch. 6) has two levels (rays and tiles). Adaptive split
+/// is an extension in the direction of Szécsi 2009, §6.7 (multi-level ray hierarchies of
+/// Roger et al.): a tile of m rays whose cone passes P of the N triangles' spheres is split into
 /// quadrants (recursively, down to `min_tile` rays on a side) when the tests a split may
 /// save exceed its cost, all in units of one ray-triangle test:
 ///     split_gain * P * m  >  4 * sphere_cost * N  +  cone_cost * m
 /// (four sub-cones each test N spheres; each ray enters cone construction again). The
 /// defaults were set on bench_cones (sphere and knot scenes). With `min_tile` at least the
-/// grid's tile size (TileOptions::fixed()) it is 000's scheme.
+/// grid's tile size (TileOptions::fixed()) it is Szécsi's scheme.
 struct TileOptions {
     ConeOptions cone;
     int min_tile = 4;
@@ -79,7 +79,7 @@ struct TileOptions {
     double sphere_cost = 0.5;   // one cone-sphere test
     double cone_cost = 10.0;    // one ray's share of building a cone
 
-    /// 000's fixed tiles: no split.
+    /// Szécsi's fixed tiles: no split.
     static TileOptions fixed() {
         TileOptions o;
         o.min_tile = std::numeric_limits<int>::max();
@@ -128,7 +128,7 @@ struct TileWorkspace {
 
 /// A shader for trace_passes: `shade(i, ray, hit, found)` is called after every pass for
 /// every active ray i (rays that cannot hit anything are never active); it may replace `ray` with the next segment of the path and returns
-/// whether the path goes on (a ray without a hit normally ends: 000 section 6.4).
+/// whether the path goes on (a ray without a hit normally ends: Szécsi 2009, §6.4).
 template <class S, class T>
 concept PassShader = requires(S s, std::size_t i, Ray<T>& r, const StoreHit<T>& h, bool f) {
     { s(i, r, h, f) } -> std::convertible_to<bool>;
@@ -143,7 +143,7 @@ PassStats run_passes(std::span<Ray<T>> rays, int max_passes, TileWorkspace<T>& w
                      Shade&& shade) {
     if (max_passes < 0) throw Error("trace_passes: max_passes must be >= 0, got " + std::to_string(max_passes));
     // Rays that cannot hit anything (ray_can_hit: NaN, infinite or zero) are inactive from
-    // the start, like pixels where no refractive surface is visible (000 section 6.4).
+    // the start, like pixels where no refractive surface is visible (Szécsi 2009, §6.4).
     ws.active.resize(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) ws.active[i] = ray_can_hit(rays[i]) ? 1 : 0;
     ws.hits.resize(rays.size());
@@ -169,7 +169,7 @@ PassStats run_passes(std::span<Ray<T>> rays, int max_passes, TileWorkspace<T>& w
 
 }  // namespace detail
 
-/// The hierarchical ray engine over triangles with intersector P (000 chapter 6).
+/// The hierarchical ray engine over triangles with intersector P (Szécsi 2009, ch. 6).
 template <TriangleIntersector P>
 class RayTileEngine {
 public:
@@ -230,7 +230,7 @@ public:
         return s;
     }
 
-    /// Up to max_passes passes of trace + shade (000 section 6.3): the rays are replaced in
+    /// Up to max_passes passes of trace + shade (Szécsi 2009, §6.3): the rays are replaced in
     /// place by the shader; paths it ends drop out of later passes.
     template <class Shade>
         requires PassShader<Shade, T>

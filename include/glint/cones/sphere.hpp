@@ -1,14 +1,14 @@
 // glint/cones/sphere.hpp: bounding spheres of triangles and the cone-sphere test.
 //
-// 000 section 6.3.1 stores, for every triangle, the centre and radius of an
-// enclosing sphere next to its IVM; 000 section 6.3.3 says they are
+// Szécsi 2009, §6.3.1 stores, for every triangle, the centre and radius of an
+// enclosing sphere next to its IVM; Szécsi 2009, §6.3.3 says they are
 // computed when the mesh is loaded. glint uses the *minimal* enclosing sphere: for a
 // triangle with an angle of 90 degrees or more it is the sphere on the longest edge as
 // diameter; otherwise the circumsphere (centre in the triangle's plane, equidistant from the
 // three vertices). It is computed in double and rounded outwards, so that the stored
 // sphere holds the triangle exactly.
 //
-// 000 section 6.3.4: the cone meets the sphere if
+// Szécsi 2009, §6.3.4: the cone meets the sphere if
 //     phi > arccos[(v - a) . x] - arcsin[r / |v - a|].
 // Repair: the arccos argument must be divided by |v - a| (as printed it is not a cosine).
 // With theta the angle from the axis to the centre and beta = arcsin(r / d) (d = |v - a|) the
@@ -86,7 +86,7 @@ T cone_test_radius(const Cone<T>& cone, const BoundingSphere<T>& s) {
     return s.radius + cone.slack + T(16) * eps * (glm::length(s.center) + glm::length(cone.apex));
 }
 
-/// Whether the infinite cone meets the sphere (000 section 6.3.4, repaired: see above).
+/// Whether the infinite cone meets the sphere (Szécsi 2009, §6.3.4, repaired: see above).
 /// `radius` is the sphere's radius as enlarged by cone_test_radius (precomputed by the
 /// ray-tile engine). Conservative: never false when an exact test would be true.
 template <Scalar T>

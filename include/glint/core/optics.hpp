@@ -1,6 +1,6 @@
 // glint/core/optics.hpp: refraction at a smooth dielectric interface (Snell's law) and its
 // Fresnel reflectance, written once for the path tracer's dielectrics (tracer/path_tracer.hpp)
-// and 000 section 6.4's glass shader (cones/glass.hpp). Formulas as in Pharr, Jakob, Humphreys
+// and Szécsi 2009, §6.4's glass shader (cones/glass.hpp). Formulas as in Pharr, Jakob, Humphreys
 // 2023, sections 9.3 and 9.5.
 #pragma once
 

@@ -2,7 +2,7 @@
 //
 // Spectrum<T, N> holds N samples of a spectral quantity (radiance, albedo, throughput) and
 // supports elementwise arithmetic. Luminance is a weighted sum of the bands; for RGB the
-// default weights are (0.3086, 0.6094, 0.0820), the luminance weights 000 section 2.2 uses
+// default weights are (0.3086, 0.6094, 0.0820), the luminance weights Szécsi 2009, §2.2 uses
 // for its spectral Russian roulette (Haeberli's linear-RGB weights). Other N default to the
 // plain mean.
 #pragma once
@@ -69,7 +69,7 @@ struct Spectrum {
         return std::all_of(v.begin(), v.end(), [](T x) { return std::isfinite(x); });
     }
 
-    /// Default luminance weights: 000 section 2.2's RGB weights for N = 3, else 1/N each.
+    /// Default luminance weights: Szécsi 2009, §2.2's RGB weights for N = 3, else 1/N each.
     static constexpr Spectrum default_luminance_weights() {
         if constexpr (N == 3) {
             return Spectrum(T(0.3086), T(0.6094), T(0.0820));

@@ -1,6 +1,6 @@
 // glint/occluders/delaunay.hpp: 3D Delaunay tetrahedralization by Bowyer-Watson.
 //
-// 000 section 5.2: "A Delaunay mesh is a decomposition of space into
+// Szécsi 2009, §5.2: "A Delaunay mesh is a decomposition of space into
 // tetrahedra, the circumspheres of which cannot contain any node of the mesh. Using the
 // Bowyer-Watson algorithm [Bow81, Wat81] ... an incremental algorithm, starting off from an
 // initial enclosing tessellation, adding points sequentially."
@@ -9,7 +9,7 @@
 // - The initial tessellation is one tetrahedron whose vertices lie 1e4 bounding radii from
 //   the points' centre; its four vertices are indices 0..3 (super vertices). Tetrahedra that
 //   use them are not reported by tetrahedra() (Delaunay tetrahedra of the hull whose
-//   circumspheres reach the super vertices may be missing; 000 discards outer tetrahedra
+//   circumspheres reach the super vertices may be missing; Szécsi 2009 discards outer tetrahedra
 //   anyway, section 5.2.1).
 // - Points are inserted in a spatially coherent order (Morton order of a 2^10 grid, shuffled
 //   in rounds as in a biased randomized insertion order), and located by a remembering

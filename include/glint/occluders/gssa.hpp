@@ -1,7 +1,7 @@
 // glint/occluders/gssa.hpp: generalized shadowing surface area (GSSA) of the union of two
 // spheres, the quantity sphere merging preserves.
 //
-// 000 section 5.2.3. A(R, r, d) for radii R >= r and centre distance d is
+// Szécsi 2009, §5.2.3. A(R, r, d) for radii R >= r and centre distance d is
 // the surface area of an enclosing convex body times the probability that a random line
 // hitting that body hits the union; the merged sphere gets R_new = sqrt(A / (4 pi)).
 // Estimators, all upper bounds of the true A:
@@ -16,7 +16,7 @@
 //                     S_r = 2 pi r^2 (1 - cos alpha), l = sqrt(d^2 - (R - r)^2),
 //                     S_C = pi l (R + r) sin alpha, A_c = S_R + S_C + S_r;
 //   minimum           min(A_P, A_u, A_c);
-//   fitted            000 fitted a closed form to Monte Carlo measurements of
+//   fitted            Szécsi 2009 fitted a closed form to Monte Carlo measurements of
 //                     A(1, r/R, d/R) / (4 pi) (garbled: it reads
 //                     "1.1824 * 0.42615R/d * r/R1.972 + 0.991", i.e. 1.1824 * 0.42615^(R/d) *
 //                     (r/R)^1.972 + 0.991). glint measured A again (gssa_monte_carlo below, 4e5
@@ -25,7 +25,7 @@
 //                     external contact) and fitted it again (bench_occluders
 //                     --fit-gssa); the coefficients and fit error are in gssa_fitted and
 //                     docs/occluders.md.
-// Repair of the measurement: 000 draws lines through two uniform points of the enclosing
+// Repair of the measurement: Szécsi 2009 draws lines through two uniform points of the enclosing
 // sphere; such chords are not uniformly distributed lines (they favour long chords), and the
 // hit probability of a convex body under them is not proportional to its surface area. glint
 // uses isotropic uniform lines (uniform direction, uniform point of the enclosing sphere's
@@ -88,7 +88,7 @@ T gssa_convex_hull(T R, T r, T d) {
     return T(2) * pi<T> * R * R * (T(1) + ca) + T(2) * pi<T> * r * r * (T(1) - ca) + pi<T> * l * (R + r) * sa;
 }
 
-/// The shadowing weights S_R, S_r of 000 section 5.2.4 (the hull's spherical caps).
+/// The shadowing weights S_R, S_r of Szécsi 2009, §5.2.4 (the hull's spherical caps).
 template <Scalar T>
 void gssa_cap_weights(T R, T r, T d, T& wR, T& wr) {
     if (d <= std::abs(R - r)) {
@@ -108,7 +108,7 @@ void gssa_cap_weights(T R, T r, T d, T& wR, T& wr) {
 ///   A/4pi = 1 + rho^2 (1 - exp(-c0 x^c1 (1 + c2 rho)))
 /// Coefficients from bench_occluders --fit-gssa (least squares on the 24 x 40 Monte Carlo
 /// grid, 4e5 lines per point). Fit error in A: relative RMS 0.0066, max 0.029 (Monte Carlo
-/// noise 0.0029); 000's printed formula measures 0.031 RMS / 0.085 max on the same data, its
+/// noise 0.0029); Szécsi's printed formula measures 0.031 RMS / 0.085 max on the same data, its
 /// form refitted 0.028 / 0.100; the minimum of the three upper bounds 0.016 / 0.082.
 struct GssaFit {
     double c0 = 0.0, c1 = 0.0, c2 = 0.0;

@@ -1,5 +1,5 @@
 // glint/occluders/predicates.hpp: robust orient3d and insphere for the Delaunay
-// tetrahedralization (000 section 5.2: the Bowyer-Watson mesh of surface
+// tetrahedralization (Szécsi 2009, §5.2: the Bowyer-Watson mesh of surface
 // points; the text assumes exact geometry, gridded and cospherical samples do not have it).
 //
 // Shewchuk-style adaptive predicates, written for glint: a floating-point filter (the

@@ -1,6 +1,6 @@
 // glint/occluders/spheres.hpp: occluder-sphere generation from a triangle mesh.
 //
-// 000 section 5.2: sample points on the surface, tetrahedralize them
+// Szécsi 2009, §5.2: sample points on the surface, tetrahedralize them
 // (delaunay.hpp), and take the circumspheres of the inner tetrahedra as a tight initial set;
 // then merge pairs until the target count is reached.
 // - Inner tetrahedra, section 5.2.1: a tetrahedron is inner when at each of
@@ -14,8 +14,8 @@
 //   recomputes partners only for the new sphere and for spheres whose partner was merged.
 //   This still finds the globally closest pair: for the closest pair (i, j) the younger of
 //   the two had its partner computed when both existed, so its record is <= D(i, j).
-//   Partners are found in a uniform grid of sphere centres (000 suggests a kd-tree; the issue
-//   allows a grid) that is updated by each merge and rebuilt whenever the live count halves.
+//   Partners are found in a uniform grid of sphere centres (Szécsi 2009 suggests a kd-tree)
+//   that is updated by each merge and rebuilt whenever the live count halves.
 // - New radius, section 5.2.3: R_new = sqrt(A(R, r, d) / 4 pi), A from gssa.hpp (GssaModel).
 // - New centre, section 5.2.4: the centres weighted by the hull caps
 //   S_R and S_r of section 5.2.3.
@@ -110,7 +110,7 @@ void sample_surface(std::span<const TriangleVertices<T>> mesh, std::size_t n, st
     }
 }
 
-/// The initial sphere set of 000 section 5.2-5.2.1: circumspheres of inner tetrahedra.
+/// The initial sphere set of Szécsi 2009, §5.2-5.2.1: circumspheres of inner tetrahedra.
 template <Scalar T>
 std::vector<Sphere<T>> initial_occluders(std::span<const TriangleVertices<T>> mesh, const OccluderOptions& opt = {}) {
     if (mesh.empty()) throw Error("glint::initial_occluders: empty mesh");
@@ -149,7 +149,7 @@ Sphere<T> merge_pair(const Sphere<T>& a, const Sphere<T>& b, GssaModel model = G
     return {Vec3<T>(c), T(std::sqrt(A / (4 * pi<double>)))};
 }
 
-/// Greedy closest-pair merging (000 section 5.2.2) that can be stopped at several counts.
+/// Greedy closest-pair merging (Szécsi 2009, §5.2.2) that can be stopped at several counts.
 template <Scalar T>
 class SphereMerger {
 public:
@@ -396,11 +396,12 @@ double mesh_hit_fraction(std::span<const TriangleVertices<T>> mesh, const Vec3<T
     return lines ? double(hits) / double(lines) : 0.0;
 }
 
-/// Radius calibration (a glint addition; 000 section 5.2.3, rejects "correct[ing]
+/// Radius calibration (a glint addition; Szécsi 2009, §5.2.3, rejects "correct[ing]
 /// the radii by some arbitrary factor", and this factor is not arbitrary: it is the one that
-/// makes the set's hit probability equal the target, 000's stated goal in section 5.2). Pairwise GSSA preservation assumes the rest of the set shadows both
-/// predecessors alike; on long thin objects it overestimates the set's shadow more with every
-/// merge (docs/occluders.md lists both numbers). For each line the smallest scale at which it
+/// makes the set's hit probability equal the target, the stated goal of §5.2). Pairwise GSSA
+/// preservation assumes the rest of the set shadows both predecessors alike; on long thin
+/// objects it overestimates the set's shadow more with every merge (docs/occluders.md lists
+/// both numbers). For each line the smallest scale at which it
 /// hits a sphere is min_i dist(line, c_i) / r_i; the factor is the target quantile of these.
 /// Returns the factor applied.
 template <Scalar T>

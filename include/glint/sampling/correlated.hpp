@@ -1,7 +1,7 @@
 // glint/sampling/correlated.hpp: multiple correlated sampling, the combination of correlated
 // sampling (a main part g with known integral J) and importance sampling (density p).
 //
-// 000 section 3.1: from each sample u ~ p the combined primary estimator is
+// Szécsi 2009, §3.1: from each sample u ~ p the combined primary estimator is
 //   I^ = f/p + lambda (J - g/p)
 // (lambda = 0: importance sampling, lambda = 1: correlated sampling). The variance-optimal
 //   lambda = E[(J - g/p)(I - f/p)] / E[(J - g/p)^2]                     (eq. 3.2)
@@ -11,14 +11,14 @@
 // the J terms cancel), the denominator is centred on J, the known mean of g/p.
 // LambdaEstimate::eq33 is that literal form. LambdaEstimate::regression (the default) centres
 // the denominator on the sample mean too: the least-squares control-variate coefficient, the
-// same quantity (E[g/p] = J) estimated with lower variance, and with the property 000 claims for
-// a fully visible diffuse light -- f = g gives lambda = 1 exactly and I^ = J with zero variance
+// same quantity (E[g/p] = J) estimated with lower variance, and with the property Szécsi 2009
+// claims for a fully visible diffuse light -- f = g gives lambda = 1 exactly and I^ = J with zero variance
 // (with eq33, lambda = 1 - O(1/M) and I^ carries a residual O(M^-1.5) error).
 // lambda estimated from the same samples makes I^ consistent, not unbiased;
 // filter_lambda pools the statistics of neighbouring pixels (section 3.1.1)
 // and a fixed or independently estimated lambda makes it unbiased.
 //
-// 000 section 3.2: direct illumination from a polygon light: f = Le fr nu G,
+// Szécsi 2009, §3.2: direct illumination from a polygon light: f = Le fr nu G,
 // main part g = Le~ fr~ G with the visibility nu dropped, and J = Le~ fr~ integral_L G dy given in
 // closed form by the point-to-polygon form factor (eq. 3.4):
 //   integral_L G(x, y) dy = 1/2 sum_l angle(R_l, R_l+1) (R_l x R_l+1)/|R_l x R_l+1| . n_x
@@ -28,7 +28,7 @@
 // front of x, matching G with cos(theta'_x) clamped at zero). The point-to-polygon form factor is
 // this integral divided by pi.
 //
-// 000 section 3.3: environment lighting over a decomposition of the sphere of
+// Szécsi 2009, §3.3: environment lighting over a decomposition of the sphere of
 // directions into cells Omega_d, each estimated by the combined estimator with one of two main
 // parts that neglect visibility:
 //   eq. 3.5  g1(w) = L_env(w) a_d / |Omega_d|,  a_d = integral_{Omega_d} fr cos  (the BRDF*cos
@@ -110,7 +110,7 @@ struct CorrelatedStats {
 /// importance sampling that section 3.1 introduces lambda as). lambda_-i is independent of
 /// sample i, so E[f_i/p_i + lambda_-i (J - g_i/p_i)] = I exactly, whatever the lambda's noise:
 ///   I^ = 1/M sum_i [f_i/p_i + lambda_-i (J - g_i/p_i)]
-/// (000 section 3.1.1 reduces the bias instead by pooling lambda over neighbouring pixels.)
+/// (Szécsi 2009, §3.1.1 reduces the bias instead by pooling lambda over neighbouring pixels.)
 /// Raw sums in double; M < 3 leaves no variance to estimate lambda_-i from: importance sampling.
 template <Scalar T>
 T leave_one_out_estimate(std::span<const T> f_over_p, std::span<const T> g_over_p, T J) {
@@ -356,8 +356,8 @@ CorrelatedResult<T, N> correlated_direct(const PolygonLight<T, N>& light, const 
             add(sgg[l], double(g[l]), double(g[l]));
         }
     }
-    // J after the samples: measured 5-10% faster on arealight than before them (the shadow
-    // rays start without waiting for the form factor's divisions and square roots).
+    // J after the samples: the shadow rays start without waiting for the form factor's
+    // divisions and square roots.
     out.main_part = light.radiance() * brdf_approx * light.geometry_integral(x, n);
     const double M = double(uniforms.size());
     for (std::size_t l = 0; l < N; ++l) {

@@ -1,10 +1,10 @@
 // glint/sampling/halton.hpp: Halton and Hammersley point sets with optional randomization,
 // and HaltonSampler, the per-pixel enumeration of one global Halton sequence.
 //
-// 003 section 6: dimension k of a Halton point i is the radical inverse
-// Phi_{p_k}(i) in the k-th prime base (6.1, 6.2); 002 section 4.1: quasi-Monte
+// Larsen 2004, §6: dimension k of a Halton point i is the radical inverse
+// Phi_{p_k}(i) in the k-th prime base (6.1, 6.2); Szirmay-Kalos 1998, §4.1: quasi-Monte
 // Carlo walks draw their directions from Halton (unknown count) or Hammersley (known count N:
-// point i is (i/N, Phi_2(i), Phi_3(i), ...)) sequences. 003 section 6.1 mentions that a plain
+// point i is (i/N, Phi_2(i), Phi_3(i), ...)) sequences. Larsen 2004, §6.1 mentions that a plain
 // Halton sequence "is far from random" and can be scrambled; glint offers:
 //   none               plain radical inverse;
 //   cranley_patterson  a random shift per dimension, added modulo 1 (on the exact 64-bit

@@ -4,7 +4,7 @@
 //
 // Random digit permutation (pbrt-v4, Pharr, Jakob, Humphreys, 4th ed., 2023, 8.6.2 "Random
 // digit permutations"): digit j of the base-b expansion of the index is mapped through its own
-// random permutation pi_j of {0, ..., b-1} before it is placed at b^(-j-1) (003 section 6.1,
+// random permutation pi_j of {0, ..., b-1} before it is placed at b^(-j-1) (Larsen 2004, §6.1,
 // eq. 6.1, is the case pi_j = identity). Every position is permuted, the index's leading zeros
 // included, so each output digit is uniform on {0, ..., b-1} and independent of the others; the
 // n digits kept give a value uniform on the grid k / b^n. A per-dimension random offset

@@ -1,10 +1,10 @@
 // glint/sampling/radical_inverse.hpp: exact integer radical inverse, its inverse, and the
 // digit scramblings (random digit permutation, Owen's nested scrambling) Halton builds on.
 //
-// 003 section 6.1: Phi_b(i) = sum_j a_j(i) b^(-j-1) where i = sum_j a_j(i) b^j,
+// Larsen 2004, §6.1: Phi_b(i) = sum_j a_j(i) b^(-j-1) where i = sum_j a_j(i) b^j,
 // "the number obtained by expressing i in base b, reversing the digits and placing the point
 // at the beginning" (eq. 6.1; the extraction split the exponents "b^(-j-1)" and "b^j" across
-// lines, repaired here). Check values from 003 section 6.1: Phi_10(1234) = 0.4321,
+// lines, repaired here). Check values from Larsen 2004, §6.1: Phi_10(1234) = 0.4321,
 // Phi_10(524) = 0.425, Phi_10(2) = 0.2, Phi_10(23) = 0.32; base 2 prefix (eq. 6.2)
 // 0, 1/2, 1/4, 3/4, 1/8, 3/8, ... (the extraction lost the fraction bars).
 //

@@ -1,8 +1,8 @@
 // glint/sampling/warps.hpp: maps from the unit square to directions and surface points, each
 // with the density it produces.
 //
-// 000 section 1.3 samples directions by BRDF (cosine-weighted hemisphere) and
-// light sources by area (uniform point on a triangle or polygon, density 1/area); 000 section 3.2
+// Szécsi 2009, §1.3 samples directions by BRDF (cosine-weighted hemisphere) and
+// light sources by area (uniform point on a triangle or polygon, density 1/area); Szécsi 2009, §3.2
 // samples points uniformly on a polygon light. Standard constructions:
 // Shirley-Chiu concentric disk + Malley's method for the cosine hemisphere (pdf cos(theta)/pi),
 // Archimedes' projection for the uniform sphere (1/4pi) and hemisphere (1/2pi), the square-root
