@@ -387,7 +387,7 @@ def layout_saving(c, r):
 
 
 row('layout', 'compact subtree layout, kd-tree node bytes (K = 31)', 'Havran\'s subtree layout',
-    '**81% smaller** (000 Fig. 4.6: 47%) ([trees.md](docs/trees.md))', 1,
+    '**81% smaller** (Szécsi 2009, Fig. 4.6: 47%) ([trees.md](docs/trees.md))', 1,
     [Check('saving, range over scenes', '81', layout_saving, '%.0f', '%')],
     lambda m: '**%s%% smaller** (Szécsi 2009, Fig. 4.6: 47%%) ([trees.md](docs/trees.md))' % m(
         'saving, range over scenes'), 0.2)
@@ -398,7 +398,7 @@ def eff(scene, method, base, sampler='random', extra=()):
                                          conv(c, r, scene, sampler, extra)[base])
 
 
-row('roulette', 'throughput roulette (default)', '000\'s classic roulette',
+row('roulette', 'throughput roulette (default)', 'the classic roulette (Szécsi 2009, §2.1)',
     '**2.0×** efficiency on the Cornell box ([tracer.md](docs/tracer.md))', 3,
     [Check('cornell, throughput vs classic', '2.0', eff('cornell', 'throughput', 'classic'), '%.1f')],
     lambda m: '**%s×** efficiency on the Cornell box ([tracer.md](docs/tracer.md))' % m(
@@ -413,7 +413,7 @@ def spectral_vs_throughput(c, r):
     return rng(vals)
 
 
-row('spectral', 'spectral roulette (000 §2.2)', 'classic / throughput roulette',
+row('spectral', 'spectral roulette (Szécsi 2009, §2.2)', 'classic / throughput roulette',
     '**1.26–1.36** on the furnace (PCG), above 1.3 on Halton walks / **0.23–0.82**: does not survive the field\'s '
     'baseline ([claims.md](docs/claims.md))', 3,
     [Check('furnace, PCG, vs classic', '1.26–1.36', eff('furnace', 'spectral', 'classic')),
@@ -424,7 +424,7 @@ row('spectral', 'spectral roulette (000 §2.2)', 'classic / throughput roulette'
                                                  m('furnace, Halton walks, vs classic'),
                                                  m('vs throughput (spectral, throughput+spectral; 3 scenes)')), 4)
 
-row('estimate', 'radiance-estimate roulette (000 §2.3)', 'classic / throughput roulette',
+row('estimate', 'radiance-estimate roulette (Szécsi 2009, §2.3)', 'classic / throughput roulette',
     '1.04–1.26 on the Cornell box / 1.005 and 0.97: within the noise '
     '([claims.md](docs/claims.md), [tracer.md](docs/tracer.md))', 3,
     [Check('cornell, estimate vs classic', '1.04–1.26', eff('cornell', 'estimate', 'classic')),
@@ -442,7 +442,7 @@ def area(c, r):
     return conv(c, r, 'arealight')
 
 
-row('correlated', 'correlated direct lighting, combined (000 §3.2)', 'light importance sampling',
+row('correlated', 'correlated direct lighting, combined (Szécsi 2009, §3.2)', 'light importance sampling',
     'lowest RMSE at every spp, +0.2–7.1% time ([claims.md](docs/claims.md))', 3,
     [Check('spp levels where combined is not lowest', '0',
            lambda c, r: (lambda l, n: n - l)(*combined_lowest(area(c, r), ['importance', 'correlated'])), '%.0f'),
@@ -469,7 +469,7 @@ def pen(d, lam_name, radius):
     raise ParseError('no penumbra row for lambda %s radius %s' % (lam_name, radius))
 
 
-row('lambda', 'λ pooled over 3 × 3 pixels (000 §3.1.1), statistical λ', 'per-pixel λ; λ = fractional visibility',
+row('lambda', 'λ pooled over 3 × 3 pixels (Szécsi 2009, §3.1.1), statistical λ', 'per-pixel λ; λ = fractional visibility',
     '13–16% less variance, and the per-pixel λ\'s bias (1% of MSE) falls to 0.01–0.04%; 16–17% lower MSE than '
     'fractional visibility ([tracer.md](docs/tracer.md#λ-filtering-000-311-bias-and-variance))', 1,
     [Check('less variance, radius 1 vs 0 (arealight, cornell)', '13–16',
@@ -492,7 +492,7 @@ def env(c, r):
     return job_envmap(c, r)
 
 
-row('envmap', 'correlated environment lighting, combined (000 §3.3)', 'map importance sampling + MIS',
+row('envmap', 'correlated environment lighting, combined (Szécsi 2009, §3.3)', 'map importance sampling + MIS',
     'lowest RMSE at every spp with 16 samples per vertex (not with 4), +1–8% time over correlated, 5.2–5.3x MIS\'s '
     'efficiency ([claims.md](docs/claims.md#envmap-correlated-environment-lighting-000-33))', 3,
     [Check('spp levels where combined is not lowest (K = 16)', '0',
@@ -533,7 +533,7 @@ def occ(scene, spheres, i):
     return get
 
 
-row('occluders', 'occluder spheres for VPL visibility (000 ch. 5)',
+row('occluders', 'occluder spheres for VPL visibility (Szécsi 2009, ch. 5)',
     'shadow rays through the wide BVH (through a kd-tree)',
     '5.2× (14.5×) at relative RMSE 0.039 on the torus knot, 2.7× (5.6×) at 0.05 on the bunny '
     '([occluders.md](docs/occluders.md))', 3,
@@ -558,9 +558,9 @@ def cone(count, what):
     return get
 
 
-row('cones', 'ray-tile hierarchy over refracted rays (000 §6)', 'brute force; the wide BVH',
-    '2.1–3.4× brute force at 100 triangles (000: 2×), 8–16× at 5k with 000\'s fixed tiles, 15–24× with adaptive '
-    'tiles (000: 15–20×); the wide BVH is faster still, 5–173× the tiles ([cones.md](docs/cones.md))', 3,
+row('cones', 'ray-tile hierarchy over refracted rays (Szécsi 2009, ch. 6)', 'brute force; the wide BVH',
+    '2.1–3.4× brute force at 100 triangles (Szécsi 2009: 2×), 8–16× at 5k with fixed 16 × 16 tiles, 15–24× with adaptive '
+    'tiles (Szécsi 2009: 15–20×); the wide BVH is faster still, 5–173× the tiles ([cones.md](docs/cones.md))', 3,
     [Check('100 triangles, fixed tiles vs brute', '2.1–3.4', cone(100, 'tiles'), '%.1f', '×'),
      Check('5k triangles, fixed tiles vs brute', '8–16', cone(5000, 'tiles'), '%.1f', '×'),
      Check('5k triangles, adaptive tiles vs brute', '15–24', cone(5000, 'tiles_split'), '%.1f', '×'),
@@ -688,7 +688,7 @@ def main():
         if k not in keys:
             p.error('unknown row %r (rows: %s)' % (k, ', '.join(keys)))
     skipped = set(a.skip.split(',')) if a.skip else set()
-    full = not a.quick and not a.rows and not skipped
+    full = not a.quick and not a.rows  # --skip still writes: skipped rows are marked 'not re-measured'
     c = Ctx(a)
     t_start = time.time()
 
@@ -729,10 +729,11 @@ def main():
         pass
     load = os.getloadavg() if hasattr(os, 'getloadavg') else (0, 0, 0)
     mode = 'quick (smoke run: tiny sizes, numbers meaningless)' if a.quick else (
-        'full' if full else 'partial (--rows/--skip)')
+        'full' if full else 'partial (--rows)')
     say('# Results: README\'s table re-measured')
     say()
-    say('Written by `bash tools/results.sh` (%s run); do not edit by hand.' % mode.split(' ')[0])
+    say('Written by `bash tools/results.sh%s` (%s run); do not edit by hand.' % (
+        ' --skip ' + a.skip if a.skip else '', mode.split(' ')[0]))
     say()
     say('- commit %s%s; %s; %d cores; load average at the end %.1f / %.1f / %.1f' % (
         git, ' (with local changes)' if dirty else '', cpu, os.cpu_count() or 0, *load))
