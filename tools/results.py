@@ -185,18 +185,29 @@ class Ctx:
         return ['taskset', '-c', str(self.a.core)] + argv if shutil.which('taskset') else argv
 
     def run(self, name, argv, rep):
-        """Runs argv once (pinned), keeps its output in the log folder, returns stdout."""
+        """Runs argv once (pinned), keeps its output in the log folder, returns stdout. With
+        --resume, a log of the same command that finished (exit 0) is read instead."""
         key = (name, rep)
         if key in self.cache:
             return self.cache[key]
         log = os.path.join(self.logs, '%s.%d.log' % (name, rep))
+        command = '$ ' + ' '.join(argv)
+        if self.a.resume and os.path.exists(log):
+            text = open(log).read()
+            m = re.search(r'\n# exit 0 after ([0-9.]+) s\n$', text)
+            if text.startswith(command + '\n') and m:
+                print('results: reuse %-20s rep %d: %s' % (name, rep, log), flush=True)
+                self.times[key] = float(m.group(1))
+                self.cache[key] = text[len(command) + 1:m.start() + 1]
+                return self.cache[key]
         t0 = time.time()
         print('results: run %-22s rep %d: %s' % (name, rep, ' '.join(argv)), flush=True)
         p = subprocess.run(self.pinned(argv), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                            cwd=self.work)
         self.times[key] = time.time() - t0
         with open(log, 'w') as f:
-            f.write(p.stdout)
+            f.write(command + '\n' + p.stdout + ('' if p.stdout.endswith('\n') else '\n'))
+            f.write('# exit %d after %.1f s\n' % (p.returncode, self.times[key]))
         if p.returncode != 0:
             raise RuntimeError('%s exited %d (log %s): %s' % (name, p.returncode, log, p.stdout[-400:].strip()))
         self.cache[key] = p.stdout
@@ -219,7 +230,10 @@ def job_trees(c, rep):
         for m in ['bunny.obj', 'diplodocus.obj', 'turbine.obj', 'cornell_box.obj']:
             if c.mesh(m):
                 argv += ['--mesh', c.mesh(m)]
-    return parse_bench_trees(c.run('bench_trees', argv, rep))
+    text = c.run('bench_trees', argv, rep)
+    if 'Embree' not in text:
+        raise Skip('bench_trees was built without Embree 3 (the peer): install it and rebuild')
+    return parse_bench_trees(text)
 
 
 def job_memory(c, rep):
@@ -573,6 +587,11 @@ row('cones', 'ray-tile hierarchy over refracted rays (Szécsi 2009, ch. 6)', 'br
                   m('5k triangles, adaptive tiles vs brute'), m('wide BVH vs fixed tiles, 100-50k triangles')), 4)
 
 
+# The rows README marked stale run first, the slowest per value (lambda, Cycles) last.
+RUN_FIRST = ['cones', 'occluders', 'trees', 'ivm', 'layout', 'roulette', 'estimate', 'halton', 'spectral',
+             'correlated', 'envmap', 'lambda']
+
+
 # --------------------------------------------------------------------------- measure
 
 def stated_values(check):
@@ -662,16 +681,28 @@ def table_line(cells):
     return '| ' + ' | '.join(cells) + ' |'
 
 
+def default_scenes():
+    """../shared/scenes beside the repository (or beside a worktree's parent folder)."""
+    for up in (('..',), ('..', '..')):
+        p = os.path.join(ROOT, *up, 'shared', 'scenes')
+        if os.path.isdir(p):
+            return os.path.normpath(p)
+    return os.path.join(ROOT, '..', 'shared', 'scenes')
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument('--quick', action='store_true', help='smoke run: tiny sizes, one repetition, rewrites nothing')
     p.add_argument('--rows', help='comma-separated row keys (see --list); the others keep README\'s text')
     p.add_argument('--skip', help='comma-separated row keys not to run')
     p.add_argument('--list', action='store_true')
+    p.add_argument('--resume', action='store_true',
+                   help='reuse the logs of benchmark runs that finished with the same command (an interrupted run)')
     p.add_argument('--reps', type=int, default=0, help='repetitions of every timed row (default: the row\'s, 3)')
     p.add_argument('--core', type=int, default=1, help='the core every benchmark is pinned to (taskset -c)')
     p.add_argument('--build-dir', default=os.path.join(ROOT, 'build'))
-    p.add_argument('--scenes', default=os.environ.get('GLINT_SCENES', os.path.join(ROOT, '..', 'shared', 'scenes')))
+    p.add_argument('--scenes', default=os.environ.get('GLINT_SCENES', default_scenes()),
+                   help='folder of the OBJ meshes (bunny, diplodocus, turbine, cornell_box); default ../shared/scenes')
     p.add_argument('--tree-rays', type=int, default=1000000, help='rays per set in the Embree comparison')
     p.add_argument('--readme', default=os.path.join(ROOT, 'README.md'))
     p.add_argument('--doc', default=os.path.join(ROOT, 'docs', 'results.md'))
@@ -690,6 +721,8 @@ def main():
     skipped = set(a.skip.split(',')) if a.skip else set()
     full = not a.quick and not a.rows  # --skip still writes: skipped rows are marked 'not re-measured'
     c = Ctx(a)
+    if not os.path.isdir(a.scenes):
+        print('results: no meshes at %s (--scenes): rows that need them say so' % a.scenes)
     t_start = time.time()
 
     out = io.StringIO()
@@ -699,7 +732,7 @@ def main():
         out.write(s + '\n')
 
     results, failed = {}, []
-    for r in ROWS:
+    for r in sorted(ROWS, key=lambda r: RUN_FIRST.index(r['key']) if r['key'] in RUN_FIRST else len(RUN_FIRST)):
         if r['key'] not in chosen:
             continue
         if r['key'] in skipped:
