@@ -176,6 +176,7 @@ class Ctx:
         os.makedirs(self.logs, exist_ok=True)
         self.cache = {}
         self.times = {}
+        self.reused = set()
 
     def mesh(self, name):
         p = os.path.join(self.scenes, name)
@@ -198,6 +199,7 @@ class Ctx:
             if text.startswith(command + '\n') and m:
                 print('results: reuse %-20s rep %d: %s' % (name, rep, log), flush=True)
                 self.times[key] = float(m.group(1))
+                self.reused.add(key)
                 self.cache[key] = text[len(command) + 1:m.start() + 1]
                 return self.cache[key]
         t0 = time.time()
@@ -355,13 +357,13 @@ row('cycles-cornell',
     [Check('64 spp', '0.68', cycles_ratio('cornell', 64)), Check('256 spp', '0.42', cycles_ratio('cornell', 256)),
      Check('1024 spp', '0.32', cycles_ratio('cornell', 1024))],
     lambda m: '**%s / %s / %s** of Cycles\' time ([tracer.md](docs/tracer.md#peer-comparison-cycles))' % (
-        m('64 spp'), m('256 spp'), m('1024 spp')), 30)
+        m('64 spp'), m('256 spp'), m('1024 spp')), 15)
 row('cycles-bunny', 'the same, Cornell box with the Stanford bunny', 'Cycles 3.4',
     '**0.76 / 0.48 / 0.34**', 1,
     [Check('64 spp', '0.76', cycles_ratio('cornell-bunny', 64)),
      Check('256 spp', '0.48', cycles_ratio('cornell-bunny', 256)),
      Check('1024 spp', '0.34', cycles_ratio('cornell-bunny', 1024))],
-    lambda m: '**%s / %s / %s**' % (m('64 spp'), m('256 spp'), m('1024 spp')), 0)
+    lambda m: '**%s / %s / %s**' % (m('64 spp'), m('256 spp'), m('1024 spp')), 15)
 
 
 def trees_range(c, r):
@@ -736,7 +738,8 @@ def main():
         if r['key'] not in chosen:
             continue
         if r['key'] in skipped:
-            results[r['key']] = (None, 'skipped in this run (--skip)')
+            results[r['key']] = (None, 'left out of this run (--skip; the row takes about %.0f minutes)' % (
+                r['minutes']))
             continue
         t0 = time.time()
         try:
@@ -770,8 +773,11 @@ def main():
     say()
     say('- commit %s%s; %s; %d cores; load average at the end %.1f / %.1f / %.1f' % (
         git, ' (with local changes)' if dirty else '', cpu, os.cpu_count() or 0, *load))
-    say('- %s UTC, %.1f minutes; every benchmark single-threaded, `taskset -c %d`; repetitions per row below' % (
-        time.strftime('%Y-%m-%d %H:%M', time.gmtime()), elapsed / 60, a.core))
+    say('- %s UTC; benchmarks %.1f minutes (the sum of the runs below%s), this invocation %.1f minutes; every '
+        'benchmark single-threaded, `taskset -c %d`' % (
+            time.strftime('%Y-%m-%d %H:%M', time.gmtime()), sum(c.times.values()) / 60,
+            '; %d of them read from an earlier invocation\'s logs with --resume' % len(c.reused) if c.reused else '',
+            elapsed / 60, a.core))
     say('- a check is flagged OUTSIDE when README\'s number lies outside the measured run-to-run spread (min–max over '
         'the repetitions) widened by the stated number\'s rounding')
     say()
