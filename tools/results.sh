@@ -8,6 +8,7 @@
 #   bash tools/results.sh --quick            # CI smoke run: tiny sizes, rewrites nothing (about a minute)
 #   bash tools/results.sh --rows cones,trees # some rows; --list names them; --skip ROWS leaves some out
 #   GLINT_RESULTS_NO_BUILD=1 bash tools/results.sh ...   # use the binaries already in --build-dir
+#   cmake --build build --target results     # the same full run as a CMake target
 #
 # Options are tools/results.py's (--build-dir DIR, default build; --core N, default 1; --reps N).
 set -euo pipefail
