@@ -29,6 +29,7 @@ import json
 import math
 import os
 import re
+import resource
 import shutil
 import statistics
 import subprocess
@@ -177,6 +178,7 @@ class Ctx:
         self.cache = {}
         self.times = {}
         self.reused = set()
+        self.cpu = {}
 
     def mesh(self, name):
         p = os.path.join(self.scenes, name)
@@ -195,21 +197,26 @@ class Ctx:
         command = '$ ' + ' '.join(argv)
         if self.a.resume and os.path.exists(log):
             text = open(log).read()
-            m = re.search(r'\n# exit 0 after ([0-9.]+) s\n$', text)
+            m = re.search(r'\n# exit 0 after ([0-9.]+) s(?:, CPU ([0-9.]+) s)?\n$', text)
             if text.startswith(command + '\n') and m:
                 print('results: reuse %-20s rep %d: %s' % (name, rep, log), flush=True)
                 self.times[key] = float(m.group(1))
+                if m.group(2):
+                    self.cpu[key] = float(m.group(2))
                 self.reused.add(key)
                 self.cache[key] = text[len(command) + 1:m.start() + 1]
                 return self.cache[key]
         t0 = time.time()
+        u0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         print('results: run %-22s rep %d: %s' % (name, rep, ' '.join(argv)), flush=True)
         p = subprocess.run(self.pinned(argv), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                            cwd=self.work)
         self.times[key] = time.time() - t0
+        u1 = resource.getrusage(resource.RUSAGE_CHILDREN)  # the process's user + system time
+        self.cpu[key] = (u1.ru_utime - u0.ru_utime) + (u1.ru_stime - u0.ru_stime)
         with open(log, 'w') as f:
             f.write(command + '\n' + p.stdout + ('' if p.stdout.endswith('\n') else '\n'))
-            f.write('# exit %d after %.1f s\n' % (p.returncode, self.times[key]))
+            f.write('# exit %d after %.1f s, CPU %.2f s\n' % (p.returncode, self.times[key], self.cpu[key]))
         if p.returncode != 0:
             raise RuntimeError('%s exited %d (log %s): %s' % (name, p.returncode, log, p.stdout[-400:].strip()))
         self.cache[key] = p.stdout
@@ -526,15 +533,21 @@ row('envmap', 'correlated environment lighting, combined (Szécsi 2009, §3.3)',
 
 
 def halton_time(c, r):
-    """Equal-error time halton / PCG at the largest spp, default roulette (MSE * seconds)."""
+    """Equal-error time halton / PCG at the largest spp, default roulette: the MSE ratio of the
+    two runs (same seed) times the ratio of their processes' CPU time (every method, the same
+    work but the sampler; bench_convergence's own seconds are wall time, which the shared
+    machine inflates by 2-3x, unevenly between runs). Both runs read the cached reference."""
     h, p = conv(c, r, 'cornell', 'halton')['throughput'][-1], conv(c, r, 'cornell')['throughput'][-1]
-    return (h[2] ** 2 * h[1]) / (p[2] ** 2 * p[1])
+    cpu = [c.cpu.get(('bench_convergence_cornell_%s' % s, r)) for s in ('halton', 'random')]
+    if None in cpu:
+        raise ParseError('no CPU time for the cornell runs (logs of an older results.py: rerun without --resume)')
+    return (h[2] / p[2]) ** 2 * cpu[0] / cpu[1]
 
 
 row('halton', 'Halton sampler in the path tracer', 'PCG',
     '0.87× the equal-error time at 64 spp ([sampling.md](docs/sampling.md))', 3,
     [Check('cornell, 64 spp, MSE·time halton / PCG', '0.87', halton_time)],
-    lambda m: '%s× the equal-error time at 64 spp (wall time of one pinned thread) '
+    lambda m: '%s× the equal-error time at 64 spp (MSE ratio × CPU-time ratio) '
               '([sampling.md](docs/sampling.md))' % m('cornell, 64 spp, MSE·time halton / PCG'), 3)
 
 
@@ -697,6 +710,7 @@ def main():
     p.add_argument('--quick', action='store_true', help='smoke run: tiny sizes, one repetition, rewrites nothing')
     p.add_argument('--rows', help='comma-separated row keys (see --list); the others keep README\'s text')
     p.add_argument('--skip', help='comma-separated row keys not to run')
+    p.add_argument('--skip-why', help='the reason the table gives for the --skip rows')
     p.add_argument('--list', action='store_true')
     p.add_argument('--resume', action='store_true',
                    help='reuse the logs of benchmark runs that finished with the same command (an interrupted run)')
@@ -738,7 +752,7 @@ def main():
         if r['key'] not in chosen:
             continue
         if r['key'] in skipped:
-            results[r['key']] = (None, 'left out of this run (--skip; the row takes about %.0f minutes)' % (
+            results[r['key']] = (None, a.skip_why or 'left out of this run (--skip; the row takes about %.0f minutes)' % (
                 r['minutes']))
             continue
         t0 = time.time()
@@ -778,13 +792,15 @@ def main():
             time.strftime('%Y-%m-%d %H:%M', time.gmtime()), sum(c.times.values()) / 60,
             '; %d of them read from an earlier invocation\'s logs with --resume' % len(c.reused) if c.reused else '',
             elapsed / 60, a.core))
+    say('- binaries from `%s`; logs (every benchmark\'s full output, its command line first) in `%s`' % (
+        a.build_dir, c.logs))
     say('- a check is flagged OUTSIDE when README\'s number lies outside the measured run-to-run spread (min–max over '
         'the repetitions) widened by the stated number\'s rounding')
     say()
     say('## Checks: stated against measured')
     say()
     say(table_line(['row', 'check', 'README states', 'measured (median)', 'spread over runs', 'runs', 'flag']))
-    say(table_line(['---'] * 7))
+    say('|---|---|---|---|---|---|---|')
     for r in ROWS:
         if r['key'] not in results:
             continue
@@ -798,7 +814,7 @@ def main():
     say()
     say('## The table README includes')
     say()
-    lines = [table_line(['what', 'against', 'result']), table_line(['---'] * 3)]
+    lines = [table_line(['what', 'against', 'result']), '|---|---|---|']
     for r in ROWS:
         res = results.get(r['key'])
         if res and res[0] is not None:
@@ -812,13 +828,11 @@ def main():
     say()
     say('## Commands and times')
     say()
-    say('| benchmark | repetition | seconds | log |')
-    say('|---|---|---|---|')
+    say('| benchmark | repetition | wall seconds | CPU seconds | log |')
+    say('|---|---|---|---|---|')
     for (name, rep), t in sorted(c.times.items()):
-        say('| %s | %d | %.1f | build/results/%s/%s.%d.log |' % (name, rep, t, os.path.basename(c.logs), name, rep))
-    say()
-    say('Logs (every benchmark\'s full output) are kept under build/results/; the command lines are at the top '
-        'of the run\'s console output (`results: run ...`).')
+        cpu = c.cpu.get((name, rep))
+        say('| %s | %d | %.1f | %s | %s.%d.log |' % (name, rep, t, '%.1f' % cpu if cpu is not None else '—', name, rep))
 
     bad = failed  # rows whose benchmark failed or whose output did not parse (a Skip says why it could not run)
     if a.quick:

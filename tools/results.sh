@@ -4,8 +4,11 @@
 # outside the run-to-run spread, and (full run only) writes docs/results.md and README's table
 # between <!-- results:begin --> and <!-- results:end -->.
 #
-#   bash tools/results.sh                    # full run (about 35-45 minutes on the 2-core machine, Cycles rows 30 more)
-#   bash tools/results.sh --quick            # CI smoke run: tiny sizes, rewrites nothing (about a minute)
+#   bash tools/results.sh                    # full run: over an hour on the shared 2-core machine (rows timed
+#                                            # there: cones 3-4 min a run, occluders 4-10, trees 5-8, intersection
+#                                            # 4-5, bench_convergence 0.5-2; lambda ~10; Cycles ~30 more)
+#   bash tools/results.sh --quick            # CI smoke run: tiny sizes, rewrites nothing (15-30 s)
+#   bash tools/results.sh --resume ...       # an interrupted run: reuse the logs of finished benchmark runs
 #   bash tools/results.sh --rows cones,trees # some rows; --list names them; --skip ROWS leaves some out
 #   GLINT_RESULTS_NO_BUILD=1 bash tools/results.sh ...   # use the binaries already in --build-dir
 #   cmake --build build --target results     # the same full run as a CMake target
