@@ -381,7 +381,7 @@ row('trees', 'wide BVH, closest hit, incoherent and primary rays, 8 scenes (36�
     'Embree 3 `rtcIntersect1`, same rays',
     '**1.06–1.99×** Embree\'s throughput (medians of 3 runs; every row ≥ 1.03 in every run); 48–52 bytes per '
     'triangle against 108–144; one-thread build 0.04–1.48× Embree\'s time '
-    '([trees.md](docs/trees.md#wide-bvh-glints-fast-path-treesbvh_builderhpp-treeswide_bvhhpp-treesmesh_bvhhpp))',
+    '([trees.md](docs/trees.md#measured))',
     3,
     [Check('throughput ratio, range over scenes and ray sets', '1.06–1.99', trees_range, '%.2f', '×'),
      Check('glint bytes per triangle', '48–52', lambda c, r: rng(v[0] for v in job_trees(c, r)['bytes'].values()),
@@ -391,8 +391,7 @@ row('trees', 'wide BVH, closest hit, incoherent and primary rays, 8 scenes (36�
      Check('one-thread build / Embree', '0.04–1.48', lambda c, r: rng(job_trees(c, r)['build'].values()), '%.2f',
            '×')],
     lambda m: '**%s×** Embree\'s throughput (%s); %s bytes per triangle against %s; one-thread build %s× '
-              'Embree\'s time ([trees.md](docs/trees.md#wide-bvh-glints-fast-path-treesbvh_builderhpp-treeswide_bvhhpp-'
-              'treesmesh_bvhhpp))' % (m('throughput ratio, range over scenes and ray sets'), m.spread_note(),
+              'Embree\'s time ([trees.md](docs/trees.md#measured))' % (m('throughput ratio, range over scenes and ray sets'), m.spread_note(),
                                       m('glint bytes per triangle'), m('Embree bytes per triangle'),
                                       m('one-thread build / Embree')), 8)
 
@@ -494,7 +493,7 @@ def pen(d, lam_name, radius):
 
 row('lambda', 'λ pooled over 3 × 3 pixels (Szécsi 2009, §3.1.1), statistical λ', 'per-pixel λ; λ = fractional visibility',
     '13–16% less variance, and the per-pixel λ\'s bias (1% of MSE) falls to 0.01–0.04%; 16–17% lower MSE than '
-    'fractional visibility ([tracer.md](docs/tracer.md#λ-filtering-000-311-bias-and-variance))', 1,
+    'fractional visibility ([tracer.md](docs/tracer.md#λ-filtering-szécsi-2009-311))', 1,
     [Check('less variance, radius 1 vs 0 (arealight, cornell)', '13–16',
            lambda c, r: rng(lam_get(c, r, lambda d: 100 * (1 - pen(d, 'stat', 1)['variance'] /
                                                             pen(d, 'stat', 0)['variance']))), '%.0f', '%'),
@@ -506,7 +505,7 @@ row('lambda', 'λ pooled over 3 × 3 pixels (Szécsi 2009, §3.1.1), statistical
            lambda c, r: rng(lam_get(c, r, lambda d: 100 * (1 - pen(d, 'stat', 1)['mse'] / pen(d, 'vis', 1)['mse']))),
            '%.0f', '%')],
     lambda m: '%s%% less variance, and the per-pixel λ\'s bias (%s%% of MSE) falls to %s%%; %s%% lower MSE than '
-              'fractional visibility ([tracer.md](docs/tracer.md#λ-filtering-000-311-bias-and-variance))' % (
+              'fractional visibility ([tracer.md](docs/tracer.md#λ-filtering-szécsi-2009-311))' % (
                   m('less variance, radius 1 vs 0 (arealight, cornell)'), m('bias²/MSE, radius 0'),
                   m('bias²/MSE, radius 1'), m('lower MSE than visibility λ, radius 1')), 6)
 
@@ -517,7 +516,7 @@ def env(c, r):
 
 row('envmap', 'correlated environment lighting, combined (Szécsi 2009, §3.3)', 'map importance sampling + MIS',
     'lowest RMSE at every spp with 16 samples per vertex (not with 4), +1–8% time over correlated, 5.2–5.3x MIS\'s '
-    'efficiency ([claims.md](docs/claims.md#envmap-correlated-environment-lighting-000-33))', 3,
+    'efficiency ([claims.md](docs/claims.md#envmap-correlated-environment-lighting-szécsi-2009-33))', 3,
     [Check('spp levels where combined is not lowest (K = 16)', '0',
            lambda c, r: (lambda l, n: n - l)(*combined_lowest(env(c, r), ['importance', 'importance-k', 'correlated',
                                                                          'combined-3.5'])), '%.0f'),
@@ -526,7 +525,7 @@ row('envmap', 'correlated environment lighting, combined (Szécsi 2009, §3.3)',
      Check('efficiency vs MIS', '5.2–5.3', lambda c, r: efficiency_ratio(env(c, r)['combined'],
                                                                          env(c, r)['importance']), '%.1f', 'x')],
     lambda m: '%s with 16 samples per vertex (not with 4: not re-measured), %s%% time over correlated, %sx MIS\'s '
-              'efficiency ([claims.md](docs/claims.md#envmap-correlated-environment-lighting-000-33))' % (
+              'efficiency ([claims.md](docs/claims.md#envmap-correlated-environment-lighting-szécsi-2009-33))' % (
                   'lowest RMSE at every spp' if m.max('spp levels where combined is not lowest (K = 16)') == 0 else
                   'not lowest RMSE at %s spp levels' % m('spp levels where combined is not lowest (K = 16)'),
                   m('time over correlated'), m('efficiency vs MIS')), 1)
