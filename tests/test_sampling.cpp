@@ -833,7 +833,7 @@ TEST_CASE("statistics: furnace walks are unbiased, spectral and radiance estimat
 }
 
 // ---------------------------------------------------------------------------------------------
-// Multiple correlated sampling (000 section 3)
+// Multiple correlated sampling (Szécsi 2009, §3)
 // ---------------------------------------------------------------------------------------------
 
 namespace {
@@ -1079,7 +1079,7 @@ TEST_CASE("exact: equal-solid-angle sphere cells and the closed-form diffuse a_d
     CHECK_THROWS_AS(SphereCells<double>(0, 3), Error);
 }
 
-TEST_CASE("exact: sphere cells' direction integral, least cosine and cell lookup (000 3.3.1)") {
+TEST_CASE("exact: sphere cells' direction integral, least cosine and cell lookup (Szécsi 2009, §3.3.1)") {
     const SphereCells<double> cells(8, 4, false);
     Vec3<double> total(0.0);
     Pcg32 rng(41);
