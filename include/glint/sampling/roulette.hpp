@@ -119,7 +119,7 @@ struct Roulette {
         return r;
     }
 
-    T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
+    [[gnu::always_inline]] T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
         switch (rule) {
             case RouletteRule::classic: return std::clamp(a.luminance(weights), T(0), T(1));
             case RouletteRule::spectral: return spectral_weight(F, a);
@@ -132,14 +132,14 @@ struct Roulette {
         }
         return std::max((F * a).max(), T(0));
     }
-    T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
+    [[gnu::always_inline]] T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
         const T s = rule_continuation(F, a, depth);
         if (goodness == T(1)) return s;
         const T den = T(1) - (T(1) - goodness) * s;
         return den > T(0) ? s * goodness / den : s;
     }
-    Spectrum<T, N> terminated(const Spectrum<T, N>& a) const { return a * estimate; }
-    Spectrum<T, N> continued_offset(const Spectrum<T, N>& a, T s) const { return a * estimate * (-(T(1) - s) / s); }
+    [[gnu::always_inline]] Spectrum<T, N> terminated(const Spectrum<T, N>& a) const { return a * estimate; }
+    [[gnu::always_inline]] Spectrum<T, N> continued_offset(const Spectrum<T, N>& a, T s) const { return a * estimate * (-(T(1) - s) / s); }
 
 private:
     static Roulette with_rule(RouletteRule rule, const Spectrum<T, N>& H) {
@@ -157,7 +157,7 @@ private:
         }
         return den > T(0) ? std::clamp(num / den, T(0), T(1)) : T(0);
     }
-    T rule_continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
+    [[gnu::always_inline]] T rule_continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
         const T v = selection_weight(F, a);
         switch (rule) {
             case RouletteRule::throughput:
@@ -187,7 +187,7 @@ struct LobeSelection {
 /// lobe or termination by u in [0,1); the roulette's offset. `albedos` beyond max_brdf_lobes
 /// are ignored (precondition: at most max_brdf_lobes).
 template <Scalar T, std::size_t N, RoulettePolicy<T, N> R>
-LobeSelection<T, N> select_lobe(const R& roulette, const Spectrum<T, N>& throughput,
+[[gnu::always_inline]] inline LobeSelection<T, N> select_lobe(const R& roulette, const Spectrum<T, N>& throughput,
                                 std::span<const Spectrum<T, N>> albedos, T u, int depth) {
     LobeSelection<T, N> sel;
     sel.count = std::min(albedos.size(), max_brdf_lobes);
@@ -248,7 +248,7 @@ struct ScatterSample {
 /// the DIS, W or MIS estimator (`selection`). u_select and u_direction are independent
 /// uniforms; `depth` counts the walk's scattering vertices before this one.
 template <Scalar T, std::size_t N, MultiLobeBrdf<T, N> M, RoulettePolicy<T, N> R>
-ScatterSample<T, N> scatter(const M& brdf, const R& roulette, const Spectrum<T, N>& throughput, T u_select,
+[[gnu::always_inline]] inline ScatterSample<T, N> scatter(const M& brdf, const R& roulette, const Spectrum<T, N>& throughput, T u_select,
                             const Vec2<T>& u_direction, int depth, BrdfSelection selection = BrdfSelection::mis) {
     std::array<Spectrum<T, N>, max_brdf_lobes> albedos;
     const std::size_t n = std::min<std::size_t>(brdf.lobe_count(), max_brdf_lobes);

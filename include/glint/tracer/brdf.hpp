@@ -32,7 +32,7 @@ namespace glint {
 template <Scalar T>
 class SurfaceBrdf {
 public:
-    SurfaceBrdf(const Material<T>& m, const Vec3<T>& wo_local)
+    [[gnu::always_inline]] SurfaceBrdf(const Material<T>& m, const Vec3<T>& wo_local)
         : kd_(m.kd), ks_(m.ks), n_(m.exponent), wo_(wo_local),
           lobes_(m.kind == MaterialKind::glossy ? 2 : 1) {
         r_ = Vec3<T>(-wo_.x, -wo_.y, wo_.z);

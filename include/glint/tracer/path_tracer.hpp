@@ -15,7 +15,7 @@
 //   E        EnvironmentLighting (MisEnvironment, the default, which does nothing in a scene
 //            without a map; CorrelatedEnvironment in tracer/correlated_environment.hpp).
 // Values, a predictable branch per vertex: the roulette rule, the BRDF selection, the scene's
-// features (point lights, environment). Specular (mirror, dielectric) vertices are followed
+// features (point lights, environment: checked once, when the tracer is built). Specular (mirror, dielectric) vertices are followed
 // deterministically (Fresnel choice for dielectrics) and count emission on the next hit, as
 // camera rays do.
 //
@@ -61,7 +61,7 @@ public:
     using Settings = PathTracerSettings<T>;
 
     PathTracer(const Scene<T>& scene, const Accel& accel, const D& direct, const E& environment, const Settings& settings)
-        : scene_(scene), accel_(accel), direct_(direct), env_(environment), settings_(settings) {
+        : scene_(scene), accel_(accel), direct_(direct), env_(environment), settings_(settings), features_(scene.features()) {
         scene.validate();
     }
     /// With the lighting policies built from the scene and settings.
@@ -155,7 +155,7 @@ private:
             }
             StoreHit<T> hit;
             if (!queries.closest_hit(ray, hit)) {
-                out.L += F * env_.escaped(ray.direction, from);
+                if (features_.environment) out.L += F * env_.escaped(ray.direction, from);
                 break;
             }
             const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
@@ -183,8 +183,9 @@ private:
                       typename D::vertex_record* rec, Ray<T>& ray, Rgb<T>& F, Rgb<T>& L, Arrival<T>& from) const {
         const SurfaceBrdf<T> brdf(m, sp.frame.to_local(-ray.direction));
         sp.brdf = &brdf;
-        L += F * (direct_.estimate(sp, sampler, queries, rec) + env_.estimate(sp, sampler, queries));
-        if (!scene_.point_lights.empty()) L += F * point_lights(sp, queries);
+        L += F * direct_.estimate(sp, sampler, queries, rec);
+        if (features_.environment) L += F * env_.estimate(sp, sampler, queries);
+        if (features_.point_lights) L += F * point_lights(sp, queries);
         const T u_select = sampler.get_1d();
         const Vec2<T> u_dir = sampler.get_2d();
         const ScatterSample<T, 3> s = scatter(brdf, settings_.roulette, F, u_select, u_dir, depth, settings_.selection);
@@ -230,6 +231,7 @@ private:
     D direct_;
     E env_;
     Settings settings_;
+    SceneFeatures features_;  // checked once: a scene without a map or point lights skips their code
 };
 
 }  // namespace glint
