@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <span>
+#include <type_traits>
 #include <variant>
 
 #include <glint/core/ray.hpp>
@@ -50,14 +51,19 @@ AcceleratorChoice any_accel(std::span<const TriangleVertices<float>> tris) {
     return std::unique_ptr<const AnyAccel>(std::make_unique<const AccelModel<A>>(tris));
 }
 
-inline AcceleratorChoice default_accel(std::span<const TriangleVertices<float>> tris) {
-    return std::make_unique<const DefaultAccel>(tris);
+template <class A>
+AcceleratorChoice default_accel(std::span<const TriangleVertices<float>> tris) {
+    return std::make_unique<const A>(tris);
 }
 }  // namespace detail
 
-inline std::span<const Choice<AcceleratorChoice (*)(std::span<const TriangleVertices<float>>)>> accelerator_choices() {
+/// The table (a template only so that a file including this header builds no tree it does not
+/// name; the trees are float-only).
+template <Scalar T = float>
+std::span<const Choice<AcceleratorChoice (*)(std::span<const TriangleVertices<float>>)>> accelerator_choices() {
+    static_assert(std::is_same_v<T, float>, "glint::accelerator_choices: the trees here are float-only");
     static constexpr Choice<AcceleratorChoice (*)(std::span<const TriangleVertices<float>>)> table[] = {
-        {"bvh8", "8-wide BVH, the fastest", detail::default_accel},
+        {"bvh8", "8-wide BVH, the fastest", detail::default_accel<DefaultAccel>},
         {"bvh4", "4-wide BVH", detail::any_accel<MeshBvh<MollerTrumbore<float>, 4>>},
         {"kd-compact", "kd-tree in Szecsi 2009 4.4's compact-subtree layout",
          detail::any_accel<KdTree<float, MollerTrumbore<float>, CompactSubtrees<15>>>},

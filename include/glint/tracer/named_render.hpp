@@ -239,8 +239,9 @@ RenderResult render_named(const Scene<T>& scene, const Accel& accel, const Named
     ts.selection = find_choice(selection_choices(), "BRDF selection", o.selection).make;
     const RouletteParams<T> params{find_choice(weights_choices<T>(), "roulette weights", o.weights).make(), o.rr_depth,
                                    o.throughput_cutoff, scene.features().grey};
-    const auto [rule, estimate] = find_roulette<T>(o.roulette);
-    ts.roulette = rule->make(params);
+    const auto roulette = find_roulette<T>(o.roulette);  // the rule's entry, and "+estimate"
+    const bool estimate = roulette.second;
+    ts.roulette = roulette.first->make(params);
     const DirectChoice<T> direct = find_choice(direct_choices<T>(), "direct lighting", o.direct).make(scene, ts);
     const SamplerChoice<T> sampler =
         find_choice(sampler_choices<T>(), "sampler", o.sampler).make(o.image.width, o.image.height, o.seed);
