@@ -186,6 +186,13 @@ private:
         L += F * direct_.estimate(sp, sampler, queries, rec);
         if (features_.environment) L += F * env_.estimate(sp, sampler, queries);
         if (features_.point_lights) L += F * point_lights(sp, queries);
+        return scatter_step(brdf, sp, depth, sampler, ray, F, L, from);
+    }
+
+    /// The roulette, lobe choice and direction at a diffuse or glossy vertex; everything it
+    /// calls is inlined into it (the per-vertex run-time choices cost least there).
+    [[gnu::flatten]] bool scatter_step(const SurfaceBrdf<T>& brdf, const ShadingPoint<T>& sp, int depth, S& sampler,
+                                       Ray<T>& ray, Rgb<T>& F, Rgb<T>& L, Arrival<T>& from) const {
         const T u_select = sampler.get_1d();
         const Vec2<T> u_dir = sampler.get_2d();
         const ScatterSample<T, 3> s = scatter(brdf, settings_.roulette, F, u_select, u_dir, depth, settings_.selection);
