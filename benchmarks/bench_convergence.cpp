@@ -1,4 +1,4 @@
-// bench_convergence: error against time for the path tracer's policies, and 000's claims as
+// bench_convergence: error against time for the path tracer's policies, and Szécsi 2009's claims as
 // efficiency ratios measured in one run.
 //
 //   ./build/benchmarks/bench_convergence --scene all --csv convergence.csv
@@ -23,18 +23,18 @@
 // Efficiency is
 // 1 / (MSE * seconds); a method's ratio to its baseline is the geometric mean over the spp
 // levels >= 4 of the ratio at equal spp. Methods per scene:
-//   furnace         roulette: classic (000's baseline), spectral, estimate, spectral+estimate,
-//                   throughput (the field's baseline: pbrt-v4, Mitsuba 3, Cycles), 000's ideas on
+//   furnace         roulette: classic (Szécsi 2009's baseline), spectral, estimate, spectral+estimate,
+//                   throughput (the field's baseline: pbrt-v4, Mitsuba 3, Cycles), Szécsi 2009's ideas on
 //                   it (throughput+spectral, throughput+estimate, throughput+spectral+estimate),
 //                   none (no roulette, throughput cut-off); each with its efficiency against
 //                   classic and against throughput
 //   cornell         roulette: as furnace
 //   cornell-glossy  BRDF selection: mis (baseline), dis, w
 //   arealight       direct lighting, 10 light samples: importance (baseline), correlated, combined
-//                   (direct illumination only, max depth 1, as 000 section 3.2 compares it:
+//                   (direct illumination only, max depth 1, as Szécsi 2009, §3.2 compares it:
 //                   with indirect light the shared path-tracing noise would hide the
 //                   difference)
-//   envmap          environment lighting (000 section 3.3), at the first vertex only, single
+//   envmap          environment lighting (Szécsi 2009, §3.3), at the first vertex only, single
 //                   thread: importance (MisEnvironment, the baseline), and CorrelatedEnvironment
 //                   with K = --light-samples (default 16) map-importance samples per vertex:
 //                   importance-k (lambda = 0), correlated (eq. 3.5), combined-3.5, combined (both
@@ -43,10 +43,10 @@
 // --compare roulette runs the roulette methods on any scene (e.g. cornell-glossy); --rr-depth N
 // sets the throughput roulettes' first decision depth (default 3).
 // --analysis (furnace, cornell) prints instead what bounds the radiance-estimate roulette: the
-// goodness d of 000 section 2.3 for the closed-scene and the pilot-fitted estimate, the floor no
+// goodness d of Szécsi 2009, §2.3 for the closed-scene and the pilot-fitted estimate, the floor no
 // estimate can reach below, and the share of the MSE that termination adds at all; on the
 // furnace also a geometry-free chain model of the room that predicts what spectral roulette
-// can gain over classic there (000 section 2.2). --weights mean|luminance sets the roulettes'
+// can gain over classic there (Szécsi 2009, §2.2). --weights mean|luminance sets the roulettes'
 // band weights H (default mean, matching the RMSE's equal weights on R, G, B).
 // CSV columns: scene,method,spp,seconds,rmse. A gnuplot plot (RMSE against seconds) is
 // written next to the CSV when gnuplot is installed.
@@ -65,21 +65,21 @@
 #include <vector>
 
 #include <glint/io/exr.hpp>
+#include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/correlated_environment.hpp>
+#include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 
-#include "dispatch_impl.hpp"
 
 #include "support/args.hpp"
 
 using namespace glint;
-using namespace glint_cli;
 
 namespace {
 
 struct Method {
     std::string name;     // as in the CSV
-    RenderOptions options;
+    NamedRender<float> options;
 };
 
 struct Point {
@@ -99,12 +99,12 @@ struct Config {
     int light_samples = 0;   // --light-samples N: light samples per vertex (0: 1; 10 on arealight)
     std::uint64_t seed = 0;  // --seed N: methods render with seed 1000 N + spp (N = 0: seed = spp)
     bool quick = false;
-    bool analysis = false;  // --analysis: 000 section 2.3's goodness d and termination's share
+    bool analysis = false;  // --analysis: Szécsi 2009, §2.3's goodness d and termination's share
     std::string compare;    // --compare roulette: the roulette methods on every scene
     int rr_depth = 3;       // --rr-depth N: the throughput roulettes' min_depth
 };
 
-/// The roulettes compared: 000's four, the field's throughput rule, 000's ideas on top of it,
+/// The roulettes compared: Szécsi 2009's four, the field's throughput rule, Szécsi 2009's ideas on top of it,
 /// and no roulette.
 const std::vector<std::string>& compared_roulettes() {
     static const std::vector<std::string> v{"classic", "spectral", "estimate", "spectral+estimate", "throughput",
@@ -115,18 +115,18 @@ const std::vector<std::string>& compared_roulettes() {
 
 std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
     auto base = [&] {
-        RenderOptions o;
-        o.settings.width = o.settings.height = cfg.size;
-        o.settings.threads = cfg.threads;
+        NamedRender<float> o;
+        o.image.width = o.image.height = cfg.size;
+        o.image.threads = cfg.threads;
         o.roulette = "spectral";
         // The furnace is lit by all its walls: a pure random walk collecting emission where
-        // it hits (000 section 2.2's setting); the others use light sampling with MIS.
+        // it hits (Szécsi 2009, §2.2's setting); the others use light sampling with MIS.
         o.direct = !cfg.direct.empty() ? cfg.direct : scene == "furnace" ? "brdf" : "mis";
-        o.roulette_weights = cfg.weights;  // default mean: the RMSE weighs R, G and B equally
-        o.radiance_estimate = cfg.radiance_estimate;
+        o.weights = cfg.weights;  // default mean: the RMSE weighs R, G and B equally
+        o.estimate = cfg.radiance_estimate;
         o.reduce_continuation = cfg.reduce;
-        if (cfg.light_samples > 0) o.settings.light_samples = cfg.light_samples;
-        o.settings.pixel_jitter = cfg.jitter;
+        if (cfg.light_samples > 0) o.tracer.light_samples = cfg.light_samples;
+        o.image.pixel_jitter = cfg.jitter;
         o.sampler = cfg.sampler;
         o.rr_depth = cfg.rr_depth;
         return o;
@@ -134,22 +134,22 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
     std::vector<Method> m;
     if (scene == "furnace" || scene == "cornell" || cfg.compare == "roulette") {
         for (const std::string& r : compared_roulettes()) {
-            RenderOptions o = base();
+            NamedRender<float> o = base();
             o.roulette = r;
             m.push_back({r, o});
         }
     } else if (scene == "cornell-glossy") {
         for (const std::string s : {"mis", "dis", "w"}) {
-            RenderOptions o = base();
-            o.settings.selection = parse_selection(s);
+            NamedRender<float> o = base();
+            o.selection = s;
             m.push_back({s, o});
         }
     } else if (scene == "arealight") {
         for (const std::string d : {"importance", "correlated", "combined"}) {
-            RenderOptions o = base();
+            NamedRender<float> o = base();
             o.direct = d;
-            o.settings.light_samples = cfg.light_samples > 0 ? cfg.light_samples : 10;
-            o.settings.max_depth = 1;
+            o.tracer.light_samples = cfg.light_samples > 0 ? cfg.light_samples : 10;
+            o.tracer.max_depth = 1;
             m.push_back({d, o});
         }
     } else {
@@ -164,7 +164,7 @@ std::vector<Method> methods_for(const std::string& scene, const Config& cfg) {
 /// only) the correlated estimator with 10 samples (lambda = 1: unbiased, and exact at every
 /// point that sees the whole light, so the reference's own variance stays well below the
 /// methods' errors; with MIS it exceeded combined's MSE at 64 spp).
-Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& scene, const RenderAccel& accel,
+Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& scene, const DefaultAccel& accel,
                             const Config& cfg, double& ref_var) {
     ref_var = 0;
     if (scene_name == "furnace") return Image<Rgb<float>>(cfg.size, cfg.size, Rgb<float>(1.0f));
@@ -178,21 +178,21 @@ Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& s
         std::printf("  reference: cached %s\n", path.c_str());
         return read_exr_rgb(path);
     }
-    RenderOptions o;
-    o.settings.width = o.settings.height = cfg.size;
-    o.settings.spp = spp;
-    o.settings.threads = cfg.threads;
-    o.settings.light_samples = 4;
+    NamedRender<float> o;
+    o.image.width = o.image.height = cfg.size;
+    o.image.spp = spp;
+    o.image.threads = cfg.threads;
+    o.tracer.light_samples = 4;
     o.roulette = "spectral";
     o.direct = "mis";
     o.seed = 0x5eed;
-    o.settings.pixel_jitter = cfg.jitter;
+    o.image.pixel_jitter = cfg.jitter;
     if (scene_name == "arealight") {
-        o.settings.max_depth = 1;  // direct illumination only
+        o.tracer.max_depth = 1;  // direct illumination only
         o.direct = "correlated";
-        o.settings.light_samples = 10;
+        o.tracer.light_samples = 10;
     }
-    const RenderResult r = render(scene, accel, o);
+    const RenderResult r = render_named(scene, accel, o);
     for (const auto& v : r.variance.pixels) ref_var += double(v[0] + v[1] + v[2]) / (3.0 * double(r.variance.size()));
     std::vector<ExrLayer> layers{ExrLayer{"variance", {"R", "G", "B"}, {}}};
     for (const auto& v : r.variance.pixels) layers[0].data.insert(layers[0].data.end(), {v[0], v[1], v[2]});
@@ -257,7 +257,7 @@ double top_pixel_share(const RenderResult& r, double fraction) {
     return all > 0 ? top / all : 0.0;
 }
 
-/// --analysis (furnace): what 000 section 2.2's formula can gain in this room at all, from a
+/// --analysis (furnace): what Szécsi 2009, §2.2's formula can gain in this room at all, from a
 /// model with no geometry. The furnace is a cube, and from any face the five others subtend
 /// form factors of 0.1998-0.2000, so a cosine-sampled walk moves, on average, to one of the
 /// other five walls uniformly. Along that chain each walk's estimate X = sum_k F_k Le_k is
@@ -293,8 +293,8 @@ std::pair<double, double> furnace_chain(const Scene<float>& scene, const R& roul
 }
 
 void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* weights) {
-    const ClassicRoulette<float, 3> classic{H};
-    const SpectralRoulette<float, 3> spectral{H};
+    const auto classic = Roulette<float, 3>::classic(H);
+    const auto spectral = Roulette<float, 3>::spectral(H);
     const auto [mse_c, len_c] = furnace_chain(scene, classic, -1, 2'000'000);
     const auto [mse_s, len_s] = furnace_chain(scene, spectral, -1, 2'000'000);
     // Rays per walk: the camera ray plus one per bounce; time taken proportional to rays.
@@ -320,44 +320,47 @@ void furnace_model(const Scene<float>& scene, const Rgb<float>& H, const char* w
     std::printf("\n");
 }
 
-/// Renders with `roulette` and the direct lighting named by o.direct (the analysis's own
-/// tracers, instantiated here: glint_render_policies names roulettes, not roulette objects).
-template <class R>
-RenderResult render_direct(const Scene<float>& scene, const RenderAccel& accel, const R& roulette, const RenderOptions& o,
-                           const RandomSampler<float>& sampler) {
-    return with_direct(o.direct, scene, o.settings, [&]<class D>(const D& direct) {
-        return steps::render_with<RenderAccel, RandomSampler<float>, R, D>(scene, accel, roulette, direct, o.settings,
-                                                                            sampler);
-    });
+/// Calls f(tracer) with the path tracer of o's direct lighting and `roulette`.
+template <class F>
+auto with_tracer(const Scene<float>& scene, const DefaultAccel& accel, const Roulette<float, 3>& roulette,
+                 const NamedRender<float>& o, F&& f) {
+    PathTracerSettings<float> ts = o.tracer;
+    ts.roulette = roulette;
+    const DirectChoice<float> direct = find_choice(direct_choices<float>(), "direct lighting", o.direct).make(scene, ts);
+    return std::visit(
+        [&]<class D>(const D& d) {
+            return f(PathTracer<DefaultAccel, RandomSampler<float>, D>(scene, accel, d, MisEnvironment<float>(scene), ts));
+        },
+        direct);
 }
 
-/// --analysis (roulette scenes): what bounds the radiance-estimate roulette of 000 section
-/// 2.3. The goodness d = E[(X - a L~)^2] / E[X^2] of the closed-scene and the pilot-fitted L~,
+/// Renders with `roulette` and the direct lighting named by o.direct.
+RenderResult render_direct(const Scene<float>& scene, const DefaultAccel& accel, const Roulette<float, 3>& roulette,
+                           const NamedRender<float>& o, const RandomSampler<float>& sampler) {
+    return with_tracer(scene, accel, roulette, o, [&](const auto& tracer) { return render_image(scene, o.image, tracer, sampler); });
+}
+
+/// --analysis (roulette scenes): what bounds the radiance-estimate roulette of Szécsi 2009,
+/// §2.3. The goodness d = E[(X - a L~)^2] / E[X^2] of the closed-scene and the pilot-fitted L~,
 /// the floor no estimate can go below (the ideal per-vertex L~, from runs of 8 samples at
 /// 2048 vertices), and how much of the MSE termination adds at all: classic roulette against
 /// none (walks to the depth cap), MSE from the variance images at max-spp, 4 seeds.
-void roulette_analysis(const std::string& name, const Scene<float>& scene, const RenderAccel& accel,
+void roulette_analysis(const std::string& name, const Scene<float>& scene, const DefaultAccel& accel,
                        const Config& cfg) {
-    RenderOptions o = methods_for(name, cfg).front().options;  // classic, the scene's lighting
-    o.settings.spp = cfg.max_spp;
+    NamedRender<float> o = methods_for(name, cfg).front().options;  // classic, the scene's lighting
+    o.image.spp = cfg.max_spp;
     const Rgb<float> H = cfg.weights == "mean" ? Rgb<float>(1.0f / 3.0f) : Rgb<float>::default_luminance_weights();
     if (name == "furnace") furnace_model(scene, H, cfg.weights.c_str());
-    using R = RadianceEstimateRoulette<float, 3, ClassicRoulette<float, 3>>;
-    const R roulette{ClassicRoulette<float, 3>{H}, {}};
     const std::size_t repeats = 8;
-    const auto samples = with_direct(o.direct, scene, o.settings, [&]<class D>(const D& direct) {
-        return steps::with_features(scene, [&]<class E, bool Points>() {
-            return PathTracer<RenderAccel, RandomSampler<float>, R, D, E, Points>(scene, accel, roulette, direct, E(scene),
-                                                                                  o.settings)
-                .pilot_samples(RandomSampler<float>(7), 2048, int(repeats));
-        });
+    const auto samples = with_tracer(scene, accel, Roulette<float, 3>::classic(H), o, [&](const auto& tracer) {
+        return tracer.pilot_samples(o.image, RandomSampler<float>(7), 2048, int(repeats));
     });
     const std::span<const RoulettePilotSample<float, 3>> v(samples);
     Rgb<float> power, albedo;
     float area;
     scene.radiance_estimate_inputs(power, area, albedo);
     const Rgb<float> scene_L = global_radiance_estimate(power, area, albedo), pilot_L = fitted_radiance_estimate(v);
-    std::printf("  analysis (direct %s, H = %s): goodness d of L~ (000 2.3; 1 = no better than L~ = 0)\n", o.direct.c_str(),
+    std::printf("  analysis (direct %s, H = %s): goodness d of L~ (Szécsi 2009, §2.3; 1 = no better than L~ = 0)\n", o.direct.c_str(),
                 cfg.weights.c_str());
     std::printf("    scene formula L~ = (%.4f %.4f %.4f)  d = %.3f\n", scene_L[0], scene_L[1], scene_L[2],
                 estimate_goodness(v, scene_L, H));
@@ -370,12 +373,12 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
     for (int seed = 0; seed < seeds; ++seed)
         for (int k = 0; k < 2; ++k) {
             const RandomSampler<float> sampler(std::uint64_t(1000 + seed));
-            const RenderResult r = k == 0 ? render_direct(scene, accel, ClassicRoulette<float, 3>{H}, o, sampler)
-                                          : render_direct(scene, accel, NoRoulette<float, 3>{}, o, sampler);
+            const RenderResult r = k == 0 ? render_direct(scene, accel, Roulette<float, 3>::classic(H), o, sampler)
+                                          : render_direct(scene, accel, Roulette<float, 3>::none(), o, sampler);
             mse[k] += mean_variance(r) / seeds;
             if (k == 0 && seed == 0) top_share = top_pixel_share(r, 0.01);
             seconds[k] += r.seconds / seeds;
-            rays[k] += double(r.rays) / (double(o.settings.width) * o.settings.height * o.settings.spp) / seeds;
+            rays[k] += double(r.rays) / (double(o.image.width) * o.image.height * o.image.spp) / seeds;
         }
     std::printf("    MSE at %d spp: classic %.5g, no roulette %.5g: termination adds %.1f%% of classic's MSE\n",
                 cfg.max_spp, mse[0], mse[1], 100.0 * (1.0 - mse[1] / mse[0]));
@@ -385,7 +388,7 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
                 100.0 * top_share, cfg.jitter ? "jittered over each pixel" : "through pixel centres");
 }
 
-/// --scene envmap: 000 section 3.3's comparison, environment lighting at the first vertex only.
+/// --scene envmap: Szécsi 2009, §3.3's comparison, environment lighting at the first vertex only.
 /// Per pixel sample, at the point the camera ray through the pixel's centre finds: the
 /// environment policy's estimate plus the BRDF sample (the path tracer's continuation ray)
 /// weighted by the policy's escaped(), which is MisEnvironment's second strategy and 0 for
@@ -393,7 +396,7 @@ void roulette_analysis(const std::string& name, const Scene<float>& scene, const
 /// continuation ray that a depth cap does not trace, and with indirect light the shared
 /// path-tracing noise hides the estimators' difference.) Rays that miss the scene see the map.
 template <class E>
-RenderResult envmap_direct(const Scene<float>& scene, const RenderAccel& accel, const E& env, int size, int spp,
+RenderResult envmap_direct(const Scene<float>& scene, const DefaultAccel& accel, const E& env, int size, int spp,
                            std::uint64_t seed) {
     RenderSettings settings;
     settings.width = settings.height = size;
@@ -409,7 +412,7 @@ RenderResult envmap_direct(const Scene<float>& scene, const RenderAccel& accel, 
             Rgb<double> sum(0.0), square(0.0);
             for (int i = 0; i < spp; ++i) {
                 const Ray<float> ray = camera.ray(x, y, std::uint64_t(i), sampler);
-                RayQueries<RenderAccel, float> queries(accel);
+                RayQueries<DefaultAccel> queries(accel);
                 StoreHit<float> hit;
                 Rgb<float> L = env.escaped(ray.direction, Arrival<float>{});
                 if (queries.closest_hit(ray, hit)) {
@@ -443,7 +446,7 @@ RenderResult envmap_direct(const Scene<float>& scene, const RenderAccel& accel, 
 /// samples from the same map density: importance-k (lambda = 0), correlated (lambda = 1, main part
 /// eq. 3.5 only), combined-3.5 (combined, eq. 3.5 only) and combined (both main parts, chosen per
 /// cell and vertex).
-RenderResult envmap_method(const std::string& method, const Scene<float>& scene, const RenderAccel& accel, int size,
+RenderResult envmap_method(const std::string& method, const Scene<float>& scene, const DefaultAccel& accel, int size,
                            int spp, std::uint64_t seed, int samples) {
     if (method == "importance") return envmap_direct(scene, accel, MisEnvironment<float>(scene), size, spp, seed);
     CorrelatedEnvironmentSettings cs;
@@ -477,7 +480,7 @@ void summarize_combined(const std::map<std::string, std::vector<Point>>& m, cons
 /// --scene envmap: every method at spp = 1, 2, .. max-spp (single thread, levels outer) against
 /// a reference of correlated sampling (lambda = 1, unbiased) with 16 samples per vertex at
 /// 4x max-spp, another seed; its own variance is subtracted from the MSE.
-void envmap_convergence(const Config& cfg, const Scene<float>& scene, const RenderAccel& accel, std::ofstream& csv,
+void envmap_convergence(const Config& cfg, const Scene<float>& scene, const DefaultAccel& accel, std::ofstream& csv,
                         Results& results) {
     const int k = cfg.light_samples > 0 ? cfg.light_samples : CorrelatedEnvironmentSettings{}.samples;
     const RenderResult ref = envmap_method("correlated", scene, accel, cfg.size, 4 * cfg.max_spp, 0x5eed, 16);
@@ -585,7 +588,7 @@ int main(int argc, char** argv) {
         }
         for (const std::string& name : scenes) {
             const Scene<float> scene = builtin_scene<float>(name);
-            const RenderAccel accel(scene.triangles);
+            const DefaultAccel accel(scene.triangles);
             std::printf("%s (%dx%d, spp 1..%d)\n", name.c_str(), cfg.size, cfg.size, cfg.max_spp);
             double ref_var = 0;
             if (name == "envmap") {
@@ -602,10 +605,10 @@ int main(int argc, char** argv) {
             // machine load drifts affect them alike.
             for (int spp = 1; spp <= cfg.max_spp; spp *= 2)
                 for (const Method& m : methods) {
-                    RenderOptions o = m.options;
-                    o.settings.spp = spp;
+                    NamedRender<float> o = m.options;
+                    o.image.spp = spp;
                     o.seed = 1000 * cfg.seed + std::uint64_t(spp);
-                    const RenderResult r = render(scene, accel, o);
+                    const RenderResult r = render_named(scene, accel, o);
                     const Point p{spp, r.seconds, rmse(r.image, ref, ref_var)};
                     results[name][m.name].push_back(p);
                     if (csv) csv << name << ',' << m.name << ',' << spp << ',' << p.seconds << ',' << p.rmse << '\n';

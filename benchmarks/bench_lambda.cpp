@@ -1,7 +1,7 @@
-// bench_lambda: bias and variance of the combined correlated estimator (000 section 3.1) as
-// its weight lambda is pooled over pixel neighbourhoods of radius 0, 1, 2 (000 section 3.1.1),
-// and statistical lambda (eq. 3.3) against lambda = the fractional visibility (000 section
-// 3.2, where it sets the weight of direct lighting).
+// bench_lambda: bias and variance of the combined correlated estimator (Szécsi 2009, §3.1) as
+// its weight lambda is pooled over pixel neighbourhoods of radius 0, 1, 2 (Szécsi 2009, §3.1.1),
+// and statistical lambda (eq. 3.3) against lambda = the fractional visibility (Szécsi 2009,
+// §3.2, where it sets the weight of direct lighting).
 //
 //   taskset -c 1 ./build/benchmarks/bench_lambda --csv docs/lambda_arealight.csv
 //   taskset -c 1 ./build/benchmarks/bench_lambda --scene cornell --csv docs/lambda_cornell.csv
@@ -9,7 +9,7 @@
 // Direct illumination only (max depth 1, as bench_convergence's arealight comparison): the
 // rest of the path is noise every method shares and would hide what lambda does. Camera rays
 // through pixel centres, so each pixel estimates one integral, from spp x light-samples light
-// points (000 compares at 10 light samples). Every method renders `renders` independent
+// points (Szécsi 2009 compares at 10 light samples). Every method renders `renders` independent
 // images (render r has the same hashed seed for every method, see series_seed: common random
 // numbers).
 // Per pixel p and band, with d_r = Y_r - ref (ref: the reference image):
@@ -61,8 +61,13 @@ using namespace glint;
 namespace {
 
 using Accel = MeshBvh<MollerTrumbore<float>, 8>;
-using Tracer = PathTracer<Accel, RandomSampler<float>, ClassicRoulette<float, 3>, CorrelatedDirect<float>,
-                          NoEnvironment<float>, false>;
+using Tracer = PathTracer<Accel, RandomSampler<float>, CorrelatedDirect<float>>;
+
+/// The image's and the tracer's settings.
+struct Settings {
+    RenderSettings image;
+    PathTracerSettings<float> tracer{.roulette = Roulette<float, 3>::classic()};
+};
 
 struct Config {
     std::string scene = "arealight", csv;
@@ -88,12 +93,11 @@ std::vector<Method> methods() {
     return m;
 }
 
-RenderResult render(const Scene<float>& scene, const Accel& accel, RenderSettings s, const Method& m,
-                    std::uint64_t seed) {
-    s.lambda_filter_radius = m.radius;
-    const Tracer tracer(scene, accel, ClassicRoulette<float, 3>{}, CorrelatedDirect<float>(scene, s, m.estimator, m.source),
-                        NoEnvironment<float>{}, s);
-    return render_image(scene, s, tracer, RandomSampler<float>(seed));
+RenderResult render(const Scene<float>& scene, const Accel& accel, Settings s, const Method& m, std::uint64_t seed) {
+    s.tracer.lambda_filter_radius = m.radius;
+    const Tracer tracer(scene, accel, CorrelatedDirect<float>(scene, s.tracer, m.estimator, m.source),
+                        MisEnvironment<float>(scene), s.tracer);
+    return render_image(scene, s.image, tracer, RandomSampler<float>(seed));
 }
 
 /// One method's renders, as differences d = Y_r - ref to the reference, pixel-band by
@@ -260,16 +264,18 @@ void seed_check() {
 
 /// Pixel-band indices of the whole image and of the penumbra (fractional visibility in
 /// (0.02, 0.98), from the lambda layer of a visibility-lambda render at 64 light samples).
-std::array<std::vector<std::size_t>, 2> regions(const Scene<float>& scene, const Accel& accel, RenderSettings s) {
-    s.light_samples = 64;
-    s.spp = 16;
+std::array<std::vector<std::size_t>, 2> regions(const Scene<float>& scene, const Accel& accel, Settings s) {
+    s.tracer.light_samples = 64;
+    s.image.spp = 16;
     const RenderResult v = render(scene, accel, s, {"visibility", "visibility", DirectEstimator::combined,
                                                     LambdaSource::visibility, 0}, series_seed(0x5e6104, 0));
     std::array<std::vector<std::size_t>, 2> out;
-    for (std::size_t p = 0; p < v.lambda.size(); ++p)
+    const FilmLayer* lambda = v.layer("lambda");
+    if (!lambda) throw Error("bench_lambda: correlated sampling wrote no lambda layer");
+    for (std::size_t p = 0; p < lambda->pixels.size(); ++p)
         for (std::size_t c = 0; c < 3; ++c) {
             out[0].push_back(3 * p + c);
-            const float f = v.lambda.pixels[p];
+            const float f = lambda->pixels.pixels[p][0];
             if (f > 0.02f && f < 0.98f) out[1].push_back(3 * p + c);
         }
     return out;
@@ -288,19 +294,19 @@ int main(int argc, char** argv) {
         if (scene.features().environment || scene.features().point_lights || !scene.features().area_lights)
             throw Error("bench_lambda: the scene '" + cfg.scene + "' must have area lights and no environment or point lights");
         const Accel accel(scene.triangles);
-        RenderSettings s;
-        s.width = s.height = cfg.size;
-        s.spp = cfg.spp;
-        s.threads = 1;
-        s.pixel_jitter = false;
-        s.max_depth = cfg.depth;
-        s.light_samples = cfg.light_samples;
+        Settings s;
+        s.image.width = s.image.height = cfg.size;
+        s.image.spp = cfg.spp;
+        s.image.threads = 1;
+        s.image.pixel_jitter = false;
+        s.tracer.max_depth = cfg.depth;
+        s.tracer.light_samples = cfg.light_samples;
 
         // The reference: the mean of --ref-renders independent renders of 1 spp (each its own hashed
         // seed, see series_seed), and the variance of that mean.
-        RenderSettings rs = s;
-        rs.spp = 1;
-        rs.light_samples = 64;
+        Settings rs = s;
+        rs.image.spp = 1;
+        rs.tracer.light_samples = 64;
         const std::size_t size = 3 * std::size_t(cfg.size) * std::size_t(cfg.size);
         std::vector<double> ref(size, 0.0), ref_v(size, 0.0);
         double ref_seconds = 0;

@@ -285,7 +285,7 @@ void render_scene(const std::string& name, const Mesh<double>& object, const Opt
     cam.fov_y = 0.68f;
     cam.width = cam.height = o.quick ? 32 : 128;
     const std::size_t walks = o.quick ? 40 : 300;
-    const auto vpls = shoot_vpls(sc, tree, SpectralRoulette<float, 3>{}, walks, 17);
+    const auto vpls = shoot_vpls(sc, tree, Roulette<float, 3>::spectral(), walks, 17);
     const float min_distance = 0.1f;
     std::printf("\n== VPL render: %s in a box, %zu triangles, %dx%d pixels, %zu VPLs from %zu walks ==\n", name.c_str(),
                 sc.triangles.size(), cam.width, cam.height, vpls.size(), walks);

@@ -49,7 +49,8 @@ using namespace glint;
 namespace {
 
 using Accel = MeshBvh<MollerTrumbore<float>, 8>;
-using Roulette = ClassicRoulette<float, 3>;
+/// The classic (albedo) roulette of the shooting walks.
+glint::Roulette<float, 3> classic() { return glint::Roulette<float, 3>::classic(); }
 using Img = std::vector<Rgb<float>>;
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
@@ -68,7 +69,7 @@ struct Setup {
 Img independent_frame(const Setup& s, std::size_t f, std::size_t walks, std::uint64_t seed) {
     Scene<float> sf = s.scene;
     sf.point_lights[0].position = s.track[f];
-    const std::vector<Vpl<float>> vpls = shoot_scene_vpls(sf, s.accel, Roulette{}, walks, seed);
+    const std::vector<Vpl<float>> vpls = shoot_scene_vpls(sf, s.accel, classic(), walks, seed);
     return gather_image(sf, std::span<const PixelPoint<float>>(s.points), std::span<const Vpl<float>>(vpls),
                         ShadowRayVisibility<Accel>(s.accel, 1e-4f), s.st);
 }
@@ -108,7 +109,7 @@ std::vector<Img> reuse_frames(const Setup& s, std::size_t paths, int branches, s
     opt.paths_per_frame = paths;
     opt.branches = branches;
     opt.seed = seed;
-    LightAnimation<float> a = shoot_light_animation(s.scene, s.accel, Roulette{}, std::span<const Vec3<float>>(s.track),
+    LightAnimation<float> a = shoot_light_animation(s.scene, s.accel, classic(), std::span<const Vec3<float>>(s.track),
                                                     s.intensity, opt);
     render_path_images(a, s.scene, std::span<const PixelPoint<float>>(s.points), ShadowRayVisibility<Accel>(s.accel, 1e-4f), s.st);
     std::vector<Img> out;

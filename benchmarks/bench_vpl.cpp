@@ -97,7 +97,7 @@ int main(int argc, char** argv) try {
     st.width = st.height = size;
     st.threads = threads;
     const auto points = primary_points(scene, accel, st);
-    const auto vpls = shoot_scene_vpls(scene, accel, ClassicRoulette<float, 3>{}, walks, 1);
+    const auto vpls = shoot_scene_vpls(scene, accel, Roulette<float, 3>::classic(), walks, 1);
     const std::span<const PixelPoint<float>> pts(points);
     const std::span<const Vpl<float>> vs(vpls);
     std::printf("%s in the Cornell box: %zu triangles, %zu VPLs, %dx%d\n", mesh_path.c_str(), mesh.size(), vpls.size(), size, size);

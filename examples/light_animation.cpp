@@ -76,7 +76,7 @@ int main(int argc, char** argv) try {
     // Shooting, connections and one image per path; then each frame is a weighted sum.
     AnimationOptions opt;
     opt.paths_per_frame = paths;
-    LightAnimation<float> anim = shoot_light_animation(scene, accel, ClassicRoulette<float, 3>{},
+    LightAnimation<float> anim = shoot_light_animation(scene, accel, Roulette<float, 3>::classic(),
                                                        std::span<const Vec3<float>>(track), intensity, opt);
     render_path_images(anim, scene, std::span<const PixelPoint<float>>(points), vis, st);
 

@@ -67,7 +67,7 @@ int main(int argc, char** argv) try {
     Scene<float> scene = with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), Rgb<float>(4.0f, 3.5f, 3.0f));
     const Accel accel(scene.triangles);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
-    const ClassicRoulette<float, 3> roulette;
+    const auto roulette = Roulette<float, 3>::classic();
     const auto track = light_track(Vec3<float>(-0.7f, 1.7f, 0.2f), Vec3<float>(0.7f, 1.7f, 0.2f), frames);
     VplSettings st;
     st.width = st.height = size;

@@ -4,9 +4,11 @@
 //   glint-render --mesh ../shared/scenes/bunny.obj --spp 64 --out bunny.exr
 //
 // Renders a built-in scene (cornell, cornell-glossy, furnace, arealight, envmap) or an OBJ
-// mesh, writes an OpenEXR file (RGB plus the per-pixel variance layer, and the lambda layer
-// of correlated sampling) and a tone-mapped PNG preview next to it, and prints the time and
-// the ray throughput. Policies are chosen by flags; see --help.
+// mesh, writes an OpenEXR file (RGB plus the per-pixel variance layer and the integrator's
+// layers, such as correlated sampling's lambda) and a tone-mapped PNG preview next to it, and
+// prints the time and the ray throughput. Policies are chosen by name (the tables of
+// glint/tracer/named_render.hpp and accelerator_choices.hpp), every name checked before any
+// file is read; see --help.
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -17,7 +19,10 @@
 #include <cstring>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
+#include <variant>
+#include <vector>
 
 #include <unistd.h>
 
@@ -26,62 +31,69 @@
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
+#include <glint/tracer/accelerator_choices.hpp>
+#include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 
 #include "vpl_cli.hpp"
-#include "render_policies/render_options.hpp"
 
 using namespace glint;
-using namespace glint_cli;
 
 namespace {
 
+enum class Tonemap { clamp, reinhard };
+constexpr Choice<Tonemap> tonemaps[] = {{"clamp", "exposure, clip at 1, sRGB", Tonemap::clamp},
+                                        {"reinhard", "x / (1 + x) first", Tonemap::reinhard}};
+constexpr Choice<bool> integrators[] = {{"path", "the path tracer", false},
+                                        {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, "
+                                                "--direct and --sampler do not apply)", true}};
+constexpr Choice<bool> visibilities[] = {{"rays", "shadow rays", false},
+                                         {"spheres", "occluder spheres from --insert-mesh or --mesh", true}};
+
+/// A flag's line of the usage text, then its choices (the first is the default).
+template <class Make>
+std::string choices(const char* flag, std::span<const Choice<Make>> table) {
+    return std::string(flag) + " (default " + std::string(table.front().name) + ")\n" + choice_usage(table);
+}
+
 void usage() {
-    std::printf(
+    std::string text =
         "usage: glint-render (--scene NAME | --mesh FILE.obj) [options]\n"
-        "  --scene NAME        cornell, cornell-glossy, furnace, arealight, envmap\n"
+        "  --scene NAME        a built-in scene:\n" + choice_usage(scene_choices<float>()) +
         "  --mesh FILE         an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky\n"
         "  --env FILE.exr      lat-long environment map (envmap scene or --mesh)\n"
         "  --size N            image width and height (default 256; at most 16384)\n"
         "  --width N, --height N  image width, height (rectangular images)\n"
         "  --spp N             samples per pixel (default 16)\n"
-        "  --out FILE          FILE.exr or FILE.png: writes FILE.exr (RGB, variance and lambda layers)\n"
-        "                      and the tone-mapped preview FILE.png (default out.exr)\n"
+        "  --out FILE          FILE.exr or FILE.png: writes FILE.exr (RGB, variance and the integrator's\n"
+        "                      layers) and the tone-mapped preview FILE.png (default out.exr)\n"
         "  --eye X,Y,Z --look-at X,Y,Z --up X,Y,Z --fov DEGREES\n"
         "                      camera (default: the scene's; a mesh is framed by its bounding box)\n"
-        "  --max-depth N       path length cap (default: RenderSettings::max_depth)\n"
-        "  --roulette NAME     classic, spectral, estimate, spectral+estimate (000's rules);\n"
-        "                      throughput, throughput+spectral, throughput+estimate,\n"
-        "                      throughput+spectral+estimate (the field's rule from --rr-depth);\n"
-        "                      none (no roulette, throughput cut-off 1e-3)\n"
-        "                      (default throughput)\n"
-        "  --rr-depth N        throughput roulettes: vertices before the first decision (default 3)\n"
-        "  --direct NAME       brdf, mis, importance, correlated, combined (default mis)\n"
-        "  --selection NAME    BRDF selection: dis, w, mis (default mis)\n"
-        "  --light-samples N   light samples per vertex (default 1; at most 1024)\n"
-        "  --accel NAME        ray accelerator: bvh8 (8-wide BVH, the fastest), bvh4 (4-wide BVH),\n"
-        "                      kd-compact (kd-tree in 000's compact-subtree layout), bvh8-virtual (bvh8\n"
-        "                      behind a virtual call) (default bvh8)\n"
-        "  --sampler NAME      random, halton (random digit permutations; also halton-perm), halton-owen\n"
-        "                      (Owen-scrambled), halton-cp (Cranley-Patterson) (default halton)\n"
-        "  --threads N         worker threads (default: all cores)\n"
-        "  --weights NAME      roulette band weights H: luminance or mean (default luminance)\n"
-        "  --estimate NAME     L~ of the estimate roulettes: pilot (fitted on pilot paths) or scene\n"
-        "                      (000's closed-scene formula) (default pilot)\n"
-        "  --reduce            estimate roulettes: shorten walks by the estimate's goodness\n"
+        "  --max-depth N       path length cap (default 1024)\n" +
+        choices("  --roulette NAME     the roulette rule; each also as NAME+estimate (Szecsi 2009 2.3's\n"
+                "                      radiance estimate on top; estimate = classic+estimate)", roulette_choices<float>()) +
+        "  --rr-depth N        throughput roulettes: vertices before the first decision (default 3)\n" +
+        choices("  --direct NAME       direct lighting", direct_choices<float>()) +
+        choices("  --selection NAME    BRDF selection", selection_choices()) +
+        "  --light-samples N   light samples per vertex (default 1; at most 1024)\n" +
+        choices("  --accel NAME        ray accelerator", accelerator_choices()) +
+        choices("  --sampler NAME      sampler", sampler_choices<float>()) +
+        "  --threads N         worker threads (default: all cores)\n" +
+        choices("  --weights NAME      roulette band weights H", weights_choices<float>()) +
+        choices("  --estimate NAME     L~ of the +estimate roulettes", estimate_choices()) +
+        "  --reduce            +estimate roulettes: shorten walks by the estimate's goodness\n"
         "  --pixel-centres     camera rays through pixel centres (default: jittered over the pixel)\n"
-        "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n"
-        "  --tonemap NAME      PNG preview: clamp (exposure, clip at 1, sRGB) or reinhard\n"
-        "                      (x / (1 + x) first) (default clamp)\n"
+        "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n" +
+        choices("  --tonemap NAME      PNG preview", std::span<const Choice<Tonemap>>(tonemaps)) +
         "  --seed N            random seed (default 0)\n"
         "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
-        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n"
-        "  --integrator NAME   path (the path tracer) or vpl (virtual light sources; one ray per pixel\n"
-        "                      centre; --spp, --roulette, --direct and --sampler do not apply)\n"
-        "  --vpls N            vpl: shooting walks (default 1024)\n"
-        "  --visibility NAME   vpl: rays or spheres (occluder spheres from --insert-mesh or --mesh)\n"
+        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n" +
+        choices("  --integrator NAME   integrator", std::span<const Choice<bool>>(integrators)) +
+        "  --vpls N            vpl: shooting walks (default 1024)\n" +
+        choices("  --visibility NAME   vpl: visibility", std::span<const Choice<bool>>(visibilities)) +
         "  --spheres K         vpl: occluder spheres (default 100)\n"
-        "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n");
+        "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n";
+    std::fputs(text.c_str(), stdout);
 }
 
 /// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
@@ -172,22 +184,31 @@ void check_writable(const std::string& path) {
         throw Error("cannot write '" + path + "': " + std::strerror(errno));
 }
 
-/// Everything the command line sets besides RenderOptions.
+/// Everything the command line sets besides the path tracer's NamedRender.
 struct Args {
     std::string scene_name, mesh, env, out = "out.exr";
     std::string insert, export_json;  // --insert-mesh, --export-scene
-    std::string accel = "bvh8";
+    std::string accel = "bvh8", tonemap = "clamp";
     float exposure = 0;
-    bool reinhard = false;
     std::optional<Vec3f> eye, look_at, up;
     std::optional<float> fov_degrees;
     std::string integrator = "path";
     VplCliOptions vpl;
 };
 
+/// Every name the command line gives, checked against its table before any file is read.
+void check_names(const Args& g, const NamedRender<float>& o) {
+    glint::check_names(o);
+    if (!g.scene_name.empty()) find_choice(scene_choices<float>(), "scene", g.scene_name);
+    find_choice(accelerator_choices(), "accelerator", g.accel);
+    find_choice(std::span<const Choice<Tonemap>>(tonemaps), "tonemap", g.tonemap);
+    find_choice(std::span<const Choice<bool>>(integrators), "integrator", g.integrator);
+    find_choice(std::span<const Choice<bool>>(visibilities), "visibility", g.vpl.visibility);
+}
+
 /// Parses and validates every flag (nothing long runs before this returns). Returns false
 /// after --help.
-bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
+bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         auto value = [&]() -> const char* {
@@ -198,34 +219,30 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
         else if (a == "--scene") g.scene_name = value();
         else if (a == "--mesh") g.mesh = value();
         else if (a == "--env") g.env = value();
-        else if (a == "--size") o.settings.width = o.settings.height = int(to_int(a, value(), 1, 16384));
-        else if (a == "--width") o.settings.width = int(to_int(a, value(), 1, 16384));
-        else if (a == "--height") o.settings.height = int(to_int(a, value(), 1, 16384));
-        else if (a == "--spp") o.settings.spp = int(to_int(a, value(), 1, 1 << 20));
+        else if (a == "--size") o.image.width = o.image.height = int(to_int(a, value(), 1, 16384));
+        else if (a == "--width") o.image.width = int(to_int(a, value(), 1, 16384));
+        else if (a == "--height") o.image.height = int(to_int(a, value(), 1, 16384));
+        else if (a == "--spp") o.image.spp = int(to_int(a, value(), 1, 1 << 20));
         else if (a == "--out") g.out = value();
         else if (a == "--roulette") o.roulette = value();
         else if (a == "--rr-depth") o.rr_depth = int(to_int(a, value(), 0, 1 << 20));
         else if (a == "--direct") o.direct = value();
-        else if (a == "--selection") o.settings.selection = parse_selection(value());
-        else if (a == "--light-samples") o.settings.light_samples = int(to_int(a, value(), 1, 1024));
+        else if (a == "--selection") o.selection = value();
+        else if (a == "--light-samples") o.tracer.light_samples = int(to_int(a, value(), 1, 1024));
         else if (a == "--sampler") o.sampler = value();
         else if (a == "--accel") g.accel = value();
-        else if (a == "--threads") o.settings.threads = int(to_int(a, value(), 1, 4096));
-        else if (a == "--weights") o.roulette_weights = value();
-        else if (a == "--estimate") o.radiance_estimate = value();
+        else if (a == "--threads") o.image.threads = int(to_int(a, value(), 1, 4096));
+        else if (a == "--weights") o.weights = value();
+        else if (a == "--estimate") o.estimate = value();
         else if (a == "--reduce") o.reduce_continuation = true;
-        else if (a == "--pixel-centres") o.settings.pixel_jitter = false;
+        else if (a == "--pixel-centres") o.image.pixel_jitter = false;
         else if (a == "--exposure") g.exposure = to_float(a, value(), -64.0f, 64.0f);
-        else if (a == "--max-depth") o.settings.max_depth = int(to_int(a, value(), 1, 1 << 24));
+        else if (a == "--max-depth") o.tracer.max_depth = int(to_int(a, value(), 1, 1 << 24));
         else if (a == "--eye") g.eye = to_vec3(a, value());
         else if (a == "--look-at") g.look_at = to_vec3(a, value());
         else if (a == "--up") g.up = to_vec3(a, value());
         else if (a == "--fov") g.fov_degrees = to_float(a, value(), 0.01f, 179.0f);
-        else if (a == "--tonemap") {
-            const std::string t = value();
-            if (t != "clamp" && t != "reinhard") throw Error("--tonemap expects clamp or reinhard, not '" + t + "'");
-            g.reinhard = t == "reinhard";
-        }
+        else if (a == "--tonemap") g.tonemap = value();
         else if (a == "--seed") o.seed = to_u64(a, value());
         else if (a == "--insert-mesh") g.insert = value();
         else if (a == "--export-scene") g.export_json = value();
@@ -236,14 +253,10 @@ bool parse_args(int argc, char** argv, Args& g, RenderOptions& o) {
         else if (a == "--clamp") g.vpl.clamp = to_float(a, value(), 0.0f, 1e30f);
         else throw Error("unknown option '" + a + "' (see --help)");
     }
-    if (g.integrator != "path" && g.integrator != "vpl") throw Error("--integrator expects path or vpl, not '" + g.integrator + "'");
-    if (g.vpl.visibility != "rays" && g.vpl.visibility != "spheres")
-        throw Error("--visibility expects rays or spheres, not '" + g.vpl.visibility + "'");
-    if (std::find(accel_names().begin(), accel_names().end(), g.accel) == accel_names().end())
-        throw Error("unknown accelerator '" + g.accel + "' (see --help)");
+    check_names(g, o);
     if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
-    if (std::uint64_t(o.settings.width) * std::uint64_t(o.settings.height) > (std::uint64_t(1) << 26))
-        throw Error("--width x --height = " + std::to_string(o.settings.width) + " x " + std::to_string(o.settings.height) +
+    if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
+        throw Error("--width x --height = " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
                     " is above the limit of 2^26 pixels");
     if (!ends_with(g.out, ".exr") && !ends_with(g.out, ".png"))
         throw Error("--out expects a file name ending in .exr or .png, got '" + g.out + "'");
@@ -271,13 +284,52 @@ void apply_camera(const Args& g, Camera<float>& c) {
     if (!(glm::length(glm::cross(w, c.up)) > 0.0f)) throw Error("--up must not be parallel to the view direction");
 }
 
+
+/// The film's layers for the EXR file: the variance, then each layer the integrator added
+/// (a grey layer as one channel Y).
+std::vector<ExrLayer> exr_layers(const Film& film) {
+    std::vector<ExrLayer> out{ExrLayer{"variance", {"R", "G", "B"}, flatten(film.variance)}};
+    for (const FilmLayer& l : film.layers) {
+        if (!l.grey) {
+            out.push_back(ExrLayer{l.name, {"R", "G", "B"}, flatten(l.pixels)});
+            continue;
+        }
+        ExrLayer y{l.name, {"Y"}, {}};
+        for (const auto& p : l.pixels.pixels) y.data.push_back(p[0]);
+        out.push_back(std::move(y));
+    }
+    return out;
+}
+
+/// The path tracer's render with the accelerator named --accel; prints what it did.
+int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+    std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n", scene.name.c_str(),
+                 scene.triangles.size(), scene.area_lights.size(), scene.environment ? ", environment map" : "",
+                 o.image.width, o.image.height, o.image.spp, o.roulette.c_str(), o.direct.c_str());
+    const auto build_start = std::chrono::steady_clock::now();
+    const AcceleratorChoice accel = find_choice(accelerator_choices(), "accelerator", g.accel).make(scene.triangles);
+    const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
+    const RenderResult r = std::visit([&](const auto& a) { return render_named(scene, *a, o); }, accel);
+    const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
+    write_exr(exr, r.image, exr_layers(r));
+    write_png(png, r.image, g.exposure, g.tonemap == "reinhard");
+    std::printf("rendered %s in %.3f s (build %s %.3f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
+                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, double(r.rays) / r.seconds * 1e-6,
+                (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), exr.c_str(),
+                png.c_str());
+    if (r.capped_walks > 0)
+        std::fprintf(stderr, "glint-render: warning: %llu walks reached the depth cap of %d vertices and were cut "
+                     "(biased); raise --max-depth\n", (unsigned long long)r.capped_walks, o.tracer.max_depth);
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
         Args g;
-        RenderOptions o;
-        o.settings.progress = isatty(STDERR_FILENO) != 0;  // a progress bar only on a terminal
+        NamedRender<float> o;
+        o.image.progress = isatty(STDERR_FILENO) != 0;  // a progress bar only on a terminal
         if (!parse_args(argc, argv, g, o)) return 0;
         Scene<float> scene = g.mesh.empty() ? builtin_scene<float>(g.scene_name) : scene_from_obj(g.mesh, g.env);
         if (!g.env.empty() && g.mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
@@ -287,52 +339,21 @@ int main(int argc, char** argv) {
             insert_mesh<float>(scene, load_obj(g.insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
                                cornell_mesh_placement<float>());
         if (!g.export_json.empty()) {
-            write_scene_json(g.export_json, scene, SceneJsonView{o.settings.width, o.settings.height, o.settings.max_depth});
+            write_scene_json(g.export_json, scene, SceneJsonView{o.image.width, o.image.height, o.tracer.max_depth});
             return 0;
         }
-
-        if (g.integrator == "vpl") {
-            VplSettings st;
-            st.width = o.settings.width, st.height = o.settings.height, st.threads = o.settings.threads, st.seed = o.seed + 1;
-            const std::span<const TriangleVertices<float>> mesh(scene.triangles.data() + before_insert,
-                                                                scene.triangles.size() - before_insert);
-            const VplResult r = render_vpl_cli(scene, mesh, g.vpl, st);
-            const std::string stem = g.out.substr(0, g.out.size() - 4);
-            write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}});
-            write_png(stem + ".png", r.image, g.exposure, g.reinhard);
-            std::printf("rendered %s with %zu VPLs (%s visibility) in %.3f s (shooting %.3f s); wrote %s.exr and %s.png\n",
-                        scene.name.c_str(), r.vpls, g.vpl.visibility.c_str(), r.seconds, r.shooting_seconds, stem.c_str(),
-                        stem.c_str());
-            return 0;
-        }
-        std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n",
-                     scene.name.c_str(), scene.triangles.size(), scene.area_lights.size(),
-                     scene.environment ? ", environment map" : "", o.settings.width, o.settings.height,
-                     o.settings.spp, o.roulette.c_str(), o.direct.c_str());
-        const auto build_start = std::chrono::steady_clock::now();
-        std::optional<RenderAccel> fast;
-        std::unique_ptr<AnyAccel> other;
-        if (g.accel == accel_names().front()) fast.emplace(scene.triangles);
-        else other = make_accel(g.accel, scene.triangles);
-        const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
-        const RenderResult r = fast ? render(scene, *fast, o) : render(scene, *other, o);
-
-        std::vector<ExrLayer> layers;
-        ExrLayer var{"variance", {"R", "G", "B"}, {}};
-        for (const auto& p : r.variance.pixels) var.data.insert(var.data.end(), {p[0], p[1], p[2]});
-        layers.push_back(std::move(var));
-        if (o.direct == "importance" || o.direct == "correlated" || o.direct == "combined")
-            layers.push_back(ExrLayer{"lambda", {"Y"}, r.lambda.pixels});
-        const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
-        write_exr(exr, r.image, layers);
-        write_png(png, r.image, g.exposure, g.reinhard);
-        std::printf("rendered %s in %.3f s (build %s %.3f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
-                    scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, double(r.rays) / r.seconds * 1e-6,
-                    (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), exr.c_str(),
-                    png.c_str());
-        if (r.capped_walks > 0)
-            std::fprintf(stderr, "glint-render: warning: %llu walks reached the depth cap of %d vertices and were cut "
-                         "(biased); raise --max-depth\n", (unsigned long long)r.capped_walks, o.settings.max_depth);
+        if (g.integrator == "path") return render_path(g, o, scene);
+        VplSettings st;
+        st.width = o.image.width, st.height = o.image.height, st.threads = o.image.threads, st.seed = o.seed + 1;
+        const std::span<const TriangleVertices<float>> mesh(scene.triangles.data() + before_insert,
+                                                            scene.triangles.size() - before_insert);
+        const VplResult r = render_vpl_cli(scene, mesh, g.vpl, st);
+        const std::string stem = g.out.substr(0, g.out.size() - 4);
+        write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}});
+        write_png(stem + ".png", r.image, g.exposure, g.tonemap == "reinhard");
+        std::printf("rendered %s with %zu VPLs (%s visibility) in %.3f s (shooting %.3f s); wrote %s.exr and %s.png\n",
+                    scene.name.c_str(), r.vpls, g.vpl.visibility.c_str(), r.seconds, r.shooting_seconds, stem.c_str(),
+                    stem.c_str());
         return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "glint-render: %s\n", e.what());

@@ -36,7 +36,7 @@ inline VplResult render_vpl_cli(const Scene<float>& scene, std::span<const Trian
                                 const VplCliOptions& v, VplSettings st) {
     using Accel = MeshBvh<MollerTrumbore<float>, 8>;
     const Accel accel(scene.triangles);
-    const ClassicRoulette<float, 3> roulette;
+    const auto roulette = Roulette<float, 3>::classic();
     st.vpl_walks = v.vpls;
     st.min_distance = v.clamp;
     if (v.visibility == "rays") return render_vpl(scene, accel, roulette, ShadowRayVisibility<Accel>(accel, 1e-4f), st);

@@ -515,7 +515,7 @@ TEST_CASE("vpl: first-bounce power equals the emitted power; spheres without occ
     CHECK(total == doctest::Approx(10.0 * pi<double> * 0.36).epsilon(1e-4));
     // Full walks, gathering: no occluder inside the box, so an empty sphere set must give the
     // shadow-ray image up to the emitter quad's own (grazing) shadows.
-    const auto vpls = shoot_vpls(sc, tree, SpectralRoulette<float, 3>{}, walks, 4);
+    const auto vpls = shoot_vpls(sc, tree, Roulette<float, 3>::spectral(), walks, 4);
     CHECK(vpls.size() > walks);
     PinholeCamera<float> cam;
     cam.eye = Vec3f(0, 0, 0.95f);

@@ -597,7 +597,7 @@ TEST_CASE("stress: warps at the corners of the unit square give finite unit vect
 }
 
 // ---------------------------------------------------------------------------------------------
-// Russian roulette and BRDF selection (000 section 2)
+// Russian roulette and BRDF selection (Szécsi 2009, §2)
 // ---------------------------------------------------------------------------------------------
 
 namespace {
@@ -609,12 +609,12 @@ using Rgbd = Rgb<double>;
 /// normal and covers the hemisphere: the exact reflected radiance is
 /// kd (1 + 2/3) tint + ks (1 + (e+2)/(e+3)) tint.
 /// W divides the whole w by the selected lobe's density: with the glossy lobe selected,
-/// w_d / p_g ~ cos^(1-e), whose variance is infinite for e >= 3 (000 section 2.1: "the specular
+/// w_d / p_g ~ cos^(1-e), whose variance is infinite for e >= 3 (Szécsi 2009, §2.1: "the specular
 /// sampling cannot sample the whole domain of the diffuse reflection"), so a finite-sample mean
 /// cannot be tested against standard errors. W is therefore tested with e = 2, DIS and MIS
 /// with a sharp e = 20.
-template <BrdfSelection C, class R>
-void check_scatter_unbiased(const R& roulette, std::uint64_t seed, int depth = 0) {
+template <BrdfSelection C>
+void check_scatter_unbiased(const Roulette<double, 3>& roulette, std::uint64_t seed, int depth = 0) {
     const double exponent = C == BrdfSelection::weighted ? 2.0 : 20.0;
     const auto material = Material<double>::glossy(Rgbd(0.5, 0.3, 0.1), Rgbd(0.2, 0.4, 0.6), exponent);
     const SurfaceBrdf<double> brdf(material, Vec3<double>(0, 0, 1));
@@ -628,7 +628,7 @@ void check_scatter_unbiased(const R& roulette, std::uint64_t seed, int depth = 0
     for (int k = 0; k < n; ++k) {
         const double us = rng.uniform<double>();
         const Vec2<double> ud(rng.uniform<double>(), rng.uniform<double>());
-        const ScatterSample<double, 3> s = scatter<C>(brdf, roulette, throughput, us, ud, depth);
+        const ScatterSample<double, 3> s = scatter(brdf, roulette, throughput, us, ud, depth, C);
         Rgbd value = s.offset;
         if (!s.terminated()) value += s.weight * tint * (1 + s.direction.z);
         for (int l = 0; l < 3; ++l) stats[l].add(value[l]);
@@ -642,23 +642,29 @@ void check_scatter_unbiased(const R& roulette, std::uint64_t seed, int depth = 0
 
 template <BrdfSelection C>
 void check_all_roulettes(std::uint64_t seed) {
-    SUBCASE("classic") { check_scatter_unbiased<C>(ClassicRoulette<double, 3>{}, seed); }
-    SUBCASE("classic mean") { check_scatter_unbiased<C>(ClassicRoulette<double, 3>::mean(), seed + 1); }
-    SUBCASE("spectral") { check_scatter_unbiased<C>(SpectralRoulette<double, 3>{}, seed + 2); }
+    using R = Roulette<double, 3>;
+    SUBCASE("classic") { check_scatter_unbiased<C>(R::classic(), seed); }
+    SUBCASE("classic mean") { check_scatter_unbiased<C>(R::mean(), seed + 1); }
+    SUBCASE("spectral") { check_scatter_unbiased<C>(R::spectral(), seed + 2); }
     SUBCASE("radiance estimate") {
-        RadianceEstimateRoulette<double, 3> r;
+        R r = R::spectral();
         r.estimate = Rgbd(0.8, 0.5, 1.5);
         check_scatter_unbiased<C>(r, seed + 3);
     }
     SUBCASE("radiance estimate, classic inside") {
-        RadianceEstimateRoulette<double, 3, ClassicRoulette<double, 3>> r;
+        R r = R::classic();
         r.estimate = Rgbd(0.8, 0.5, 1.5);
         check_scatter_unbiased<C>(r, seed + 4);
     }
+    SUBCASE("radiance estimate, reduced continuation") {
+        R r = R::classic();
+        r.estimate = Rgbd(0.8, 0.5, 1.5);
+        r.goodness = 0.4;
+        check_scatter_unbiased<C>(r, seed + 10);
+    }
     // The throughput rule before its first decision (no termination) and after it, with the
-    // max norm, 000's H-weighted norm, and a radiance estimate on top; no roulette.
-    ThroughputRoulette<double, 3> t;
-    t.min_depth = 2;
+    // max norm, Szécsi 2009, §2.2's H-weighted norm, and a radiance estimate on top; no roulette.
+    R t = R::throughput(ThroughputNorm::max, 2);
     SUBCASE("throughput, before min_depth") { check_scatter_unbiased<C>(t, seed + 5, 1); }
     SUBCASE("throughput, after min_depth") { check_scatter_unbiased<C>(t, seed + 6, 2); }
     SUBCASE("throughput, H-weighted norm") {
@@ -666,19 +672,31 @@ void check_all_roulettes(std::uint64_t seed) {
         check_scatter_unbiased<C>(t, seed + 7, 5);
     }
     SUBCASE("throughput + radiance estimate") {
-        RadianceEstimateRoulette<double, 3, ThroughputRoulette<double, 3>> r{t, Rgbd(0.8, 0.5, 1.5)};
-        check_scatter_unbiased<C>(r, seed + 8, 3);
+        t.estimate = Rgbd(0.8, 0.5, 1.5);
+        check_scatter_unbiased<C>(t, seed + 8, 3);
     }
-    SUBCASE("no roulette") { check_scatter_unbiased<C>(NoRoulette<double, 3>{}, seed + 9, 7); }
+    SUBCASE("no roulette") { check_scatter_unbiased<C>(R::none(), seed + 9, 7); }
 }
 
 }  // namespace
 
-static_assert(RoulettePolicy<ClassicRoulette<float, 3>, float, 3>);
-static_assert(RoulettePolicy<SpectralRoulette<double, 8>, double, 8>);
-static_assert(RoulettePolicy<RadianceEstimateRoulette<float, 3>, float, 3>);
-static_assert(RoulettePolicy<ThroughputRoulette<float, 3>, float, 3>);
-static_assert(RoulettePolicy<NoRoulette<double, 8>, double, 8>);
+static_assert(RoulettePolicy<Roulette<float, 3>, float, 3>);
+static_assert(RoulettePolicy<Roulette<double, 8>, double, 8>);
+
+TEST_CASE("exact: a roulette's identity values give zero offsets and leave s unchanged") {
+    using R = Roulette<double, 3>;
+    const Rgbd F(0.3, 0.9, 0.5), a(0.6, 0.2, 0.7);
+    for (R r : {R::classic(), R::spectral(), R::throughput(ThroughputNorm::weighted, 0, 0.95), R::none(0.01)}) {
+        CHECK(r.terminated(a) == Rgbd(0.0));
+        CHECK(r.continued_offset(a, 0.3) == Rgbd(0.0));
+        const double s = r.continuation(F, a, 4);
+        r.goodness = 0.5;  // s d / (1 - (1 - d) s)
+        CHECK(r.continuation(F, a, 4) == doctest::Approx(s * 0.5 / (1 - 0.5 * s)));
+        r.estimate = Rgbd(2.0);
+        CHECK(r.terminated(a) == a * 2.0);
+        CHECK(r.continued_offset(a, 0.25) == a * 2.0 * -3.0);
+    }
+}
 
 TEST_CASE("statistics: DIS with every roulette is unbiased (10^6 samples)") {
     check_all_roulettes<BrdfSelection::decomposition>(100);
@@ -691,12 +709,12 @@ TEST_CASE("statistics: MIS with every roulette is unbiased (10^6 samples)") {
 }
 
 TEST_CASE("exact: spectral roulette stops blue light on a yellow surface, equals classic on grey") {
-    const SpectralRoulette<double, 3> spectral;
-    const ClassicRoulette<double, 3> classic;
+    const auto spectral = Roulette<double, 3>::spectral();
+    const auto classic = Roulette<double, 3>::classic();
     const Rgbd yellow(1, 1, 0), blue(0, 0, 1);
-    // 000 section 2.2: classic continues with the mean albedo (2/3 for uniform weights).
+    // Szécsi 2009, §2.2: classic continues with the mean albedo (2/3 for uniform weights).
     CHECK(spectral.selection_weight(blue, yellow) == 0.0);
-    CHECK(ClassicRoulette<double, 3>::mean().selection_weight(blue, yellow) == doctest::Approx(2.0 / 3.0));
+    CHECK(Roulette<double, 3>::mean().selection_weight(blue, yellow) == doctest::Approx(2.0 / 3.0));
     const std::array<Rgbd, 1> lobes = {yellow};
     for (double u : {0.0, 0.3, 0.999}) {
         CHECK(select_lobe(spectral, blue, std::span<const Rgbd>(lobes), u, 0).terminated());
@@ -747,10 +765,9 @@ TEST_CASE("exact: pilot fit, goodness and its floor; no roulette never terminate
     // No roulette: some lobe is always chosen, however dark the albedo; with a cut-off, walks
     // whose throughput falls to it stop.
     const std::array<Rgbd, 2> lobes = {Rgbd(0.01), Rgbd(0.0)};
-    NoRoulette<double, 3> cut;
-    cut.cutoff = 0.02;
+    const auto cut = Roulette<double, 3>::none(0.02);
     for (double u : {0.0, 0.5, 0.999999}) {
-        const auto sel = select_lobe(NoRoulette<double, 3>{}, Rgbd(1.0), std::span<const Rgbd>(lobes), u, 100);
+        const auto sel = select_lobe(Roulette<double, 3>::none(), Rgbd(1.0), std::span<const Rgbd>(lobes), u, 100);
         CHECK(sel.lobe == 0);
         CHECK(sel.total == 1.0);
         CHECK(select_lobe(cut, Rgbd(1.0), std::span<const Rgbd>(lobes), u, 0).terminated());
@@ -760,11 +777,10 @@ TEST_CASE("exact: pilot fit, goodness and its floor; no roulette never terminate
 
 namespace {
 
-/// The furnace of 000 section 2.2 as a toy walk: every surface has albedo a
+/// The furnace of Szécsi 2009, §2.2 as a toy walk: every surface has albedo a
 /// and emission 1 - a per band, so the radiance is 1 everywhere. Returns the per-walk
 /// estimates of the H-weighted radiance; `steps` counts the reflections.
-template <class R>
-MomentStats furnace_walks(const R& roulette, const Rgbd& albedo, int walks, std::uint64_t seed,
+MomentStats furnace_walks(const Roulette<double, 3>& roulette, const Rgbd& albedo, int walks, std::uint64_t seed,
                           double& steps) {
     Pcg32 rng(seed);
     MomentStats out;
@@ -790,15 +806,15 @@ MomentStats furnace_walks(const R& roulette, const Rgbd& albedo, int walks, std:
 }  // namespace
 
 TEST_CASE("statistics: furnace walks are unbiased, spectral and radiance estimate cut variance") {
-    // Saturated walls: a permutation of (1.0, 0.5, 0.2) in 000; 1.0 would never terminate, so
+    // Saturated walls: a permutation of (1.0, 0.5, 0.2) in Szécsi 2009, §2.2; 1.0 would never terminate, so
     // (0.9, 0.5, 0.2). The exact luminance of the radiance is 1.
     const Rgbd albedo(0.9, 0.5, 0.2);
     const int walks = 200000;
     double steps_classic = 0, steps_spectral = 0, steps_estimate = 0;
-    const MomentStats classic = furnace_walks(ClassicRoulette<double, 3>{}, albedo, walks, 1, steps_classic);
-    const MomentStats spectral = furnace_walks(SpectralRoulette<double, 3>{}, albedo, walks, 2, steps_spectral);
+    const MomentStats classic = furnace_walks(Roulette<double, 3>::classic(), albedo, walks, 1, steps_classic);
+    const MomentStats spectral = furnace_walks(Roulette<double, 3>::spectral(), albedo, walks, 2, steps_spectral);
     // L~ from the scene: area S, Phi_e = pi S (1 - a), mean albedo a (one material).
-    RadianceEstimateRoulette<double, 3, SpectralRoulette<double, 3>> with_estimate;
+    auto with_estimate = Roulette<double, 3>::spectral();
     with_estimate.estimate = global_radiance_estimate(Rgbd(pi<double>) * (Rgbd(1.0) - albedo), 1.0, albedo);
     const MomentStats estimate = furnace_walks(with_estimate, albedo, walks, 3, steps_estimate);
     for (const MomentStats* s : {&classic, &spectral, &estimate}) {
@@ -817,7 +833,7 @@ TEST_CASE("statistics: furnace walks are unbiased, spectral and radiance estimat
 }
 
 // ---------------------------------------------------------------------------------------------
-// Multiple correlated sampling (000 section 3)
+// Multiple correlated sampling (Szécsi 2009, §3)
 // ---------------------------------------------------------------------------------------------
 
 namespace {
@@ -1063,7 +1079,7 @@ TEST_CASE("exact: equal-solid-angle sphere cells and the closed-form diffuse a_d
     CHECK_THROWS_AS(SphereCells<double>(0, 3), Error);
 }
 
-TEST_CASE("exact: sphere cells' direction integral, least cosine and cell lookup (000 3.3.1)") {
+TEST_CASE("exact: sphere cells' direction integral, least cosine and cell lookup (Szécsi 2009, §3.3.1)") {
     const SphereCells<double> cells(8, 4, false);
     Vec3<double> total(0.0);
     Pcg32 rng(41);
@@ -1202,8 +1218,7 @@ TEST_CASE("stress: float instantiations, degenerate and non-finite inputs give n
     // float versions compile and agree with double.
     const SurfaceBrdf<float> brdf(Material<float>::glossy(Rgb<float>(0.5f, 0.3f, 0.1f), Rgb<float>(0.2f, 0.4f, 0.6f), 20.0f),
                                   Vec3<float>(0, 0, 1));
-    const auto s = scatter<BrdfSelection::mis>(brdf, SpectralRoulette<float, 3>{}, Rgb<float>(1.0f), 0.1f,
-                                               Vec2<float>(0.3f, 0.7f), 0);
+    const auto s = scatter(brdf, Roulette<float, 3>::spectral(), Rgb<float>(1.0f), 0.1f, Vec2<float>(0.3f, 0.7f), 0);
     CHECK_FALSE(s.terminated());
     CHECK(s.weight.is_finite());
     const std::vector<Vec3<float>> sq = {{-0.5f, -0.5f, 1}, {-0.5f, 0.5f, 1}, {0.5f, 0.5f, 1}, {0.5f, -0.5f, 1}};
@@ -1220,8 +1235,8 @@ TEST_CASE("stress: float instantiations, degenerate and non-finite inputs give n
     const std::array<Rgbd, 1> lobe = {Rgbd(0.5)};
     for (const Rgbd& F : {Rgbd(nan), Rgbd(std::numeric_limits<double>::infinity()), Rgbd(0.0)}) {
         for (int depth : {0, 5})
-            CHECK(select_lobe(ThroughputRoulette<double, 3>{}, F, std::span<const Rgbd>(lobe), 0.2, depth).terminated());
-        const auto sel = select_lobe(SpectralRoulette<double, 3>{}, F, std::span<const Rgbd>(lobe), 0.2, 0);
+            CHECK(select_lobe(Roulette<double, 3>::throughput(), F, std::span<const Rgbd>(lobe), 0.2, depth).terminated());
+        const auto sel = select_lobe(Roulette<double, 3>::spectral(), F, std::span<const Rgbd>(lobe), 0.2, 0);
         CHECK(sel.terminated());
         CHECK(sel.offset.is_finite());
     }

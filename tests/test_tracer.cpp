@@ -24,21 +24,21 @@
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
+#include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/correlated_environment.hpp>
+#include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/intersection/ivm.hpp>
 #include <glint/trees/brute_force.hpp>
 
-#include "render_options.hpp"
 
 using namespace glint;
-using namespace glint_cli;
 
 namespace {
 
-RenderResult render_scene(const Scene<float>& s, RenderOptions o) {
-    const RenderAccel accel(s.triangles);
-    return render(s, accel, o);
+RenderResult render_scene(const Scene<float>& s, NamedRender<float> o) {
+    const DefaultAccel accel(s.triangles);
+    return render_named(s, accel, o);
 }
 
 /// Image mean per band and its standard error from the per-pixel variances of the means.
@@ -66,10 +66,10 @@ TEST_CASE("accuracy: the saturated furnace renders to 1 in every band, for every
     for (const std::string roulette : {"classic", "spectral", "estimate", "spectral+estimate", "throughput",
                                        "throughput+spectral", "throughput+estimate", "throughput+spectral+estimate"}) {
         for (const std::string direct : {"brdf", "mis"}) {
-            RenderOptions o;
-            o.settings.width = o.settings.height = 24;
-            o.settings.spp = 256;
-            o.settings.threads = 2;
+            NamedRender<float> o;
+            o.image.width = o.image.height = 24;
+            o.image.spp = 256;
+            o.image.threads = 2;
             o.roulette = roulette;
             o.direct = direct;
             const RenderResult r = render_scene(s, o);
@@ -121,19 +121,19 @@ TEST_CASE("accuracy: the saturated furnace renders to 1 in every band, for every
 
 TEST_CASE("accuracy: every roulette agrees with classic on the open Cornell box") {
     // The furnace's answer is the same everywhere; here the radiance varies and light escapes,
-    // so an estimate roulette's L~ (pilot-fitted or 000's closed-scene formula, which
+    // so an estimate roulette's L~ (pilot-fitted or Szécsi 2009, §2.3's closed-scene formula, which
     // overestimates here) is far from L_in at most vertices. Unbiased roulettes still give the
     // same image mean: each band's difference to classic within 4 standard errors (the two
     // renders are independent; SE from their summed per-pixel variances of the mean).
     const Scene<float> s = builtin_scene<float>("cornell");
-    const RenderAccel accel(s.triangles);
-    RenderOptions o;
-    o.settings.width = o.settings.height = 24;
-    o.settings.spp = 256;
-    o.settings.pixel_jitter = false;
+    const DefaultAccel accel(s.triangles);
+    NamedRender<float> o;
+    o.image.width = o.image.height = 24;
+    o.image.spp = 256;
+    o.image.pixel_jitter = false;
     o.roulette = "classic";
     o.seed = 501;
-    const RenderResult base = render(s, accel, o);
+    const RenderResult base = render_named(s, accel, o);
     Rgb<double> base_mean, base_se;
     image_mean(base, base_mean, base_se);
     for (const std::string roulette : {"spectral", "estimate", "spectral+estimate", "throughput", "throughput+spectral",
@@ -141,9 +141,9 @@ TEST_CASE("accuracy: every roulette agrees with classic on the open Cornell box"
         for (const std::string estimate : {"pilot", "scene"}) {
             if (!roulette.ends_with("estimate") && estimate == "scene") continue;
             o.roulette = roulette;
-            o.radiance_estimate = estimate;
+            o.estimate = estimate;
             ++o.seed;
-            const RenderResult r = render(s, accel, o);
+            const RenderResult r = render_named(s, accel, o);
             Rgb<double> mean, se;
             image_mean(r, mean, se);
             for (std::size_t c = 0; c < 3; ++c) {
@@ -160,9 +160,9 @@ TEST_CASE("accuracy: every roulette agrees with classic on the open Cornell box"
 }
 
 TEST_CASE("grey scenes: the spectral roulettes render classic's image, colour or not in the lights") {
-    // With every reflectance grey, 000's spectral rule <F a, H> / <F, H> is the albedo itself
-    // (test_sampling: spectral == classic for grey albedo), so render() gives grey scenes the
-    // classic policies; the images are the same. The coloured Cornell box is not grey.
+    // With every reflectance grey, Szécsi 2009, §2.2's spectral rule <F a, H> / <F, H> is the
+    // albedo itself (test_sampling: spectral == classic for grey albedo), so roulette_choices
+    // gives grey scenes the classic rules; the images are the same. The coloured Cornell box is not grey.
     Scene<float> s = builtin_scene<float>("cornell");
     CHECK_FALSE(s.features().grey);
     for (auto& m : s.materials) {
@@ -171,26 +171,26 @@ TEST_CASE("grey scenes: the spectral roulettes render classic's image, colour or
     }
     const SceneFeatures f = s.features();
     CHECK(f.grey);  // the light's emission (17, 12, 4) stays coloured
-    const RenderAccel accel(s.triangles);
-    RenderOptions o;
-    o.settings.width = o.settings.height = 16;
-    o.settings.spp = 8;
+    const DefaultAccel accel(s.triangles);
+    NamedRender<float> o;
+    o.image.width = o.image.height = 16;
+    o.image.spp = 8;
     for (const auto& names : {std::pair{"spectral", "classic"}, std::pair{"spectral+estimate", "estimate"}}) {
         const char* spectral = names.first;  // not a structured binding: clang 14 cannot capture one
         const char* classic = names.second;
         o.roulette = spectral;
-        const RenderResult a = render(s, accel, o);
+        const RenderResult a = render_named(s, accel, o);
         o.roulette = classic;
-        const RenderResult b = render(s, accel, o);
+        const RenderResult b = render_named(s, accel, o);
         CAPTURE(spectral);
         CHECK(a.image.pixels == b.image.pixels);
     }
 }
 
 TEST_CASE("accuracy: the furnace with the Halton sampler") {
-    RenderOptions o;
-    o.settings.width = o.settings.height = 16;
-    o.settings.spp = 64;
+    NamedRender<float> o;
+    o.image.width = o.image.height = 16;
+    o.image.spp = 64;
     o.sampler = "halton";
     o.direct = "brdf";
     const RenderResult r = render_scene(builtin_scene<float>("furnace"), o);
@@ -241,15 +241,13 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
 
     const BruteForce<Ivm<float>> accel(s.triangles);
     const Ray<float> down{Vec3f(0, 0.5f, 0), Vec3f(0, -1, 0)};
-    RenderSettings settings;
+    PathTracerSettings<float> settings{.roulette = Roulette<float, 3>::classic()};
     settings.max_depth = 1;  // the first vertex only: its direct light
     SUBCASE("light and BRDF sampling by MIS: unbiased within 4 standard errors") {
         // The BRDF sample of the MIS pair is the continuation ray: a second vertex (on the
         // light, which reflects nothing) is where its share of the direct light is counted.
         settings.max_depth = 2;
-        PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>, MisDirect<float>,
-                   NoEnvironment<float>, false>
-            pt(s, accel, {}, settings);
+        PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, MisDirect<float>> pt(s, accel, settings);
         RandomSampler<float> sampler(1);
         double sum = 0, sum2 = 0;
         const int n_samples = 100000;
@@ -266,12 +264,11 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
     }
     SUBCASE("combined correlated sampling: exact, zero variance, lambda = 1") {
         settings.light_samples = 10;
-        using Tracer = PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>,
-                                  CorrelatedDirect<float>, NoEnvironment<float>, false>;
+        using Tracer = PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, CorrelatedDirect<float>>;
         RandomSampler<float> sampler(2);
         // lambda per vertex: the combined estimate is part of the walk's radiance.
         settings.lambda_filter_radius = -1;
-        const Tracer pt(s, accel, {}, CorrelatedDirect<float>(s, settings, DirectEstimator::combined), NoEnvironment<float>{},
+        const Tracer pt(s, accel, CorrelatedDirect<float>(s, settings, DirectEstimator::combined), MisEnvironment<float>(s),
                         settings);
         Tracer::pixel_state state;
         for (int i = 0; i < 100; ++i) {
@@ -282,9 +279,9 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
         REQUIRE(state.lambda_count == 100);
         CHECK(state.lambda_sum / 100.0 == doctest::Approx(1.0).epsilon(1e-4));
         // lambda pooled over pixels (radius 1, the default): the primary vertex's parts are kept
-        // in the pixel's statistics, and finish() forms the pixel once (000 section 3.1.1).
+        // in the pixel's statistics, and finish() forms the pixel once (Szécsi 2009, §3.1.1).
         settings.lambda_filter_radius = 1;
-        const Tracer pooled(s, accel, {}, settings);
+        const Tracer pooled(s, accel, settings);
         std::vector<Tracer::pixel_state> states(1);
         for (int i = 0; i < 100; ++i) {
             sampler.start_pixel_sample(0, 0, std::uint64_t(i));
@@ -295,23 +292,23 @@ TEST_CASE("accuracy: direct light from a fully visible polygon light equals the 
         pooled.finish(film, std::span<const Tracer::pixel_state>(states));
         CHECK(film.image.at(0, 0)[0] == doctest::Approx(expected).epsilon(1e-4));
         CHECK(film.variance.at(0, 0)[0] <= 1e-6 * expected * expected);
-        CHECK(film.lambda.at(0, 0) == doctest::Approx(1.0f).epsilon(1e-4));
+        REQUIRE(film.layer("lambda"));
+        CHECK(film.layer("lambda")->pixels.at(0, 0)[0] == doctest::Approx(1.0f).epsilon(1e-4));
     }
 }
 
-TEST_CASE("lambda = fractional visibility (000 section 3.2): the visible share of the light, exact at 0 and 1") {
+TEST_CASE("lambda = fractional visibility (Szécsi 2009, §3.2): the visible share of the light, exact at 0 and 1") {
     // The origin of formfactor_scene, seen by a ray straight down; 10 light samples per vertex,
     // lambda per vertex (radius -1).
     const Ray<float> down{Vec3f(0, 0.5f, 0), Vec3f(0, -1, 0)};
-    RenderSettings settings;
+    PathTracerSettings<float> settings{.roulette = Roulette<float, 3>::classic()};
     settings.max_depth = 1;  // the first vertex only: its direct light
     settings.light_samples = 10;
     settings.lambda_filter_radius = -1;
-    using Tracer = PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, ClassicRoulette<float, 3>,
-                              CorrelatedDirect<float>, NoEnvironment<float>, false>;
-    auto tracer = [&](const Scene<float>& s, const BruteForce<Ivm<float>>& accel, const RenderSettings& st) {
-        return Tracer(s, accel, {}, CorrelatedDirect<float>(s, st, DirectEstimator::combined, LambdaSource::visibility),
-                      NoEnvironment<float>{}, st);
+    using Tracer = PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, CorrelatedDirect<float>>;
+    auto tracer = [&](const Scene<float>& s, const BruteForce<Ivm<float>>& accel, const PathTracerSettings<float>& st) {
+        return Tracer(s, accel, CorrelatedDirect<float>(s, st, DirectEstimator::combined, LambdaSource::visibility),
+                      MisEnvironment<float>(s), st);
     };
     const double exact = 0.5 * 2.0 * point_to_polygon_form_factor<double>(Vec3d(0), Vec3d(0, 1, 0),
         std::vector<Vec3d>{Vec3d(formfactor_light[0]), Vec3d(formfactor_light[1]), Vec3d(formfactor_light[2]),
@@ -358,7 +355,7 @@ TEST_CASE("lambda = fractional visibility (000 section 3.2): the visible share o
         CHECK(std::abs(mean - 0.5) < 4.0 * se);
         // Pooled at radius 0 over the same samples: the film's lambda is the share of all the
         // pixel's shadow rays that reached the light, here the mean of the per-vertex shares.
-        RenderSettings pooled_settings = settings;
+        PathTracerSettings<float> pooled_settings = settings;
         pooled_settings.lambda_filter_radius = 0;
         const Tracer pooled = tracer(s, accel, pooled_settings);
         std::vector<Tracer::pixel_state> states(1);
@@ -369,7 +366,8 @@ TEST_CASE("lambda = fractional visibility (000 section 3.2): the visible share o
         Film film;
         film.resize(1, 1);
         pooled.finish(film, std::span<const Tracer::pixel_state>(states));
-        CHECK(film.lambda.at(0, 0) == doctest::Approx(mean).epsilon(1e-5));
+        REQUIRE(film.layer("lambda"));
+        CHECK(film.layer("lambda")->pixels.at(0, 0)[0] == doctest::Approx(mean).epsilon(1e-5));
     }
 }
 
@@ -380,7 +378,6 @@ namespace {
 /// counts 0, since the light samples estimate the lights whole). It keeps no per-pixel
 /// statistics. Unbiased, as MisDirect is, with another variance.
 struct UniformAreaDirect : NoPixelStatistics<float> {
-    static constexpr bool collects_emission = false;
     explicit UniformAreaDirect(const Scene<float>& scene) : lights(scene) {}
 
     template <class Q, class S>
@@ -394,7 +391,9 @@ struct UniformAreaDirect : NoPixelStatistics<float> {
         }
         return L;
     }
-    float emission_weight(float, const Ray<float>&, const StoreHit<float>&) const { return 0.0f; }
+    float emission_weight(const Arrival<float>& from, const Ray<float>&, const StoreHit<float>&) const {
+        return from.lights_sampled ? 0.0f : 1.0f;
+    }
 
     SceneLights<float> lights;
 };
@@ -406,16 +405,16 @@ namespace {
 /// The envmap scene's image (full paths) with environment policy `env`, camera rays through
 /// pixel centres.
 template <class E>
-RenderResult render_envmap(const Scene<float>& s, const RenderAccel& accel, const E& env, int size, int spp,
+RenderResult render_envmap(const Scene<float>& s, const DefaultAccel& accel, const E& env, int size, int spp,
                            std::uint64_t seed) {
-    RenderSettings settings;
-    settings.width = settings.height = size;
-    settings.spp = spp;
-    settings.pixel_jitter = false;
-    using R = SpectralRoulette<float, 3>;
-    const PathTracer<RenderAccel, RandomSampler<float>, R, MisDirect<float>, E, false> pt(
-        s, accel, R{}, MisDirect<float>(s, settings), env, settings);
-    return render_image(s, settings, pt, RandomSampler<float>(seed));
+    RenderSettings image;
+    image.width = image.height = size;
+    image.spp = spp;
+    image.pixel_jitter = false;
+    const PathTracerSettings<float> settings{.roulette = Roulette<float, 3>::spectral()};
+    const PathTracer<DefaultAccel, RandomSampler<float>, MisDirect<float>, E> pt(s, accel, MisDirect<float>(s, settings), env,
+                                                                                  settings);
+    return render_image(s, image, pt, RandomSampler<float>(seed));
 }
 
 /// A shading point with normal n on material m, seen from direction `view` (towards the eye).
@@ -430,12 +429,12 @@ struct EnvVertex {
 
 }  // namespace
 
-TEST_CASE("statistics: correlated environment lighting (000 3.3) renders MisEnvironment's image mean") {
+TEST_CASE("statistics: correlated environment lighting (Szécsi 2009, §3.3) renders MisEnvironment's image mean") {
     // envmap, 12x12, full paths: importance (lambda = 0), correlated (lambda = 1, eq. 3.5 only)
     // and combined (both main parts chosen per cell, leave-one-out lambda) against the map's
     // MIS, per band within 4 standard errors of the difference (from the variance layers).
     const Scene<float> s = builtin_scene<float>("envmap");
-    const RenderAccel accel(s.triangles);
+    const DefaultAccel accel(s.triangles);
     Rgb<double> mis_mean, mis_se;
     image_mean(render_envmap(s, accel, MisEnvironment<float>(s), 12, 256, 1), mis_mean, mis_se);
     for (const DirectEstimator e : {DirectEstimator::importance, DirectEstimator::correlated, DirectEstimator::combined}) {
@@ -512,18 +511,16 @@ TEST_CASE("policies: a direct-lighting policy defined outside the library render
     const Scene<float> s = builtin_scene<float>("cornell");
     REQUIRE(!s.features().environment);
     REQUIRE(!s.features().point_lights);
-    const RenderAccel accel(s.triangles);
+    const DefaultAccel accel(s.triangles);
     RenderSettings settings;
     settings.width = settings.height = 24;
     settings.spp = 128;
     settings.threads = 2;
-    using Roulette = ClassicRoulette<float, 3>;
-    const Roulette roulette(Rgb<float>::default_luminance_weights());
-    static_assert(DirectLighting<UniformAreaDirect, float, RayQueries<RenderAccel, float>, RandomSampler<float>>);
-    const PathTracer<RenderAccel, RandomSampler<float>, Roulette, UniformAreaDirect, NoEnvironment<float>, false> own(
-        s, accel, roulette, UniformAreaDirect(s), NoEnvironment<float>{}, settings);
-    const PathTracer<RenderAccel, RandomSampler<float>, Roulette, MisDirect<float>, NoEnvironment<float>, false> mis(
-        s, accel, roulette, settings);
+    const PathTracerSettings<float> tracing{.roulette = Roulette<float, 3>::classic()};
+    static_assert(DirectLighting<UniformAreaDirect, float, RayQueries<DefaultAccel>, RandomSampler<float>>);
+    const PathTracer<DefaultAccel, RandomSampler<float>, UniformAreaDirect> own(s, accel, UniformAreaDirect(s),
+                                                                                MisEnvironment<float>(s), tracing);
+    const PathTracer<DefaultAccel, RandomSampler<float>, MisDirect<float>> mis(s, accel, tracing);
     const RenderResult a = render_image(s, settings, own, RandomSampler<float>(11));
     const RenderResult b = render_image(s, settings, mis, RandomSampler<float>(12));
     CHECK(a.rays > 0);
@@ -581,14 +578,13 @@ struct LuminanceFilm {
 
 TEST_CASE("policies: a film defined outside the library receives exactly the pixels of the default film") {
     const Scene<float> s = builtin_scene<float>("cornell");
-    const RenderAccel accel(s.triangles);
+    const DefaultAccel accel(s.triangles);
     RenderSettings settings;
     settings.width = 20, settings.height = 12;  // not a multiple of the 16-pixel tiles
     settings.spp = 8;
     settings.threads = 2;
-    using Roulette = ClassicRoulette<float, 3>;
-    const PathTracer<RenderAccel, RandomSampler<float>, Roulette, MisDirect<float>, NoEnvironment<float>, false> tracer(
-        s, accel, Roulette{}, settings);
+    const PathTracer<DefaultAccel, RandomSampler<float>, MisDirect<float>> tracer(
+        s, accel, {.roulette = Roulette<float, 3>::classic()});
     static_assert(FilmPolicy<LuminanceFilm, float>);
     const RenderResult reference = render_image(s, settings, tracer, RandomSampler<float>(5));
     LuminanceFilm film;
@@ -610,20 +606,20 @@ TEST_CASE("policies: a film defined outside the library receives exactly the pix
 
 TEST_CASE("convergence: the Cornell box's RMSE falls as 1/sqrt(spp)") {
     const Scene<float> s = builtin_scene<float>("cornell");
-    const RenderAccel accel(s.triangles);
-    RenderOptions o;
-    o.settings.width = o.settings.height = 20;
-    o.settings.spp = 4096;
+    const DefaultAccel accel(s.triangles);
+    NamedRender<float> o;
+    o.image.width = o.image.height = 20;
+    o.image.spp = 4096;
     o.seed = 1000;
     o.sampler = "random";  // Monte Carlo's rate (Halton walks converge faster at first)
-    const RenderResult ref = render(s, accel, o);
+    const RenderResult ref = render_named(s, accel, o);
     double ref_var = 0;  // the reference's own error, subtracted from the measured MSE
     for (const auto& v : ref.variance.pixels) ref_var += double(v[0] + v[1] + v[2]) / (3.0 * double(ref.image.size()));
     std::vector<double> log_spp, log_rmse;
     for (int spp : {4, 16, 64}) {
-        o.settings.spp = spp;
+        o.image.spp = spp;
         o.seed = std::uint64_t(spp);
-        const RenderResult r = render(s, accel, o);
+        const RenderResult r = render_named(s, accel, o);
         double mse = 0;
         for (std::size_t i = 0; i < r.image.size(); ++i)
             for (std::size_t c = 0; c < 3; ++c) {
@@ -645,14 +641,14 @@ TEST_CASE("convergence: the Cornell box's RMSE falls as 1/sqrt(spp)") {
 
 TEST_CASE("determinism: the image does not depend on the thread count") {
     const Scene<float> s = builtin_scene<float>("cornell");
-    const RenderAccel accel(s.triangles);
-    RenderOptions o;
-    o.settings.width = o.settings.height = 24;
-    o.settings.spp = 4;
-    o.settings.threads = 1;
-    const RenderResult a = render(s, accel, o);
-    o.settings.threads = 3;
-    const RenderResult b = render(s, accel, o);
+    const DefaultAccel accel(s.triangles);
+    NamedRender<float> o;
+    o.image.width = o.image.height = 24;
+    o.image.spp = 4;
+    o.image.threads = 1;
+    const RenderResult a = render_named(s, accel, o);
+    o.image.threads = 3;
+    const RenderResult b = render_named(s, accel, o);
     CHECK(a.image.pixels == b.image.pixels);
 }
 
@@ -661,14 +657,14 @@ TEST_CASE("pixel_jitter off: every sample of a pixel follows the ray through its
     // sample: zero variance in every pixel, the light's pixels exactly its emission. With
     // jitter, the pixels on the light's edges see it some of the time.
     const Scene<float> s = builtin_scene<float>("cornell");
-    RenderOptions o;
-    o.settings.width = o.settings.height = 32;
-    o.settings.spp = 8;
-    o.settings.max_depth = 1;
+    NamedRender<float> o;
+    o.image.width = o.image.height = 32;
+    o.image.spp = 8;
+    o.tracer.max_depth = 1;
     o.direct = "brdf";
-    o.settings.pixel_jitter = false;
+    o.image.pixel_jitter = false;
     const RenderResult centres = render_scene(s, o);
-    o.settings.pixel_jitter = true;
+    o.image.pixel_jitter = true;
     const RenderResult jittered = render_scene(s, o);
     int light_pixels = 0, noisy_centres = 0, noisy_jittered = 0;
     for (std::size_t i = 0; i < centres.image.size(); ++i) {
@@ -684,10 +680,11 @@ TEST_CASE("pixel_jitter off: every sample of a pixel follows the ray through its
 TEST_CASE("every built-in scene renders finite, non-negative images with every direct policy") {
     for (const auto& name : builtin_scene_names()) {
         const Scene<float> s = builtin_scene<float>(name);
-        for (const auto& direct : direct_names()) {
-            RenderOptions o;
-            o.settings.width = o.settings.height = 8;
-            o.settings.spp = 2;
+        for (const auto& choice : direct_choices<float>()) {
+            const std::string direct(choice.name);
+            NamedRender<float> o;
+            o.image.width = o.image.height = 8;
+            o.image.spp = 2;
             o.direct = direct;
             const RenderResult r = render_scene(s, o);
             // Correlated sampling (a control variate) may give negative estimates in a pixel;
@@ -702,7 +699,7 @@ TEST_CASE("every built-in scene renders finite, non-negative images with every d
         }
     }
     CHECK_THROWS_AS(builtin_scene<float>("nosuchscene"), Error);
-    RenderOptions bad;
+    NamedRender<float> bad;
     bad.roulette = "nosuch";
     CHECK_THROWS_AS(render_scene(builtin_scene<float>("cornell"), bad), Error);
 }
@@ -1052,18 +1049,20 @@ TEST_CASE("insert_mesh: a generated mesh scaled to its footprint, standing on th
                     Error);
 }
 
-TEST_CASE("ReducedContinuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 1") {
-    const ClassicRoulette<double, 3> classic{Rgb<double>(1.0 / 3.0)};
-    const RadianceEstimateRoulette<double, 3, ClassicRoulette<double, 3>> est{classic, Rgb<double>(0.2)};
+TEST_CASE("reduced continuation: s_new = s d / (1 - (1 - d) s), unchanged at d = 1") {
+    Roulette<double, 3> est = Roulette<double, 3>::classic(Rgb<double>(1.0 / 3.0));
+    est.estimate = Rgb<double>(0.2);
     const Rgb<double> F(1.0), a(0.6);
-    const ReducedContinuation<double, 3, decltype(est)> same{est, 1.0}, shorter{est, 0.25};
+    const Roulette<double, 3> same = est;
+    Roulette<double, 3> shorter = est;
+    shorter.goodness = 0.25;
     CHECK(same.continuation(F, a, 0) == doctest::Approx(0.6));
     CHECK(shorter.continuation(F, a, 0) == doctest::Approx(0.6 * 0.25 / (1.0 - 0.75 * 0.6)));
-    // What s_new is for (000 section 2.3): the variance termination adds, (1/s - 1) E[..^2],
+    // What s_new is for (Szécsi 2009, §2.3): the variance termination adds, (1/s - 1) E[..^2],
     // is the same with the estimate at goodness d and s_new as without it at s_old.
     const double s_new = shorter.continuation(F, a, 0), d = 0.25;
     CHECK((1.0 / s_new - 1.0) * d == doctest::Approx(1.0 / 0.6 - 1.0));
-    // The speedup 000 section 2.3 predicts, measured: walks continued with probability s (walk
+    // The speedup Szécsi 2009, §2.3 predicts, measured: walks continued with probability s (walk
     // length = number of continuations + 1, geometric) at s_old and s_new, fixed seed; the
     // ratio of mean lengths must be 1 / (1 - (1 - d) s_old) within 4 standard errors (delta
     // method on the two means, variance s / (1 - s)^2 each).
@@ -1093,9 +1092,9 @@ TEST_CASE("scale and translation: the Cornell box renders the same image whereve
     // 10^-4 ... 10^4 gives the untransformed image's mean in every band and in each image half
     // (left/right: the red and the green wall), within 4 standard errors of the difference.
     const Scene<float> base = builtin_scene<float>("cornell");
-    RenderOptions o;
-    o.settings.width = o.settings.height = 24;
-    o.settings.spp = 64;
+    NamedRender<float> o;
+    o.image.width = o.image.height = 24;
+    o.image.spp = 64;
     o.roulette = "throughput";
     const auto halves = [](const RenderResult& r, std::array<double, 6>& m, std::array<double, 6>& var) {
         m.fill(0);
@@ -1149,9 +1148,9 @@ TEST_CASE("depth cap: far out of reach by default, and walks it cuts are counted
         m.ks = Rgb<float>(0.0f);
         m.emission = Rgb<float>(0.01f);
     }
-    RenderOptions o;
-    o.settings.width = o.settings.height = 12;
-    o.settings.spp = 32;
+    NamedRender<float> o;
+    o.image.width = o.image.height = 12;
+    o.image.spp = 32;
     o.direct = "brdf";
     o.roulette = "throughput";
     const RenderResult r = render_scene(s, o);
@@ -1161,7 +1160,7 @@ TEST_CASE("depth cap: far out of reach by default, and walks it cuts are counted
     CHECK(r.paths == std::uint64_t(12 * 12 * 32));
     CHECK(double(r.capped_walks) < 1e-3 * paths);
     CHECK(std::abs(mean[0] - 1.0) < 4.0 * se[0]);
-    o.settings.max_depth = 64;
+    o.tracer.max_depth = 64;
     const RenderResult capped = render_scene(s, o);
     image_mean(capped, mean, se);
     CHECK(double(capped.capped_walks) > 0.3 * paths);

@@ -26,7 +26,8 @@ using namespace glint;
 namespace {
 
 using Accel = MeshBvh<MollerTrumbore<float>, 8>;
-using Roulette = ClassicRoulette<float, 3>;
+/// The classic (albedo) roulette of the shooting walks.
+glint::Roulette<float, 3> classic() { return glint::Roulette<float, 3>::classic(); }
 
 /// The Cornell box with its area light replaced by a point light below the ceiling.
 Scene<float> point_box() {
@@ -55,8 +56,7 @@ void path_traced(const Scene<float>& s, const Accel& accel, int size, int spp, s
     st.spp = spp;
     st.threads = 2;
     st.pixel_jitter = false;
-    const PathTracer<Accel, RandomSampler<float>, Roulette, MisDirect<float>, NoEnvironment<float>, Points> pt(
-        s, accel, Roulette{}, st);
+    const PathTracer<Accel, RandomSampler<float>, MisDirect<float>> pt(s, accel, {.roulette = classic()});
     const RenderResult r = render_image(s, st, pt, RandomSampler<float>(7));
     mean = quadrant_means(r.image);
     const std::vector<double> var = quadrant_means(r.variance);  // mean pixel variance of the mean
@@ -73,7 +73,7 @@ void vpl_runs(const Scene<float>& s, const Accel& accel, VplSettings st, int run
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
     for (int k = 0; k < runs; ++k) {
         st.seed = std::uint64_t(k + 1);
-        const auto q = quadrant_means(render_vpl(s, accel, Roulette{}, vis, st).image);
+        const auto q = quadrant_means(render_vpl(s, accel, classic(), vis, st).image);
         for (std::size_t i = 0; i < 12; ++i) sum[i] += q[i], sum2[i] += q[i] * q[i];
     }
     mean.resize(12);
@@ -152,7 +152,7 @@ TEST_CASE("stress: bad settings and lightless scenes throw naming the value") {
     CHECK_THROWS_WITH_AS(EmitterSet<float>{s}, doctest::Contains("no light"), Error);
     const Accel accel(s.triangles);
     s.point_lights.push_back({Vec3<float>(0, 1, 0), Rgb<float>(1)});
-    CHECK_THROWS_WITH_AS(shoot_scene_vpls(s, accel, Roulette{}, 0, 1), doctest::Contains("got 0"), Error);
+    CHECK_THROWS_WITH_AS(shoot_scene_vpls(s, accel, classic(), 0, 1), doctest::Contains("got 0"), Error);
 }
 
 TEST_CASE("agreement: VPL image equals the path tracer's on the Cornell box (area light) within standard errors") {
@@ -174,9 +174,9 @@ TEST_CASE("agreement: clamping the geometry term only darkens; its bias is negat
     for (int k = 0; k < runs; ++k) {
         st.seed = std::uint64_t(k + 1);
         st.min_distance = 0;
-        const VplResult a = render_vpl(s, accel, Roulette{}, vis, st);
+        const VplResult a = render_vpl(s, accel, classic(), vis, st);
         st.min_distance = 0.3;
-        const VplResult b = render_vpl(s, accel, Roulette{}, vis, st);
+        const VplResult b = render_vpl(s, accel, classic(), vis, st);
         double diff = 0;
         bool never_brighter = true;
         for (std::size_t i = 0; i < a.image.size(); ++i)
@@ -199,9 +199,9 @@ TEST_CASE("exact: the VPL image does not depend on the thread count") {
     const Accel accel(s.triangles);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
     VplSettings st = small_settings(12, 16, 1);
-    const VplResult a = render_vpl(s, accel, Roulette{}, vis, st);
+    const VplResult a = render_vpl(s, accel, classic(), vis, st);
     st.threads = 3;
-    const VplResult b = render_vpl(s, accel, Roulette{}, vis, st);
+    const VplResult b = render_vpl(s, accel, classic(), vis, st);
     CHECK(a.image.pixels == b.image.pixels);
     CHECK(a.vpls > 16);
 }
@@ -245,7 +245,7 @@ TEST_CASE("exact: every path's frame weights sum to 1; paths are reused across f
     const auto path = track(6);
     AnimationOptions opt;
     opt.paths_per_frame = 8;
-    const LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(path),
+    const LightAnimation<float> a = shoot_light_animation(s, accel, classic(), std::span<const Vec3<float>>(path),
                                                           Rgb<float>(1), opt);
     std::size_t reused = 0, occluded = 0;
     for (std::size_t p = 0; p < a.paths.size(); ++p) {
@@ -282,14 +282,14 @@ TEST_CASE("agreement: each frame of the path-reuse animation equals independent 
         AnimationOptions opt;
         opt.paths_per_frame = 8;
         opt.seed = 100 + r;
-        LightAnimation<float> a = shoot_light_animation(s, accel, Roulette{}, std::span<const Vec3<float>>(path),
+        LightAnimation<float> a = shoot_light_animation(s, accel, classic(), std::span<const Vec3<float>>(path),
                                                         Rgb<float>(4.0f, 3.5f, 3.0f), opt);
         render_path_images(a, s, std::span<const PixelPoint<float>>(points), vis, st);
         for (std::size_t f = 0; f < F; ++f) {
             Scene<float> sf = s;
             sf.point_lights[0].position = path[f];
             st.seed = 1000 + r * F + f;
-            const VplResult v = render_vpl(sf, accel, Roulette{}, vis, st);
+            const VplResult v = render_vpl(sf, accel, classic(), vis, st);
             std::vector<Rgb<float>> indep(v.indirect.pixels.begin(), v.indirect.pixels.end());
             const std::vector<Rgb<float>> img[3] = {a.frame_image(f), a.frame_image(f, 2), indep};
             for (std::size_t m = 0; m < 3; ++m)
@@ -417,7 +417,7 @@ TEST_CASE("agreement: the light path map's indirect irradiance equals VPL gather
         opt.min_distance = 0.25;
         opt.threads = 2;
         opt.seed = std::uint64_t(50 + r);
-        const LightPathMap<float> map = build_light_path_map(s, accel, Roulette{}, vis, opt);
+        const LightPathMap<float> map = build_light_path_map(s, accel, classic(), vis, opt);
         const auto e = entry_irradiance(map, s, accel, 1, 1);
         const auto lpm = reference_irradiance(map, std::span<const Rgb<float>>(e));
         std::vector<PixelPoint<float>> points(map.grid.size());
@@ -432,7 +432,7 @@ TEST_CASE("agreement: the light path map's indirect irradiance equals VPL gather
         st.height = 1;
         st.min_distance = 0.25;
         st.seed = std::uint64_t(900 + r);
-        const auto vpls = shoot_scene_vpls(s, accel, Roulette{}, st.vpl_walks, st.seed);
+        const auto vpls = shoot_scene_vpls(s, accel, classic(), st.vpl_walks, st.seed);
         const auto vpl = gather_image(s, std::span<const PixelPoint<float>>(points), std::span<const Vpl<float>>(vpls), vis, st);
         for (std::size_t c = 0; c < 3; ++c) {
             double a = 0, b = 0;

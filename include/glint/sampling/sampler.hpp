@@ -37,8 +37,8 @@ public:
             (std::uint64_t(std::uint32_t(x)) << 32) | std::uint64_t(std::uint32_t(y));
         rng_ = Pcg32::hashed(index ^ detail::mix_bits(seed_), pixel);
     }
-    T get_1d() { return rng_.uniform<T>(); }
-    Vec2<T> get_2d() {
+    [[gnu::always_inline]] T get_1d() { return rng_.uniform<T>(); }
+    [[gnu::always_inline]] Vec2<T> get_2d() {
         const T a = rng_.uniform<T>();
         return Vec2<T>(a, rng_.uniform<T>());
     }

@@ -8,7 +8,7 @@
 // energy-normalized Phong lobe ks (n + 2) / (2 pi) cos^n(alpha) about the mirror direction
 // r = (-wo.x, -wo.y, wo.z), sampled with density (n + 1) / (2 pi) cos^n(alpha) about r; a
 // sample below the horizon has w = 0 (its weight is zero, which is what makes the Phong
-// density unable to cover the diffuse lobe: the W estimator of 000 section 2.1 is biased
+// density unable to cover the diffuse lobe: the W estimator of Szécsi 2009, §2.1 is biased
 // here, DIS and MIS are not). Lobe albedos: kd, and ks (the Phong lobe's albedo at normal
 // incidence; the roulette only needs a positive selection weight). Seen from the normal
 // (wo = z) the Phong lobe is about the normal and covers the whole hemisphere, so there DIS,
@@ -32,7 +32,7 @@ namespace glint {
 template <Scalar T>
 class SurfaceBrdf {
 public:
-    SurfaceBrdf(const Material<T>& m, const Vec3<T>& wo_local)
+    [[gnu::always_inline]] SurfaceBrdf(const Material<T>& m, const Vec3<T>& wo_local)
         : kd_(m.kd), ks_(m.ks), n_(m.exponent), wo_(wo_local),
           lobes_(m.kind == MaterialKind::glossy ? 2 : 1) {
         r_ = Vec3<T>(-wo_.x, -wo_.y, wo_.z);

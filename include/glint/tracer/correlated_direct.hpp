@@ -1,6 +1,6 @@
-// glint/tracer/correlated_direct.hpp: CorrelatedDirect, 000 section 3.2's multiple correlated
-// sampling of polygon lights as a direct-lighting policy (tracer/lighting.hpp), with the
-// per-pixel statistics of 000 section 3.1.1's lambda pooling.
+// glint/tracer/correlated_direct.hpp: CorrelatedDirect, Szécsi 2009, §3.2's multiple
+// correlated sampling of polygon lights as a direct-lighting policy (tracer/lighting.hpp), with
+// the per-pixel statistics of §3.1.1's lambda pooling.
 //
 // Per area light and vertex, K points uniform on the polygon: f = Le fr G V, main part
 // g = Le fr~ G (V dropped, fr~ = kd / pi) with J from the point-to-polygon form factor
@@ -12,12 +12,14 @@
 // for the pooled lambda, mean and second moment from the per-pixel sums of X, a, b and their
 // products.
 //
-// The weight's source (000 section 3.2, on setting the weight): lambda estimated from the
+// The weight's source (Szécsi 2009, §3.2, on setting the weight): lambda estimated from the
 // samples (eq. 3.3, above), or "a more drastic approach", lambda = the fractional visibility, the
 // share of the shadow rays (the samples with G > 0) that reach the light, pooled over the same
-// neighbourhood. 000 reports the statistical lambda "slightly better"; bench_lambda measures
-// both (docs/tracer.md). Either lambda comes from the samples it weights, so either makes the
-// combined estimate consistent, not unbiased (000 section 3.1.1).
+// neighbourhood; §3.2 reports the statistical lambda "slightly better" (bench_lambda measures
+// both). Either lambda comes from the samples it weights, so either makes the combined
+// estimate consistent, not unbiased (§3.1.1).
+// finish() writes the film's "lambda" layer: each pixel's mean lambda (pooled, or of its
+// primary vertices).
 #pragma once
 
 #include <algorithm>
@@ -26,6 +28,7 @@
 #include <cstddef>
 #include <limits>
 #include <span>
+#include <utility>
 
 #include <glint/core/spectrum.hpp>
 #include <glint/sampling/correlated.hpp>
@@ -34,18 +37,17 @@
 
 namespace glint {
 
-/// Which estimator CorrelatedDirect returns (000 section 3.2): lambda = 0, lambda = 1, or
+/// Which estimator CorrelatedDirect returns (Szécsi 2009, §3.2): lambda = 0, lambda = 1, or
 /// lambda estimated from the samples (eq. 3.3).
 enum class DirectEstimator { importance, correlated, combined };
 
-/// Where the combined estimator's lambda comes from (000 section 3.2):
+/// Where the combined estimator's lambda comes from (Szécsi 2009, §3.2):
 /// eq. 3.3's statistical estimate, or the fractional visibility of the light samples.
 enum class LambdaSource { statistical, visibility };
 
 template <Scalar T = float>
 class CorrelatedDirect {
 public:
-    static constexpr bool collects_emission = false;
     using D3 = Spectrum<double, 3>;
 
     /// The primary vertex's quantities of one pixel sample.
@@ -62,7 +64,7 @@ public:
         int lambda_count = 0, n = 0;
     };
 
-    CorrelatedDirect(const Scene<T>& scene, const RenderSettings& s, DirectEstimator estimator = DirectEstimator::combined,
+    CorrelatedDirect(const Scene<T>& scene, const PathTracerSettings<T>& s, DirectEstimator estimator = DirectEstimator::combined,
                      LambdaSource source = LambdaSource::statistical)
         : lights_(scene), k_(std::size_t(std::clamp(s.light_samples, 1, 64))), estimator_(estimator), source_(source),
           radius_(s.lambda_filter_radius),
@@ -109,8 +111,11 @@ public:
         return L;
     }
 
-    /// Light samples estimate the area lights whole: emission the BRDF sample meets counts 0.
-    T emission_weight(T, const Ray<T>&, const StoreHit<T>&) const { return T(0); }
+    /// Light samples estimate the area lights whole: emission the BRDF sample from a vertex
+    /// whose lights were sampled meets counts 0.
+    T emission_weight(const Arrival<T>& from, const Ray<T>&, const StoreHit<T>&) const {
+        return from.lights_sampled ? T(0) : T(1);
+    }
 
     void record(pixel_state& st, const vertex_record& rec, const Rgb<T>& L) const {
         ++st.n;
@@ -130,18 +135,18 @@ public:
         }
     }
 
-    /// The lambda layer; with pooling, each pixel's mean and variance of the pooled estimator.
+    /// The "lambda" layer; with pooling, each pixel's mean and variance of the pooled estimator.
     void finish(Film& film, std::span<const pixel_state> states) const {
         const int w = film.image.width, h = film.image.height;
+        FilmLayer lambda{"lambda", Image<Rgb<float>>(w, h), true};
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 const pixel_state& p = states[std::size_t(y) * std::size_t(w) + std::size_t(x)];
-                if (pooled_) {
-                    finish_pooled(film, x, y, p, pooled_lambda(states, w, h, x, y));
-                } else {
-                    film.lambda.at(x, y) = p.lambda_count ? float(p.lambda_sum / p.lambda_count) : 0.0f;
-                }
+                float l = p.lambda_count ? float(p.lambda_sum / p.lambda_count) : 0.0f;
+                if (pooled_) l = finish_pooled(film, x, y, p, pooled_lambda(states, w, h, x, y));
+                lambda.pixels.at(x, y) = Rgb<float>(l);
             }
+        film.layers.push_back(std::move(lambda));
     }
 
 private:
@@ -187,8 +192,9 @@ private:
         return lambda;
     }
 
-    /// The pixel's samples X + a + lambda b: mean and variance of the mean.
-    static void finish_pooled(Film& film, int x, int y, const pixel_state& p, const D3& lambda) {
+    /// The pixel's samples X + a + lambda b: mean and variance of the mean; returns lambda's
+    /// mean over the bands.
+    static float finish_pooled(Film& film, int x, int y, const pixel_state& p, const D3& lambda) {
         const double n = std::max(p.n, 1);
         for (std::size_t c = 0; c < 3; ++c) {
             const double l = lambda[c];
@@ -197,7 +203,7 @@ private:
             film.image.at(x, y)[c] = float(s1 / n);
             film.variance.at(x, y)[c] = n > 1 ? float(std::max(0.0, (s2 - s1 * s1 / n) / (n - 1.0) / n)) : 0.0f;
         }
-        film.lambda.at(x, y) = float(lambda.mean());
+        return float(lambda.mean());
     }
 
     SceneLights<T> lights_;

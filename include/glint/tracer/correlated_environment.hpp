@@ -1,34 +1,33 @@
-// glint/tracer/correlated_environment.hpp: CorrelatedEnvironment, 000 section 3.3's environment
+// glint/tracer/correlated_environment.hpp: CorrelatedEnvironment, Szécsi 2009, §3.3's environment
 // lighting by multiple correlated sampling as an environment-lighting policy
 // (tracer/lighting.hpp's EnvironmentLighting, in place of MisEnvironment).
 //
 // At each vertex, K directions w_k are drawn from the map's importance density p (the samples
 // MisEnvironment draws one of); f = L(w) fr(w) cos V(w) is the integrand over the whole sphere
-// and g the main part, which neglects the visibility V (000 section 3.3). The sphere is split
-// into world-fixed cells Omega_d of equal solid angle (SphereCells, section 3.3.1, with its pole
-// on the map's up axis), and in each cell g is one of section 3.3's two main parts:
+// and g the main part, which neglects the visibility V (§3.3). The sphere is split
+// into world-fixed cells Omega_d of equal solid angle (SphereCells, §3.3.1, with its pole
+// on the map's up axis), and in each cell g is one of §3.3's two main parts:
 //   eq. 3.5  g = L(w) c_d,  c_d a constant per cell: the mean of fr cos over a 2x2 stencil of
-//            the cell (000's a_d / |Omega_d|). J_d = L~_d c_d |Omega_d| is the exact integral of
+//            the cell (§3.3's a_d / |Omega_d|). J_d = L~_d c_d |Omega_d| is the exact integral of
 //            g for any constant c_d, so only the cell average L~_d must be exact: it is computed
-//            once from the map's pixels (EnvironmentMap::integrate), as 000 says ("computed once
+//            once from the map's pixels (EnvironmentMap::integrate), as §3.3 says ("computed once
 //            when the environment map is loaded").
-//   eq. 3.6  g = L~_d fr~ (n . w), fr~ = kd / pi (the diffuse part, as 000 section 3.2's fr~;
+//   eq. 3.6  g = L~_d fr~ (n . w), fr~ = kd / pi (the diffuse part, as §3.2's fr~;
 //            the whole BRDF of a Lambertian surface). J_d = L~_d fr~ n . V_d with V_d the cell's
 //            closed-form direction integral (SphereCells::direction_integral): the exact integral
 //            of g, whose cosine is signed. Only where the whole cell lies above the tangent plane
 //            is that cosine fr cos's (below it f = 0), so cells the plane cuts use eq. 3.5.
-// The main part is chosen per cell and vertex by choose_environment_main_part (000: "the optimal
+// The main part is chosen per cell and vertex by choose_environment_main_part (§3.3: "the optimal
 // alternative can be selected separately for each sample"), from the radiance's relative variance
 // over the cell (once per map) and fr cos's over the stencil (per vertex). Neither depends on the
-// random samples, so the choice adds no bias. Then (000 section 3.1, CorrelatedStats)
+// random samples, so the choice adds no bias. Then (§3.1, CorrelatedStats)
 //   importance  mean f/p                        (lambda = 0)
 //   correlated  mean f/p + J - mean g/p         (lambda = 1, unbiased)
 //   combined    1/K sum_k [f_k/p_k + lambda_-k (J - g_k/p_k)], lambda_-k estimated from the other
 //               K - 1 samples (eq. 3.3's regression form) and clamped to [0, 1]
-//               (leave_one_out_estimate): unbiased. Measured on envmap (32x32, 16 spp, K = 4):
-//               lambda from all K samples, as eq. 3.3 writes it, biased the image mean by +2%
-//               (10 standard errors), and unclamped it multiplied J - mean g/p without bound
-//               where most samples fall in the sun's pixels and the g/p are nearly equal.
+//               (leave_one_out_estimate): unbiased, where lambda from all K samples, as
+//               eq. 3.3 writes it, is not, and unclamped it multiplies J - mean g/p without
+//               bound where most samples fall in the sun's pixels and the g/p are nearly equal.
 // The estimate covers the whole sphere, so a BRDF-sampled ray that escapes from a vertex whose
 // lights were sampled adds nothing (escaped() returns 0 there).
 #pragma once
@@ -56,9 +55,8 @@ namespace glint {
 
 struct CorrelatedEnvironmentSettings {
     int n_phi = 8, n_theta = 4;  // world-fixed cells over the sphere (at most 128)
-    /// K directions per vertex from the map's importance (1 .. 64). 000's figures take 10-20
-    /// samples per cell; here lambda_-k is estimated from K - 1 samples, and on envmap combined
-    /// beats correlated at every spp with K = 16 but not with K = 4 (bench_convergence).
+    /// K directions per vertex from the map's importance (1 .. 64); lambda_-k is estimated
+    /// from K - 1 of them (Szécsi 2009's figures take 10-20 samples per cell).
     int samples = 16;
     DirectEstimator estimator = DirectEstimator::combined;
     /// One main part in every cell (eq. 3.6 falls back to eq. 3.5 where the tangent plane cuts

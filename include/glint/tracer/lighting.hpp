@@ -6,14 +6,14 @@
 //                     combined by the balance heuristic (Veach and Guibas 1995); the BRDF
 //                     sample is the walk's continuation ray, so a vertex costs one closest-hit
 //                     ray and one shadow ray per light sample.
-//   CorrelatedDirect  000 section 3.2: multiple correlated sampling of polygon lights, with the
-//                     importance, correlated or combined estimator fixed at construction; the
-//                     combined estimator's lambda pooled over pixel neighbourhoods (000 section
-//                     3.1.1) from statistics the policy keeps per pixel and turns into the
-//                     film's values once, when the render is finished.
-// Environment lighting (an EnvironmentLighting policy): NoEnvironment, MisEnvironment (the
-// map's importance sampling and the BRDF sample by the balance heuristic); CorrelatedEnvironment
-// (000 section 3.3) is in tracer/correlated_environment.hpp.
+//   CorrelatedDirect  Szécsi 2009, §3.2: multiple correlated sampling of polygon lights, with
+//                     the importance, correlated or combined estimator fixed at construction;
+//                     the combined estimator's lambda pooled over pixel neighbourhoods (§3.1.1)
+//                     from statistics the policy keeps per pixel and turns into the film's
+//                     values once, when the render is finished (tracer/correlated_direct.hpp).
+// Environment lighting (an EnvironmentLighting policy): MisEnvironment (the map's importance
+// sampling and the BRDF sample by the balance heuristic; nothing in a scene without a map);
+// CorrelatedEnvironment (Szécsi 2009, §3.3) is in tracer/correlated_environment.hpp.
 // A policy written anywhere (a test defines one) plugs into PathTracer unchanged: the concepts
 // below name everything the tracer asks of it.
 #pragma once
@@ -32,6 +32,7 @@
 #include <glint/sampling/correlated.hpp>
 #include <glint/sampling/sampler.hpp>
 #include <glint/tracer/environment.hpp>
+#include <glint/tracer/path_tracer_settings.hpp>
 #include <glint/tracer/renderer.hpp>
 #include <glint/tracer/scene.hpp>
 #include <glint/tracer/shading.hpp>
@@ -40,22 +41,22 @@ namespace glint {
 
 /// What the path tracer asks of a direct-lighting policy D, for scalar T, ray queries Q and
 /// sampler S:
-///   collects_emission        true: no light sampling; emission met by the walk counts whole
 ///   estimate(sp, s, q, rec)  area lights' direct light at sp (rec: the primary vertex's record,
-///                            else null; the policy may keep part of the estimate in it)
-///   emission_weight(pdf, ray, hit)  weight of area-light emission met by a BRDF-sampled ray of
-///                            density pdf from a vertex whose lights were sampled
+///                            else null; the policy may keep part of the estimate in it); 0 for
+///                            a policy that samples no lights
+///   emission_weight(from, ray, hit)  weight of area-light emission met at hit by `ray`, which
+///                            left a vertex as `from` says (1 for a policy that samples no
+///                            lights, and wherever `from` sampled none)
 ///   record(state, rec, L)    once per pixel sample: the primary record and the sample's L
 ///   finish(film, states)     once per render, after every sample: the policy's film values
 template <class D, class T, class Q, class S>
 concept DirectLighting =
     std::default_initializable<typename D::pixel_state> && std::default_initializable<typename D::vertex_record> &&
     requires(const D& d, const ShadingPoint<T>& sp, S& sampler, Q& queries, typename D::vertex_record* rec,
-             typename D::pixel_state& state, const typename D::vertex_record& crec, const Rgb<T>& L, T pdf,
+             typename D::pixel_state& state, const typename D::vertex_record& crec, const Rgb<T>& L, const Arrival<T>& from,
              const Ray<T>& ray, const StoreHit<T>& hit, Film& film, std::span<const typename D::pixel_state> states) {
-        { D::collects_emission } -> std::convertible_to<bool>;
         { d.estimate(sp, sampler, queries, rec) } -> std::same_as<Rgb<T>>;
-        { d.emission_weight(pdf, ray, hit) } -> std::same_as<T>;
+        { d.emission_weight(from, ray, hit) } -> std::same_as<T>;
         d.record(state, crec, L);
         d.finish(film, states);
     };
@@ -120,18 +121,18 @@ private:
     T power_ = 0;
 };
 
-/// No next-event estimation: the walk collects emission wherever it hits it.
+/// No next-event estimation of the area lights: the walk collects their emission wherever it
+/// hits it, whole.
 template <Scalar T = float>
 struct BrdfOnlyDirect : NoPixelStatistics<T> {
-    static constexpr bool collects_emission = true;
     BrdfOnlyDirect() = default;
-    BrdfOnlyDirect(const Scene<T>&, const RenderSettings&) {}
+    BrdfOnlyDirect(const Scene<T>&, const PathTracerSettings<T>&) {}
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>&, S&, Q&, typename NoPixelStatistics<T>::vertex_record*) const {
         return Rgb<T>(T(0));
     }
-    T emission_weight(T, const Ray<T>&, const StoreHit<T>&) const { return T(1); }
+    T emission_weight(const Arrival<T>&, const Ray<T>&, const StoreHit<T>&) const { return T(1); }
 };
 
 /// Light sampling and the BRDF sample combined by the balance heuristic (with sample counts:
@@ -139,10 +140,9 @@ struct BrdfOnlyDirect : NoPixelStatistics<T> {
 template <Scalar T = float>
 class MisDirect : public NoPixelStatistics<T> {
 public:
-    static constexpr bool collects_emission = false;
     using vertex_record = typename NoPixelStatistics<T>::vertex_record;
 
-    MisDirect(const Scene<T>& scene, const RenderSettings& s)
+    MisDirect(const Scene<T>& scene, const PathTracerSettings<T>& s)
         : scene_(&scene), lights_(scene), k_(std::max(1, s.light_samples)) {}
 
     template <class Q, class S>
@@ -154,7 +154,9 @@ public:
     }
 
     /// The BRDF sample's balance-heuristic weight where its ray meets area-light emission.
-    T emission_weight(T brdf_pdf, const Ray<T>& ray, const StoreHit<T>& hit) const {
+    T emission_weight(const Arrival<T>& from, const Ray<T>& ray, const StoreHit<T>& hit) const {
+        if (!from.lights_sampled) return T(1);
+        const T brdf_pdf = from.pdf;
         const std::int32_t li = scene_->light_of[hit.id];
         if (li < 0) return T(1);  // emissive but not a sampled light: only BRDF sampling finds it
         const auto& al = scene_->area_lights[std::size_t(li)];
@@ -193,31 +195,19 @@ private:
     int k_;
 };
 
-/// No environment.
-template <Scalar T = float>
-struct NoEnvironment {
-    NoEnvironment() = default;
-    explicit NoEnvironment(const Scene<T>&) {}
-    template <class Q, class S>
-        requires ShadowQueries<Q, T> && Sampler<S, T>
-    Rgb<T> estimate(const ShadingPoint<T>&, S&, Q&) const {
-        return Rgb<T>(T(0));
-    }
-    Rgb<T> escaped(const Vec3<T>&, const Arrival<T>&) const { return Rgb<T>(T(0)); }
-};
-
 /// The environment map sampled by its importance (one sample per vertex) and by the BRDF
-/// sample (the continuation ray), combined by the balance heuristic.
+/// sample (the continuation ray), combined by the balance heuristic. In a scene without a map
+/// it draws no samples and adds nothing (one predictable branch per vertex).
 template <Scalar T = float>
 class MisEnvironment {
 public:
-    explicit MisEnvironment(const Scene<T>& scene) : env_(scene.environment ? &*scene.environment : nullptr) {
-        if (!env_) throw Error("glint::MisEnvironment: the scene '" + scene.name + "' has no environment map");
-    }
+    MisEnvironment() = default;
+    explicit MisEnvironment(const Scene<T>& scene) : env_(scene.environment ? &*scene.environment : nullptr) {}
 
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries) const {
+        if (!env_) return Rgb<T>(T(0));
         const Vec2<T> u_env = sampler.get_2d();
         T pdf_env;
         const Vec3<T> we = env_->sample(u_env, pdf_env);
@@ -228,12 +218,13 @@ public:
         return env_->eval(we) * f * (wl.z * balance_weight(pdf_env, sp.brdf->sampling_pdf(wl)) / pdf_env);
     }
     Rgb<T> escaped(const Vec3<T>& dir, const Arrival<T>& from) const {
+        if (!env_) return Rgb<T>(T(0));
         const T w = from.lights_sampled ? balance_weight(from.pdf, env_->pdf(safe_normalize(dir))) : T(1);
         return env_->eval(dir) * w;
     }
 
 private:
-    const EnvironmentMap<T>* env_;
+    const EnvironmentMap<T>* env_ = nullptr;
 };
 
 }  // namespace glint

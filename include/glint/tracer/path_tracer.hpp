@@ -1,21 +1,23 @@
 // glint/tracer/path_tracer.hpp: the bundled reference path tracer, an integrator composed of
 // policies.
 //
-// 000 section 1.3: the rendering equation L = Le + T L is estimated by random
-// walks; at every diffuse or glossy vertex the direct illumination is estimated by a
-// direct-lighting policy (next-event estimation) and an environment-lighting policy, and the
-// walk continues or stops by a Russian-roulette policy with a BRDF-selection estimator (000
-// sections 2.1-2.3 through glint::scatter). Policies:
-//   Accel    TracerAccelerator: closest_hit(ray, StoreHit&) and any_hit(ray) (trees/, BruteForce);
+// Szécsi 2009, §1.3: the rendering equation L = Le + T L is estimated by random walks; at
+// every diffuse or glossy vertex the direct illumination is estimated by a direct-lighting
+// policy (next-event estimation), the environment by an environment-lighting policy and the
+// point lights by shadow rays, and the walk continues or stops by the Russian roulette and
+// BRDF selection of PathTracerSettings (§2.1-2.3 through glint::scatter). Types, where they
+// pay in the hot loop:
+//   Accel    a RayAccelerator (trees/tree.hpp): closest_hit(ray, StoreHit&) and any_hit(ray)
+//            (MeshBvh, KdTree, Bih, BruteForce); its scalar_type is the tracer's;
 //   S        glint::Sampler (RandomSampler, HaltonSampler);
-//   R        glint::RoulettePolicy (classic, spectral, throughput, radiance estimate);
 //   D        DirectLighting (tracer/lighting.hpp: BrdfOnlyDirect, MisDirect; CorrelatedDirect
 //            in tracer/correlated_direct.hpp; or a user's own);
-//   E        EnvironmentLighting (NoEnvironment, MisEnvironment; CorrelatedEnvironment in
-//            tracer/correlated_environment.hpp);
-//   Points   a compile-time switch: a scene without point lights gets no point-light code.
-// Specular (mirror, dielectric) vertices are followed deterministically (Fresnel choice for
-// dielectrics) and count emission on the next hit, as camera rays do.
+//   E        EnvironmentLighting (MisEnvironment, the default, which does nothing in a scene
+//            without a map; CorrelatedEnvironment in tracer/correlated_environment.hpp).
+// Values, a predictable branch per vertex: the roulette rule, the BRDF selection, the scene's
+// features (point lights, environment: checked once, when the tracer is built). Specular (mirror, dielectric) vertices are followed
+// deterministically (Fresnel choice for dielectrics) and count emission on the next hit, as
+// camera rays do.
 //
 // The tracer is an Integrator (tracer/renderer.hpp): radiance(ray, sampler, pixel_state) gives
 // one sample's radiance and rays, finish(film, states) lets the direct-lighting policy finish
@@ -27,7 +29,6 @@
 #include <cmath>
 #include <concepts>
 #include <cstdint>
-#include <limits>
 #include <span>
 #include <vector>
 
@@ -38,32 +39,35 @@
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
 #include <glint/tracer/brdf.hpp>
-#include <glint/tracer/correlated_direct.hpp>
 #include <glint/tracer/lighting.hpp>
+#include <glint/tracer/path_tracer_settings.hpp>
 #include <glint/tracer/renderer.hpp>
 #include <glint/tracer/scene.hpp>
 #include <glint/tracer/shading.hpp>
+#include <glint/trees/tree.hpp>
 
 namespace glint {
 
-template <class Accel, class S, class R, class D, class E, bool Points, Scalar T = float>
-    requires Sampler<S, T> && RoulettePolicy<R, T, 3> && TracerAccelerator<Accel, T> &&
-             DirectLighting<D, T, RayQueries<Accel, T>, S> && EnvironmentLighting<E, T, RayQueries<Accel, T>, S>
+template <RayAccelerator Accel, class S, class D, class E = MisEnvironment<typename Accel::scalar_type>>
+    requires Sampler<S, typename Accel::scalar_type> &&
+             DirectLighting<D, typename Accel::scalar_type, RayQueries<Accel>, S> &&
+             EnvironmentLighting<E, typename Accel::scalar_type, RayQueries<Accel>, S>
 class PathTracer {
 public:
-    using scalar_type = T;
+    using scalar_type = typename Accel::scalar_type;
+    using T = scalar_type;
     using pixel_state = typename D::pixel_state;
-    using Queries = RayQueries<Accel, T>;
+    using Queries = RayQueries<Accel>;
+    using Settings = PathTracerSettings<T>;
 
-    PathTracer(const Scene<T>& scene, const Accel& accel, const R& roulette, const D& direct, const E& environment,
-               const RenderSettings& settings)
-        : scene_(scene), accel_(accel), roulette_(roulette), direct_(direct), env_(environment), settings_(settings) {
+    PathTracer(const Scene<T>& scene, const Accel& accel, const D& direct, const E& environment, const Settings& settings)
+        : scene_(scene), accel_(accel), direct_(direct), env_(environment), settings_(settings), features_(scene.features()) {
         scene.validate();
     }
-    /// With the policies built from the scene and settings.
-    PathTracer(const Scene<T>& scene, const Accel& accel, const R& roulette, const RenderSettings& settings)
-        requires std::constructible_from<D, const Scene<T>&, const RenderSettings&> && std::constructible_from<E, const Scene<T>&>
-        : PathTracer(scene, accel, roulette, D(scene, settings), E(scene), settings) {}
+    /// With the lighting policies built from the scene and settings.
+    PathTracer(const Scene<T>& scene, const Accel& accel, const Settings& settings = {})
+        requires std::constructible_from<D, const Scene<T>&, const Settings&> && std::constructible_from<E, const Scene<T>&>
+        : PathTracer(scene, accel, D(scene, settings), E(scene), settings) {}
 
     /// Radiance along a camera ray; the direct-lighting policy records the sample in `state`.
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state) const {
@@ -87,28 +91,29 @@ public:
     }
 
     const D& direct() const { return direct_; }
+    const Settings& settings() const { return settings_; }
 
-    /// Pilot observations for 000 section 2.3's radiance-estimate roulette: at the first
-    /// diffuse vertex of `n` camera paths, the albedo a and the one-sample reflected radiance
-    /// X = (w/p) L_in (L_in traced by this tracer, so unbiased), `repeats` of them per vertex
-    /// (consecutive; more than 1 for estimate_goodness_floor). X is exactly what the
-    /// roulette decides about, what a terminated walk loses: with light sampling, emission
-    /// met by the continued ray counts only with the BRDF sample's MIS weight (the rest is in
-    /// the vertex's light samples), as in the walk. A direction the BRDF cannot sample gives
-    /// X = 0, as in the walk.
-    std::vector<RoulettePilotSample<T, 3>> pilot_samples(const S& prototype, int n, int repeats = 1) const {
+    /// Pilot observations for Szécsi 2009, §2.3's radiance estimate: at the first diffuse
+    /// vertex of `n` camera paths through the pixels of `image`, the albedo a and the
+    /// one-sample reflected radiance X = (w/p) L_in (L_in traced by this tracer, so unbiased),
+    /// `repeats` of them per vertex (consecutive; more than 1 for estimate_goodness_floor). X
+    /// is what the roulette decides about, what a terminated walk loses: emission met by the
+    /// continued ray counts with the direct-lighting policy's weight, as in the walk. A
+    /// direction the BRDF cannot sample gives X = 0, as in the walk.
+    std::vector<RoulettePilotSample<T, 3>> pilot_samples(const RenderSettings& image, const S& prototype, int n,
+                                                         int repeats = 1) const {
         S sampler = prototype;
         std::vector<RoulettePilotSample<T, 3>> out;
         repeats = std::max(repeats, 1);
         out.reserve(std::size_t(std::max(n, 0)) * std::size_t(repeats));
-        const PixelCamera<T> camera(scene_.camera, settings_);
-        const std::uint64_t pixels = std::uint64_t(settings_.width) * std::uint64_t(settings_.height);
+        const PixelCamera<T> camera(scene_.camera, image);
+        const std::uint64_t pixels = std::uint64_t(image.width) * std::uint64_t(image.height);
         for (int i = 0; i < n; ++i) {
             // Pixels spread over the whole image (an odd multiplier not divisible by 3 permutes
             // the indices of a w x h image with w h = 2^k 3^j; any other size is still covered
             // widely), not the first rows: the fit must see every part of the scene.
             const std::uint64_t k = (std::uint64_t(i) * 0x9E3779B1u) % pixels;
-            const int x = int(k % std::uint64_t(settings_.width)), y = int(k / std::uint64_t(settings_.width));
+            const int x = int(k % std::uint64_t(image.width)), y = int(k / std::uint64_t(image.width));
             pilot_vertex(camera.ray(x, y, std::uint64_t(0x9000000 + i), sampler), sampler, repeats, out);
         }
         return out;
@@ -133,16 +138,14 @@ private:
             const T pdf = brdf.sampling_pdf(wi);
             Rgb<T> X(T(0));
             if (pdf > T(0) && wi.z > T(0))
-                X = brdf.f(wi) * (wi.z / pdf) *
-                    walk(spawn(sp, frame.to_world(wi)), sampler, queries, Arrival<T>{!D::collects_emission, pdf}, nullptr).L;
+                X = brdf.f(wi) * (wi.z / pdf) * walk(spawn(sp, frame.to_world(wi)), sampler, queries, Arrival<T>{true, pdf}, nullptr).L;
             out.push_back({m.kd + m.ks, X});
         }
     }
 
     /// The walk from `ray`, which left a vertex as `from` says; `rec`: the primary vertex's
     /// record for the direct-lighting policy (null after the camera ray).
-    PathSample<T> walk(Ray<T> ray, S& sampler, Queries& queries, Arrival<T> from,
-                       typename D::vertex_record* rec) const {
+    PathSample<T> walk(Ray<T> ray, S& sampler, Queries& queries, Arrival<T> from, typename D::vertex_record* rec) const {
         PathSample<T> out;
         Rgb<T> F(T(1));
         for (int depth = 0;; ++depth) {
@@ -152,7 +155,7 @@ private:
             }
             StoreHit<T> hit;
             if (!queries.closest_hit(ray, hit)) {
-                out.L += F * env_.escaped(ray.direction, from);
+                if (features_.environment) out.L += F * env_.escaped(ray.direction, from);
                 break;
             }
             const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
@@ -160,7 +163,7 @@ private:
             const bool front = glm::dot(ng, ray.direction) < T(0);
             const Vec3<T> n = front ? ng : -ng;
             const SurfacePoint<T> p = surface_point(scene_, hit);
-            if (front && m.emissive()) out.L += F * m.emission * emission_weight(from, ray, hit);
+            if (front && m.emissive()) out.L += F * m.emission * direct_.emission_weight(from, ray, hit);
             if (m.specular()) {
                 if (!specular_step(m, ShadingPoint<T>{p.x, p.err, n, {}, nullptr}, ng, depth, sampler, ray, F, out.L)) break;
                 from = Arrival<T>{};
@@ -174,21 +177,31 @@ private:
     }
 
     /// A diffuse or glossy vertex: lighting policies, point lights, then the roulette, lobe
-    /// choice and direction (BRDF-selection estimator of settings, 000 section 2.1). Updates
-    /// ray, F, L and from; false when the walk stops.
+    /// choice and direction (Szécsi 2009, §2.1). Updates ray, F, L and from; false when the
+    /// walk stops.
     bool surface_step(const Material<T>& m, ShadingPoint<T> sp, int depth, S& sampler, Queries& queries,
                       typename D::vertex_record* rec, Ray<T>& ray, Rgb<T>& F, Rgb<T>& L, Arrival<T>& from) const {
         const SurfaceBrdf<T> brdf(m, sp.frame.to_local(-ray.direction));
         sp.brdf = &brdf;
-        if constexpr (!D::collects_emission) L += F * (direct_.estimate(sp, sampler, queries, rec) + env_.estimate(sp, sampler, queries));
-        if constexpr (Points) L += F * point_lights(sp, queries);
-        const ScatterSample<T, 3> s = scatter_step(brdf, F, sampler, depth);
-        if constexpr (R::has_radiance_estimate) L += F * s.offset;
+        L += F * direct_.estimate(sp, sampler, queries, rec);
+        if (features_.environment) L += F * env_.estimate(sp, sampler, queries);
+        if (features_.point_lights) L += F * point_lights(sp, queries);
+        return scatter_step(brdf, sp, depth, sampler, ray, F, L, from);
+    }
+
+    /// The roulette, lobe choice and direction at a diffuse or glossy vertex; everything it
+    /// calls is inlined into it (the per-vertex run-time choices cost least there).
+    [[gnu::flatten]] bool scatter_step(const SurfaceBrdf<T>& brdf, const ShadingPoint<T>& sp, int depth, S& sampler,
+                                       Ray<T>& ray, Rgb<T>& F, Rgb<T>& L, Arrival<T>& from) const {
+        const T u_select = sampler.get_1d();
+        const Vec2<T> u_dir = sampler.get_2d();
+        const ScatterSample<T, 3> s = scatter(brdf, settings_.roulette, F, u_select, u_dir, depth, settings_.selection);
+        L += F * s.offset;
         if (s.terminated()) return false;
         F *= s.weight;
         if (F.max() <= T(0) || !F.is_finite()) return false;  // nothing more can contribute
         ray = spawn(sp, sp.frame.to_world(s.direction));
-        if constexpr (!D::collects_emission) from = Arrival<T>{true, brdf.sampling_pdf(s.direction)};
+        from = Arrival<T>{true, brdf.sampling_pdf(s.direction)};
         return true;
     }
 
@@ -200,29 +213,12 @@ private:
         const T u = m.kind == MaterialKind::dielectric ? sampler.get_1d() : T(0);  // only a dielectric chooses
         const Vec3<T> wi = specular_direction(m, ray.direction, ng, u);
         const std::array<Rgb<T>, 1> lobes{specular_albedo(m)};
-        const auto sel = select_lobe(roulette_, F, std::span<const Rgb<T>>(lobes), sampler.get_1d(), depth);
-        if constexpr (R::has_radiance_estimate) L += F * sel.offset;
+        const auto sel = select_lobe(settings_.roulette, F, std::span<const Rgb<T>>(lobes), sampler.get_1d(), depth);
+        L += F * sel.offset;
         if (sel.terminated()) return false;
         F *= lobes[0] / sel.probability[0];
         ray = spawn(sp, wi);
         return true;
-    }
-
-    ScatterSample<T, 3> scatter_step(const SurfaceBrdf<T>& brdf, const Rgb<T>& F, S& sampler, int depth) const {
-        const T u_select = sampler.get_1d();
-        const Vec2<T> u_dir = sampler.get_2d();
-        switch (settings_.selection) {
-            case BrdfSelection::decomposition:
-                return scatter<BrdfSelection::decomposition>(brdf, roulette_, F, u_select, u_dir, depth);
-            case BrdfSelection::weighted:
-                return scatter<BrdfSelection::weighted>(brdf, roulette_, F, u_select, u_dir, depth);
-            default: return scatter<BrdfSelection::mis>(brdf, roulette_, F, u_select, u_dir, depth);
-        }
-    }
-
-    /// Weight of area-light emission met at `hit` by `ray`, which left a vertex as `from` says.
-    T emission_weight(const Arrival<T>& from, const Ray<T>& ray, const StoreHit<T>& hit) const {
-        return from.lights_sampled ? direct_.emission_weight(from.pdf, ray, hit) : T(1);
     }
 
     Rgb<T> point_lights(const ShadingPoint<T>& sp, Queries& queries) const {
@@ -239,10 +235,10 @@ private:
 
     const Scene<T>& scene_;
     const Accel& accel_;
-    R roulette_;
     D direct_;
     E env_;
-    RenderSettings settings_;
+    Settings settings_;
+    SceneFeatures features_;  // checked once: a scene without a map or point lights skips their code
 };
 
 }  // namespace glint

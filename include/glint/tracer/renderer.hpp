@@ -6,8 +6,8 @@
 // the image's layers; any FilmPolicy plugs in). For each pixel sample it asks its camera
 // policy for a ray and the integrator (PathTracer, VplIntegrator, or any type that satisfies
 // Integrator) for the radiance along it; after all samples it lets the integrator finish the
-// film once (correlated direct lighting pools its lambda there, 000 section 3.1.1; the VPL
-// method adds its indirect layer). Every pixel sample draws from the
+// film once (correlated direct lighting pools its lambda there, Szécsi 2009, §3.1.1, and adds its
+// lambda layer; the VPL method adds its indirect layer). Every pixel sample draws from the
 // sampler's stream for (x, y, sample index), so the image does not depend on the thread count
 // or the order tiles are rendered in.
 #pragma once
@@ -28,14 +28,13 @@
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
-#include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
 #include <glint/tracer/scene.hpp>
 
 namespace glint {
 
+/// The image's settings; each integrator has its own (PathTracerSettings, VplSettings).
 struct RenderSettings {
-    // The renderer's settings.
     int width = 256, height = 256;
     int spp = 16;
     int threads = 0;             // 0: std::thread::hardware_concurrency()
@@ -46,23 +45,14 @@ struct RenderSettings {
     /// transport's alone: comparisons of estimators (bench_convergence) are not diluted by
     /// the pixel-footprint noise at silhouettes and light edges that every method shares.
     bool pixel_jitter = true;
-    // The path tracer's settings.
-    /// Cap on a walk's vertices, far beyond where roulette stops walks (a grey furnace of
-    /// albedo 0.99 continues past 1024 vertices with probability about 3e-5); walks that reach
-    /// it are counted in RenderResult::capped_walks, since a cap truncates (biases) them.
-    int max_depth = 1024;
-    int light_samples = 1;       // per area light and vertex (CorrelatedDirect, MisDirect)
-    BrdfSelection selection = BrdfSelection::mis;
-    /// Combined correlated estimator at the primary vertices: lambda from the statistics
-    /// pooled over the (2r + 1)^2 pixel neighbourhood (000 section 3.1.1); -1 estimates it
-    /// per vertex.
-    int lambda_filter_radius = 1;
 };
 
-/// An integrator's own layer of the image, by name (the VPL method's "indirect" part).
+/// An integrator's own layer of the image, by name (the VPL method's "indirect" part,
+/// correlated sampling's "lambda").
 struct FilmLayer {
     std::string name;
     Image<Rgb<float>> pixels;
+    bool grey = false;  // one value per pixel, in all three bands
 };
 
 /// A film policy: what the renderer does with each pixel's estimate. resize(width, height)
@@ -79,14 +69,18 @@ concept FilmPolicy = Scalar<T> && requires(F& film, int x, const Rgb<T>& value) 
 struct Film {
     Image<Rgb<float>> image;     // mean radiance per pixel
     Image<Rgb<float>> variance;  // variance of that mean (sample variance / spp)
-    Image<float> lambda;         // mean lambda of the primary vertices (CorrelatedDirect)
     std::vector<FilmLayer> layers;  // what integrators add in finish()
 
     void resize(int width, int height) {
         image = Image<Rgb<float>>(width, height);
         variance = Image<Rgb<float>>(width, height);
-        lambda = Image<float>(width, height);
         layers.clear();
+    }
+    /// The layer called `name`, or null.
+    const FilmLayer* layer(const std::string& name) const {
+        for (const FilmLayer& l : layers)
+            if (l.name == name) return &l;
+        return nullptr;
     }
     template <Scalar T>
     void set_pixel(int x, int y, const Rgb<T>& mean, const Rgb<T>& variance_of_mean) {
@@ -102,7 +96,7 @@ struct RenderStats {
     double seconds = 0;
     std::uint64_t rays = 0;          // closest-hit plus shadow rays
     std::uint64_t paths = 0;         // camera paths (pixel samples)
-    std::uint64_t capped_walks = 0;  // walks cut at RenderSettings::max_depth (biased)
+    std::uint64_t capped_walks = 0;  // walks cut by the integrator's depth cap (biased)
 };
 
 /// A render on the default film.

@@ -1,13 +1,12 @@
 // glint/tracer/scene.hpp: what the reference path tracer renders: triangle meshes with
 // per-face materials, polygon area lights, point lights, an optional environment map and a
-// pinhole camera; plus the scene features the tracer checks once, before rendering, to
-// choose the variant that skips what the scene does not need.
+// pinhole camera; plus the scene's features, checked once, before rendering.
 //
-// Materials (000 section 1.3, and section 2.1 for the combined BRDF):
+// Materials (Szécsi 2009, §1.3, and §2.1 for the combined BRDF):
 //   lambertian  f = kd / pi;
 //   glossy      kd / pi + ks (n + 2) / (2 pi) cos^n(alpha), alpha = angle to the mirror
 //               direction (the energy-normalized Phong lobe, Lafortune and Willems 1994):
-//               the two-lobe BRDF of 000's BRDF-selection experiments (Fig. 2.1);
+//               the two-lobe BRDF of Szécsi 2009's BRDF-selection experiments (§2.1, Fig. 2.1);
 //   mirror      ideal reflection with reflectance ks;
 //   dielectric  ideal refraction and reflection with Fresnel weights (index ior).
 // Any material may emit (emission = radiance leaving the front face).
@@ -93,8 +92,9 @@ struct Camera {
     }
 };
 
-/// Which capabilities a scene uses; the tracer instantiates the variant that has exactly
-/// these, so that a scene without them does not pay for them.
+/// Which capabilities a scene uses, checked once before rendering (the path tracer skips the
+/// point lights and the environment where a scene has none; glint-render's roulette choice
+/// reads `grey`).
 struct SceneFeatures {
     bool environment = false;
     bool point_lights = false;
@@ -102,7 +102,7 @@ struct SceneFeatures {
     bool specular = false;
     /// Every reflectance (kd, ks) equal in all bands, so that every walk's throughput stays
     /// grey whatever the lights' colours: the spectral roulettes then reduce exactly to the
-    /// classic ones (render() uses those).
+    /// classic ones.
     bool grey = true;
 };
 
@@ -184,7 +184,7 @@ public:
 
     /// Total emitted power of the area lights per band (Phi = pi Le A for a Lambertian
     /// emitter), the total surface area and the area-weighted mean albedo: the inputs of
-    /// 000 section 2.3's scene-wide radiance estimate.
+    /// Szécsi 2009, §2.3's scene-wide radiance estimate.
     void radiance_estimate_inputs(Rgb<T>& power, T& area, Rgb<T>& mean_albedo) const {
         power = Rgb<T>(T(0));
         for (const auto& l : area_lights) power += l.emission * (pi<T> * l.area);

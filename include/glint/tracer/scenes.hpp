@@ -6,15 +6,15 @@
 //                   measured reflectances (white 0.725 0.71 0.68, red 0.63 0.065 0.05,
 //                   green 0.14 0.45 0.091; light 17 12 4);
 //   cornell-glossy  the same box with diffuse + Phong materials, for the BRDF-selection
-//                   experiment of 000 section 2.1 (Fig. 2.1);
-//   furnace         000 section 2.2's saturated furnace: a closed room whose six walls carry
+//                   experiment of Szécsi 2009, §2.1 (Fig. 2.1);
+//   furnace         Szécsi 2009, §2.2's saturated furnace: a closed room whose six walls carry
 //                   the six permutations of the albedo (1.0, 0.5, 0.2) over RGB and emit
 //                   1 - albedo, so the radiance is exactly 1 everywhere in every band
 //                   (L = E + a L has the solution L = 1 when E = 1 - a);
 //   arealight       a room lit by one large area light covering a wall, with occluding
-//                   columns (000 section 3.2, Fig. 3.4);
+//                   columns (Szécsi 2009, §3.2, Fig. 3.4);
 //   envmap          a sphere and a box on a ground plane under a procedural sky with a sun
-//                   (000 section 3.3, Fig. 3.7), or under a given lat-long EXR.
+//                   (Szécsi 2009, §3.3, Fig. 3.7), or under a given lat-long EXR.
 //
 // insert_mesh() adds a mesh (an OBJ's triangles) to a scene, scaled to a footprint and standing
 // on a floor point: glint-render --insert-mesh puts one on the Cornell box's free floor
@@ -31,6 +31,7 @@
 #include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/tracer/choice.hpp>
 #include <glint/tracer/environment.hpp>
 #include <glint/tracer/scene.hpp>
 
@@ -239,23 +240,33 @@ MeshPlacement<T> cornell_mesh_placement() {
     return MeshPlacement<T>{Vec3<T>(T(-0.5), T(0), T(0.45)), T(0.7)};
 }
 
+/// The built-in scenes by name.
+template <Scalar T>
+std::span<const Choice<Scene<T> (*)()>> scene_choices() {
+    static constexpr Choice<Scene<T> (*)()> table[] = {
+        {"cornell", "the Cornell box", [] { return detail::cornell<T>(false); }},
+        {"cornell-glossy", "the Cornell box with glossy boxes", [] { return detail::cornell<T>(true); }},
+        {"furnace", "a closed room of saturated albedos whose radiance is 1 everywhere", [] { return detail::furnace<T>(); }},
+        {"arealight", "a room lit by a large area light, with occluding columns", [] { return detail::arealight<T>(); }},
+        {"envmap", "a sphere and a box under a sky with a sun (or an EXR map)", [] { return detail::envmap<T>(); }},
+    };
+    return table;
+}
+
 /// Names accepted by builtin_scene().
 inline const std::vector<std::string>& builtin_scene_names() {
-    static const std::vector<std::string> names{"cornell", "cornell-glossy", "furnace", "arealight", "envmap"};
+    static const std::vector<std::string> names = [] {
+        std::vector<std::string> v;
+        for (const auto& c : scene_choices<float>()) v.emplace_back(c.name);
+        return v;
+    }();
     return names;
 }
 
 /// A built-in scene by name; throws glint::Error listing the names for an unknown one.
 template <Scalar T>
 Scene<T> builtin_scene(const std::string& name) {
-    if (name == "cornell") return detail::cornell<T>(false);
-    if (name == "cornell-glossy") return detail::cornell<T>(true);
-    if (name == "furnace") return detail::furnace<T>();
-    if (name == "arealight") return detail::arealight<T>();
-    if (name == "envmap") return detail::envmap<T>();
-    std::string list;
-    for (const auto& n : builtin_scene_names()) list += (list.empty() ? "" : ", ") + n;
-    throw Error("unknown scene '" + name + "' (built-in scenes: " + list + ")");
+    return find_choice(scene_choices<T>(), "scene", name).make();
 }
 
 }  // namespace glint

@@ -25,11 +25,6 @@
 
 namespace glint {
 
-/// What the tracer needs of an accelerator: trees/tree.hpp's RayAccelerator (closest hit
-/// and any hit) on rays of scalar T.
-template <class A, class T>
-concept TracerAccelerator = RayAccelerator<A> && std::same_as<typename A::scalar_type, T>;
-
 /// The per-vertex inputs of a lighting policy.
 template <Scalar T>
 struct ShadingPoint {
@@ -115,11 +110,12 @@ concept ShadowQueries = requires(Q& q, const ShadingPoint<T>& sp, const PolygonL
     { q.unoccluded(ray) } -> std::convertible_to<bool>;
 };
 
-/// The rays of one path sample through accelerator A, counted.
-template <class A, Scalar T>
-    requires TracerAccelerator<A, T>
+/// The rays of one path sample through accelerator A (trees/tree.hpp's RayAccelerator, on
+/// rays of its scalar_type), counted.
+template <RayAccelerator A>
 class RayQueries {
 public:
+    using T = typename A::scalar_type;
     explicit RayQueries(const A& accel) : accel_(accel) {}
 
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) {

@@ -152,8 +152,9 @@ std::vector<Vpl<T>> shoot_vpls(const VplScene<T>& scene, const Accel& accel, con
             const Rgb<T> a = scene.albedo[hit.id];
             out.push_back({p, n, power, a});
             const SurfaceBrdf<T> brdf(Material<T>::lambertian(a), Vec3<T>(0, 0, 1));
-            const ScatterSample<T, 3> s = scatter<BrdfSelection::decomposition>(
-                brdf, roulette, power, rng.uniform<T>(), Vec2<T>(rng.uniform<T>(), rng.uniform<T>()), int(depth));
+            const ScatterSample<T, 3> s = scatter(
+                brdf, roulette, power, rng.uniform<T>(), Vec2<T>(rng.uniform<T>(), rng.uniform<T>()), int(depth),
+                BrdfSelection::decomposition);
             if (s.terminated()) break;
             power = power * s.weight;
             dir = Frame<T>::from_normal(n).to_world(s.direction);

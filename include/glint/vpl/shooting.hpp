@@ -44,10 +44,10 @@ namespace glint {
 template <class A>
 concept SceneAccelerator = RayAccelerator<A> && Scalar<typename A::scalar_type>;
 
-/// A roulette policy that a shooting walk can use: one without a radiance estimate (the
-/// estimate's offset is reflected radiance, which a walk carrying power has no use for).
+/// A roulette policy that a shooting walk can use (a radiance estimate's offset is reflected
+/// radiance, which a walk carrying power has no use for: shooting walks ignore it).
 template <class R, class T>
-concept ShootingRoulette = RoulettePolicy<R, T, 3> && (!R::has_radiance_estimate);
+concept ShootingRoulette = RoulettePolicy<R, T, 3>;
 
 /// Where a light sample leaves from: position, direction, and power / density.
 template <Scalar T>
@@ -188,7 +188,7 @@ void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, R
         const SurfaceBrdf<T> brdf(m, frame.to_local(-safe_normalize(ray.direction)));
         const T u_sel = rng.uniform<T>();
         const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
-        const ScatterSample<T, 3> step = scatter<BrdfSelection::mis>(brdf, roulette, beta, u_sel, u_dir, depth);
+        const ScatterSample<T, 3> step = scatter(brdf, roulette, beta, u_sel, u_dir, depth);
         if (step.terminated()) return;
         beta *= step.weight;
         if (!(beta.max() > T(0)) || !beta.is_finite()) return;
@@ -212,7 +212,7 @@ void shoot_path_tree(const Scene<T>& s, const A& accel, const R& roulette, const
     for (int b = 0; b < branches; ++b) {
         const T u_sel = rng.uniform<T>();
         const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
-        const ScatterSample<T, 3> step = scatter<BrdfSelection::mis>(brdf, roulette, beta, u_sel, u_dir, 0);
+        const ScatterSample<T, 3> step = scatter(brdf, roulette, beta, u_sel, u_dir, 0);
         if (step.terminated()) continue;
         trace_shooting_walk(s, accel, roulette, detail::vpl_spawn(z1, n1, frame.to_world(step.direction)),
                             power * step.weight / T(branches), rng, max_depth, out, 1);
