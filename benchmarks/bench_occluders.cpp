@@ -1,11 +1,12 @@
-// bench_occluders: occluder spheres (000 chapter 5) measured against shadow rays.
+// bench_occluders: occluder spheres (Szécsi 2009, ch. 5) measured against shadow rays.
 //
 //   bench_occluders [--quick] [--csv FILE] [--mesh FILE.obj] [--images DIR]   (images only with --images)
 //       1. Delaunay build time scaling (random points and torus-knot surface samples);
 //       2. sphere generation: time, and the sphere sets' hit probability for isotropic random
-//          lines against the mesh's at 1000/250/100/25/10 spheres, without (000's method) and
+//          lines against the mesh's at 1000/250/100/25/10 spheres, without (Szécsi 2009's method) and
 //          with radius calibration; generation time for a 100k-triangle mesh;
-//       3. VPL renders (tracer/vpl.hpp) of the torus knot (and --mesh) in a box: shadow rays
+//       3. VPL renders (glint/vpl/integrator.hpp, the indirect part) of the torus knot (and
+//          --mesh) in a box (tests/support/occluder_box.hpp): shadow rays
 //          through the 8-wide BVH against occluder spheres (linear scan and kd-tree search),
 //          time, speedup and relative RMSE of the VPL (indirect) illumination; the kd-tree /
 //          linear crossover; side-by-side PNG images (rays | spheres | 4x difference).
@@ -37,8 +38,10 @@
 #include <glint/occluders/spheres.hpp>
 #include <glint/occluders/visibility.hpp>
 #include <glint/sampling/roulette.hpp>
-#include <glint/tracer/vpl.hpp>
 #include <glint/trees/mesh_bvh.hpp>
+#include <glint/vpl/integrator.hpp>
+#include "image_error.hpp"
+#include "occluder_box.hpp"
 #include "tree_scenes.hpp"
 
 #include "support/args.hpp"
@@ -145,14 +148,15 @@ int fit_gssa(std::uint64_t lines) {
         }
         return sq;
     };
-    // 000's form: a * b^(1/delta) * rho^c + e.
-    auto m000 = [](const std::vector<double>& p) {
+    // The dissertation's form (Szécsi 2009, §5.2.3): a * b^(1/delta) * rho^c + e.
+    auto m_printed = [](const std::vector<double>& p) {
         return [p](double rho, double delta) { return p[0] * std::pow(p[1], 1.0 / delta) * std::pow(rho, p[2]) + p[3]; };
     };
-    report("000 as printed (1.1824, 0.42615, 1.972, 0.991)", m000({1.1824, 0.42615, 1.972, 0.991}));
-    const auto p000 = nelder_mead([&](const std::vector<double>& p) { return rel_sq(m000(p)); }, {1.1824, 0.42615, 1.972, 0.991});
-    std::printf("000's form refitted: %.5f * %.5f^(R/d) * (r/R)^%.4f + %.5f\n", p000[0], p000[1], p000[2], p000[3]);
-    report("000's form refitted", m000(p000));
+    report("Szecsi 2009 as printed (1.1824, 0.42615, 1.972, 0.991)", m_printed({1.1824, 0.42615, 1.972, 0.991}));
+    const auto refit =
+        nelder_mead([&](const std::vector<double>& p) { return rel_sq(m_printed(p)); }, {1.1824, 0.42615, 1.972, 0.991});
+    std::printf("Szecsi 2009's form refitted: %.5f * %.5f^(R/d) * (r/R)^%.4f + %.5f\n", refit[0], refit[1], refit[2], refit[3]);
+    report("Szecsi 2009's form refitted", m_printed(refit));
     auto mglint = [](const std::vector<double>& p) {
         return [p](double rho, double delta) {
             return double(gssa_fitted_unit<double>(rho, delta, GssaFit{p[0], p[1], p[2]}));
@@ -232,7 +236,7 @@ void hit_probability(const std::string& name, const Mesh<double>& mesh, const Op
         const double t0 = now();
         const auto levels = generate_occluder_levels<double>(mesh, targets, opt);
         const double t = now() - t0;
-        std::printf("%-26s generation %.2f s;", calibrate ? "D2+fitted GSSA+calibrated" : "D2+fitted GSSA (000)", t);
+        std::printf("%-26s generation %.2f s;", calibrate ? "D2+fitted GSSA+calibrated" : "D2+fitted GSSA (Szecsi)", t);
         for (std::size_t k = 0; k < targets.size(); ++k) {
             const double ps = sphere_set_hit_fraction<double>(levels[k], c, radius, lines, 31);
             std::printf("  %zu: %+.1f%%", targets[k], 100 * (ps / pm - 1));
@@ -248,51 +252,40 @@ Mesh<float> to_float(const Mesh<double>& m) {
     return out;
 }
 
-/// Object scaled into a Cornell-like box [-1, 1]^3 (open at +z), lit by a ceiling quad.
-VplScene<float> box_scene(const Mesh<double>& object, Mesh<double>& placed) {
+/// Object scaled into the occluder box [-1, 1]^3 (tests/support/occluder_box.hpp), standing
+/// on its floor.
+Mesh<double> place_in_box(const Mesh<double>& object) {
     AABB<double> b = mesh_bounds<double>(object);
     const Vec3d e = b.extent();
     const double s = 1.3 / std::max({e.x, e.y, e.z});
     const Vec3d shift = Vec3d(0, -1 + 0.02 + 0.5 * s * e.y, -0.1) - s * b.center();
-    placed = object;
+    Mesh<double> placed = object;
     for (auto& t : placed)
         for (auto& v : t) v = v * s + shift;
-    VplScene<float> sc;
-    auto quad = [&](Vec3d a, Vec3d bb, Vec3d c, Vec3d d, Rgb<float> alb, Rgb<float> le = Rgb<float>(0.f)) {
-        const Mesh<double> q = {{a, bb, c}, {a, c, d}};
-        sc.add(to_float(q), alb, le);
-    };
-    const Rgb<float> white(0.75f, 0.75f, 0.75f), red(0.7f, 0.15f, 0.12f), green(0.15f, 0.6f, 0.15f);
-    quad({-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}, white);   // floor
-    quad({-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}, white);       // ceiling
-    quad({-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {1, -1, -1}, white);   // back
-    quad({-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}, red);     // left
-    quad({1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}, green);       // right
-    const double l = 0.3, y = 0.999;
-    quad({-l, y, -l}, {l, y, -l}, {l, y, l}, {-l, y, l}, Rgb<float>(0.f), Rgb<float>(15.f, 14.f, 12.f));
-    sc.add(to_float(placed), Rgb<float>(0.7f, 0.7f, 0.65f));
-    return sc;
+    return placed;
 }
 
 void render_scene(const std::string& name, const Mesh<double>& object, const Options& o, std::vector<CsvRow>& rows) {
-    Mesh<double> placed;
-    const VplScene<float> sc = box_scene(object, placed);
+    const Mesh<double> placed = place_in_box(object);
+    const Mesh<float> placed_f = to_float(placed);
+    const Scene<float> sc = occluder_box(placed_f, Rgb<float>(15.f, 14.f, 12.f), false);
     using Tree = MeshBvh<MollerTrumbore<float>, 8>;  // glint's fastest tree for the shadow rays
     const Tree tree(std::span<const TriangleVertices<float>>(sc.triangles), {.threads = 1});
-    PinholeCamera<float> cam;
-    cam.eye = Vec3f(0, 0, 3.4f);
-    cam.target = Vec3f(0, 0, 0);
-    cam.fov_y = 0.68f;
-    cam.width = cam.height = o.quick ? 32 : 128;
+    // The VPL integrator's indirect part, one camera ray per pixel centre, one thread.
+    const int size = o.quick ? 32 : 128;
+    const RenderSettings image{.width = size, .height = size, .spp = 1, .threads = 1, .pixel_jitter = false};
+    const VplSettings st{.min_distance = 0.1, .direct = false};
     const std::size_t walks = o.quick ? 40 : 300;
-    const auto vpls = shoot_vpls(sc, tree, Roulette<float, 3>::spectral(), walks, 17);
-    const float min_distance = 0.1f;
+    const auto vpls = shoot_scene_vpls(sc, tree, Roulette<float, 3>::spectral(), walks, 17);
+    const std::span<const Vpl<float>> vs(vpls);
+    const auto gather = [&](const auto& visibility) {
+        return std::move(render_vpls(sc, tree, vs, visibility, image, st).image.pixels);
+    };
     std::printf("\n== VPL render: %s in a box, %zu triangles, %dx%d pixels, %zu VPLs from %zu walks ==\n", name.c_str(),
-                sc.triangles.size(), cam.width, cam.height, vpls.size(), walks);
+                sc.triangles.size(), image.width, image.height, vpls.size(), walks);
 
-    ShadowRayVisibility<Tree> rays(tree, 1e-4f);
     double t0 = now();
-    const auto ref = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, rays, min_distance);
+    const auto ref = gather(ShadowRayVisibility<Tree>(tree, 1e-4f));
     const double t_rays = now() - t0;
     rows.push_back({name, "rays", 0, t_rays, 0.0});
     std::printf("%-16s %8s %10s %10s %9s\n", "visibility", "spheres", "seconds", "speedup", "rel_rmse");
@@ -310,15 +303,18 @@ void render_scene(const std::string& name, const Mesh<double>& object, const Opt
     for (std::size_t k = 0; k < counts.size(); ++k) {
         std::vector<Sphere<float>> sf;
         for (const auto& s : levels[k]) sf.push_back({Vec3f(s.centre), float(s.radius)});
-        SphereVisibilityLinear<float> lin(sf);
-        SphereVisibilityKdTree<float> kd(sf);
+        const SphereVisibilityLinear<float> lin(sf);
+        const SphereVisibilityKdTree<float> kd(sf);
         t0 = now();
-        const auto a = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, lin, min_distance);
+        const auto a = gather(lin);
         const double t_lin = now() - t0;
         t0 = now();
-        const auto b = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, kd, min_distance);
+        const auto b = gather(kd);
         const double t_kd = now() - t0;
-        const double e_lin = relative_rmse<float>(a, ref), e_kd = relative_rmse<float>(b, ref);
+        const auto error = [&](const std::vector<Rgb<float>>& img) {
+            return relative_rmse(std::span<const Rgb<float>>(img), std::span<const Rgb<float>>(ref));
+        };
+        const double e_lin = error(a), e_kd = error(b);
         rows.push_back({name, "spheres-linear", sf.size(), t_lin, e_lin});
         rows.push_back({name, "spheres-kdtree", sf.size(), t_kd, e_kd});
         std::printf("%-16s %8zu %10.3f %10.1f %9.4f\n", "spheres-linear", sf.size(), t_lin, t_rays / t_lin, e_lin);
@@ -343,7 +339,7 @@ void render_scene(const std::string& name, const Mesh<double>& object, const Opt
         for (const auto& p : ref) mean += double(p.luminance());
         mean /= double(ref.size());
         const float scale = float(0.5 / std::max(mean, 1e-12));
-        const int w = cam.width, h = cam.height;
+        const int w = image.width, h = image.height;
         Image<Rgb<float>> side(3 * w, h);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {

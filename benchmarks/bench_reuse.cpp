@@ -1,4 +1,4 @@
-// bench_reuse: light animation with path reuse (000 chapter 7) against rendering the frames
+// bench_reuse: light animation with path reuse (Szécsi 2009, ch. 7) against rendering the frames
 // independently, on the Cornell box lit by a point light moving under the ceiling.
 //
 //   bench_reuse [--quick] [--csv FILE] [--size S] [--frames 10,100] [--ref-walks R] [--reps K] [--threads T]
@@ -14,7 +14,7 @@
 // (shooting, connections, gathering, combination; the camera's visible points are shared):
 //   independent  k paths per frame, independent random numbers (k = 1, 2, 4, ..., F);
 //   dependent    k paths per frame, the same random numbers in every frame;
-//   reuse        1 own + (F - 1) borrowed paths per frame (000 section 7.2);
+//   reuse        1 own + (F - 1) borrowed paths per frame (Szécsi 2009, §7.2);
 //   reuse-split  the same with each path split into 10 at its first hit (section 7.2.1);
 //   online       1 own path per frame + those of the last W - 1 frames (section 7.3, W = 10).
 // Every method runs --reps times with different seeds (times and flicker averaged, rmse the
@@ -59,7 +59,8 @@ struct Setup {
     explicit Setup(Scene<float> sc) : scene(std::move(sc)), accel(scene.triangles) {}
     Scene<float> scene;
     Accel accel;
-    VplSettings st;
+    RenderSettings image;  // the camera's pixels (points gathered at, threads)
+    double clamp = 0.1;    // the geometry-term clamp of every image
     std::vector<PixelPoint<float>> points;
     std::vector<Vec3<float>> track;
     Rgb<float> intensity{4.0f, 3.5f, 3.0f};
@@ -71,7 +72,7 @@ Img independent_frame(const Setup& s, std::size_t f, std::size_t walks, std::uin
     sf.point_lights[0].position = s.track[f];
     const std::vector<Vpl<float>> vpls = shoot_scene_vpls(sf, s.accel, classic(), walks, seed);
     return gather_image(sf, std::span<const PixelPoint<float>>(s.points), std::span<const Vpl<float>>(vpls),
-                        ShadowRayVisibility<Accel>(s.accel, 1e-4f), s.st);
+                        ShadowRayVisibility<Accel>(s.accel, 1e-4f), s.clamp, s.image.threads);
 }
 
 double sq(double x) { return x * x; }
@@ -111,7 +112,8 @@ std::vector<Img> reuse_frames(const Setup& s, std::size_t paths, int branches, s
     opt.seed = seed;
     LightAnimation<float> a = shoot_light_animation(s.scene, s.accel, classic(), std::span<const Vec3<float>>(s.track),
                                                     s.intensity, opt);
-    render_path_images(a, s.scene, std::span<const PixelPoint<float>>(s.points), ShadowRayVisibility<Accel>(s.accel, 1e-4f), s.st);
+    render_path_images(a, s.scene, std::span<const PixelPoint<float>>(s.points), ShadowRayVisibility<Accel>(s.accel, 1e-4f),
+                       s.clamp, s.image.threads);
     std::vector<Img> out;
     for (std::size_t f = 0; f < a.frames(); ++f) out.push_back(a.frame_image(f, window));
     return out;
@@ -180,10 +182,12 @@ int main(int argc, char** argv) {
     }
     if (quick) size = 16, ref_walks = 64, frame_counts = {4}, reps = 2;
     Setup s(with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), Rgb<float>(4.0f, 3.5f, 3.0f)));
-    s.st.width = s.st.height = size;
-    s.st.threads = threads;
-    s.st.min_distance = clamp;
-    s.points = primary_points(s.scene, s.accel, s.st);
+    s.image.width = s.image.height = size;
+    s.image.threads = threads;
+    s.image.spp = 1;
+    s.image.pixel_jitter = false;
+    s.clamp = clamp;
+    s.points = primary_points(s.scene, s.accel, s.image, VplSettings{});
     std::vector<Row> rows;
     for (const std::size_t F : frame_counts) {
         s.track = light_track(Vec3<float>(-0.7f, 1.7f, 0.2f), Vec3<float>(0.7f, 1.7f, 0.2f), F);

@@ -1,11 +1,11 @@
 // bench_vpl: the VPL integrator (glint/vpl/integrator.hpp) with shadow rays through the wide
-// BVH against occluder spheres (000 chapter 5) on a mesh standing in the Cornell box (its two
+// BVH against occluder spheres (Szécsi 2009, ch. 5) on a mesh standing in the Cornell box (its two
 // blocks removed: the mesh is the only occluder).
 //
 //   bench_vpl [--quick] [--mesh FILE.obj] [--size S] [--vpls N] [--spheres 25,100,400] [--threads T] [--csv FILE]
 //
-// The VPL (indirect) illumination only, as 000's Fig. 5.7 measurements: shooting once, then
-// the same VPLs gathered with each visibility policy, each timed twice in alternation (the
+// The VPL (indirect) illumination only, as in the measurements of Szécsi 2009, Fig. 5.7: shooting
+// once, then the same VPLs gathered with each visibility policy, each timed twice in alternation (the
 // faster of the two kept). The occluders are generated from the mesh's triangles (the box's
 // walls are a convex enclosure and occlude nothing inside). Prints seconds, the speedup over
 // shadow rays, and the relative RMSE of the sphere image against the shadow-ray image (the
@@ -28,6 +28,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
+#include "image_error.hpp"
 
 using namespace glint;
 
@@ -41,11 +42,11 @@ double now() { return std::chrono::duration<double>(std::chrono::steady_clock::n
 /// The faster of two timed gathers (the image of the last).
 template <class V>
 double timed_gather(const Scene<float>& s, std::span<const PixelPoint<float>> pts, std::span<const Vpl<float>> vpls, const V& vis,
-                    const VplSettings& st, Img& out) {
+                    int threads, Img& out) {
     double best = 1e30;
     for (int k = 0; k < 2; ++k) {
         const double t0 = now();
-        out = gather_image(s, pts, vpls, vis, st);
+        out = gather_image(s, pts, vpls, vis, 0.0, threads);
         best = std::min(best, now() - t0);
     }
     return best;
@@ -93,10 +94,12 @@ int main(int argc, char** argv) try {
                        cornell_mesh_placement<float>());
     const std::span<const TriangleVertices<float>> mesh(scene.triangles.data() + before, scene.triangles.size() - before);
     const Accel accel(scene.triangles);
-    VplSettings st;
-    st.width = st.height = size;
-    st.threads = threads;
-    const auto points = primary_points(scene, accel, st);
+    RenderSettings image;
+    image.width = image.height = size;
+    image.threads = threads;
+    image.spp = 1;
+    image.pixel_jitter = false;
+    const auto points = primary_points(scene, accel, image, VplSettings{});
     const auto vpls = shoot_scene_vpls(scene, accel, Roulette<float, 3>::classic(), walks, 1);
     const std::span<const PixelPoint<float>> pts(points);
     const std::span<const Vpl<float>> vs(vpls);
@@ -107,9 +110,9 @@ int main(int argc, char** argv) try {
         const auto spheres = generate_occluders(mesh, k);
         const std::span<const Sphere<float>> set(spheres);
         // Alternate: rays, then spheres, for every sphere count (the rays' time of this round).
-        const double t_rays = timed_gather(scene, pts, vs, ShadowRayVisibility<Accel>(accel, 1e-4f), st, ref);
-        const double t_sph = spheres.size() < 800 ? timed_gather(scene, pts, vs, SphereVisibilityLinear<float>(set), st, img)
-                                                  : timed_gather(scene, pts, vs, SphereVisibilityKdTree<float>(set), st, img);
+        const double t_rays = timed_gather(scene, pts, vs, ShadowRayVisibility<Accel>(accel, 1e-4f), threads, ref);
+        const double t_sph = spheres.size() < 800 ? timed_gather(scene, pts, vs, SphereVisibilityLinear<float>(set), threads, img)
+                                                  : timed_gather(scene, pts, vs, SphereVisibilityKdTree<float>(set), threads, img);
         const double e = relative_rmse(std::span<const Rgb<float>>(img), std::span<const Rgb<float>>(ref));
         std::printf("spheres %4zu: rays %.3f s, spheres %.3f s, speedup %.1fx, rel. RMSE %.3f\n", spheres.size(), t_rays, t_sph,
                     t_rays / t_sph, e);

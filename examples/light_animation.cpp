@@ -1,12 +1,12 @@
 // light_animation: a point light moving under the ceiling of the Cornell box, rendered with
-// the virtual light sources method and light-path reuse (000 chapter 7).
+// the virtual light sources method and light-path reuse (Szécsi 2009, ch. 7).
 //
 //   light_animation [--frames F] [--size S] [--paths N] [--window W] [--out DIR]
 //
 // Every frame shoots N paths from its own light position (N = 1 by default); every path is
 // reused in every frame by connecting its first hit to that frame's light, weighted by the
 // balance heuristic over the frames (glint/vpl/light_animation.hpp). --window W > 0 reuses
-// only the last W frames (the on-line variant of 000 section 7.3). Writes, into DIR
+// only the last W frames (the on-line variant of Szécsi 2009, §7.3). Writes, into DIR
 // (default "."):
 //   frame_NNN.exr / .png             direct + indirect illumination with path reuse;
 //   strip_reuse.png                  the indirect illumination of 5 frames side by side;
@@ -31,12 +31,6 @@
 using namespace glint;
 
 namespace {
-
-Image<Rgb<float>> to_image(const std::vector<Rgb<float>>& px, int w, int h) {
-    Image<Rgb<float>> img(w, h);
-    std::copy(px.begin(), px.end(), img.pixels.begin());
-    return img;
-}
 
 /// `frames` images of w x h side by side.
 Image<Rgb<float>> strip(const std::vector<std::vector<Rgb<float>>>& frames, int w, int h) {
@@ -68,9 +62,11 @@ int main(int argc, char** argv) try {
     Scene<float> scene = with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), intensity);
     const MeshBvh<MollerTrumbore<float>, 8> accel(scene.triangles);
     const auto track = light_track(Vec3<float>(-0.7f, 1.7f, 0.2f), Vec3<float>(0.7f, 1.7f, 0.2f), frames);
-    VplSettings st;
-    st.width = st.height = size;
-    const auto points = primary_points(scene, accel, st);
+    // One camera ray through each pixel's centre; the pixel points where every path's VPLs
+    // are gathered are those the Renderer sees with the same settings and seed.
+    const RenderSettings image{.width = size, .height = size, .spp = 1, .pixel_jitter = false};
+    const VplSettings direct_only{.indirect = false};
+    const auto points = primary_points(scene, accel, image, direct_only);
     const ShadowRayVisibility<MeshBvh<MollerTrumbore<float>, 8>> vis(accel, 1e-4f);
 
     // Shooting, connections and one image per path; then each frame is a weighted sum.
@@ -78,18 +74,19 @@ int main(int argc, char** argv) try {
     opt.paths_per_frame = paths;
     LightAnimation<float> anim = shoot_light_animation(scene, accel, Roulette<float, 3>::classic(),
                                                        std::span<const Vec3<float>>(track), intensity, opt);
-    render_path_images(anim, scene, std::span<const PixelPoint<float>>(points), vis, st);
+    render_path_images(anim, scene, std::span<const PixelPoint<float>>(points), vis, 0.0, image.threads);
 
     std::vector<std::vector<Rgb<float>>> reuse_strip, own_strip;
     for (std::size_t f = 0; f < frames; ++f) {
         const std::vector<Rgb<float>> indirect = anim.frame_image(f, window);
         scene.point_lights[0].position = track[f];
-        std::vector<Rgb<float>> full = direct_image(scene, accel, std::span<const PixelPoint<float>>(points), st);
-        for (std::size_t i = 0; i < full.size(); ++i) full[i] += indirect[i];
+        // Direct illumination through the Renderer (no VPLs), then the frame's indirect part.
+        Image<Rgb<float>> full = render_vpls(scene, accel, std::span<const Vpl<float>>(), vis, image, direct_only).image;
+        for (std::size_t i = 0; i < full.size(); ++i) full.pixels[i] += indirect[i];
         char name[64];
         std::snprintf(name, sizeof name, "%s/frame_%03zu", dir.c_str(), f);
-        write_exr(std::string(name) + ".exr", to_image(full, size, size));
-        write_png(std::string(name) + ".png", to_image(full, size, size));
+        write_exr(std::string(name) + ".exr", full);
+        write_png(std::string(name) + ".png", full);
         if (frames < 5 || f % (frames / 5) == 0) {
             reuse_strip.push_back(indirect);
             std::vector<Rgb<float>> own(indirect.size(), Rgb<float>(0.0f));  // this frame's own paths only

@@ -1,4 +1,4 @@
-// light_path_maps: precomputed light path maps (000 chapter 8) on the Cornell box lit by a
+// light_path_maps: precomputed light path maps (Szécsi 2009, ch. 8) on the Cornell box lit by a
 // point light that moves under the ceiling: preprocessing once, then every frame costs one
 // shadow ray per entry point and a weighted sum of panes.
 //
@@ -28,6 +28,7 @@
 #include <glint/vpl/integrator.hpp>
 #include <glint/vpl/light_path_maps.hpp>
 #include <glint/vpl/scenes.hpp>
+#include "image_error.hpp"
 
 using namespace glint;
 
@@ -69,10 +70,11 @@ int main(int argc, char** argv) try {
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
     const auto roulette = Roulette<float, 3>::classic();
     const auto track = light_track(Vec3<float>(-0.7f, 1.7f, 0.2f), Vec3<float>(0.7f, 1.7f, 0.2f), frames);
-    VplSettings st;
-    st.width = st.height = size;
-    st.min_distance = opt.min_distance;
-    const auto points = primary_points(scene, accel, st);
+    // One camera ray through each pixel's centre; the LPM and the VPL renders it is compared
+    // with gather at the pixel points the Renderer sees with the same settings and seed.
+    const RenderSettings image{.width = size, .height = size, .spp = 1, .pixel_jitter = false};
+    const VplSettings direct_only{.indirect = false};
+    const auto points = primary_points(scene, accel, image, direct_only);
     const std::span<const PixelPoint<float>> pts(points);
 
     double t0 = now();
@@ -84,7 +86,7 @@ int main(int argc, char** argv) try {
     // The VPL method's indirect illumination at the same pixel points: shooting + gathering.
     auto vpl_indirect = [&](std::size_t walks, std::uint64_t seed) {
         const auto vpls = shoot_scene_vpls(scene, accel, roulette, walks, seed);
-        return gather_image(scene, pts, std::span<const Vpl<float>>(vpls), vis, st);
+        return gather_image(scene, pts, std::span<const Vpl<float>>(vpls), vis, opt.min_distance, image.threads);
     };
     scene.point_lights[0].position = track[0];
     t0 = now();
@@ -119,9 +121,9 @@ int main(int argc, char** argv) try {
         std::printf("frame %zu: LPM %.4f s, rel. RMSE %.3f | VPL at equal time: %zu walks %.4f s, rel. RMSE %.3f | "
                     "VPL at equal RMSE: %zu walks %.4f s, rel. RMSE %.3f\n",
                     f, dt, e_lpm, walks, vt, relative_rmse(std::span<const Rgb<float>>(v), std::span<const Rgb<float>>(r)), eq, eq_t, eq_e);
-        Image<Rgb<float>> img(size, size);
-        const auto direct = direct_image(scene, accel, pts, st);
-        for (std::size_t i = 0; i < img.size(); ++i) img.pixels[i] = direct[i] + indirect[i];
+        // Direct illumination through the Renderer (no VPLs), then the LPM's indirect part.
+        Image<Rgb<float>> img = render_vpls(scene, accel, std::span<const Vpl<float>>(), vis, image, direct_only).image;
+        for (std::size_t i = 0; i < img.size(); ++i) img.pixels[i] += indirect[i];
         char name[64];
         std::snprintf(name, sizeof name, "%s/lpm_%03zu.png", dir.c_str(), f);
         write_png(name, img);

@@ -344,10 +344,10 @@ int main(int argc, char** argv) {
         }
         if (g.integrator == "path") return render_path(g, o, scene);
         VplSettings st;
-        st.width = o.image.width, st.height = o.image.height, st.threads = o.image.threads, st.seed = o.seed + 1;
+        st.seed = o.seed + 1;
         const std::span<const TriangleVertices<float>> mesh(scene.triangles.data() + before_insert,
                                                             scene.triangles.size() - before_insert);
-        const VplResult r = render_vpl_cli(scene, mesh, g.vpl, st);
+        const VplResult r = render_vpl_cli(scene, mesh, g.vpl, o.image, st);
         const std::string stem = g.out.substr(0, g.out.size() - 4);
         write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}});
         write_png(stem + ".png", r.image, g.exposure, g.tonemap == "reinhard");

@@ -1,5 +1,6 @@
 // Tests for glint/occluders: exact predicates, Delaunay tetrahedralization, occluder-sphere
-// generation and merging (GSSA), occluder visibility, and the VPL renderer.
+// generation and merging (GSSA), occluder visibility (spheres and shadow rays), and the VPL
+// integrator's gathering through sphere visibility.
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
@@ -15,9 +16,12 @@
 #include <glint/occluders/spheres.hpp>
 #include <glint/occluders/visibility.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
-#include "tree_scenes.hpp"
+#include <glint/sampling/roulette.hpp>
 #include <glint/trees/traversal.hpp>
-#include <glint/tracer/vpl.hpp>
+#include <glint/vpl/integrator.hpp>
+#include "image_error.hpp"
+#include "occluder_box.hpp"
+#include "tree_scenes.hpp"
 
 using namespace glint;
 
@@ -364,7 +368,7 @@ TEST_CASE("generation: merging keeps the globally closest pair (against brute fo
 }
 
 TEST_CASE("generation: torus knot sphere sets shadow like the mesh (hit probability within 10%)") {
-    const auto mesh = make_torus_knot<double>();  // 2880 triangles, 000 section 5.2.5
+    const auto mesh = make_torus_knot<double>();  // 2880 triangles, Szécsi 2009, §5.2.5
     REQUIRE(mesh.size() == 2880);
     const KdTree<double, MollerTrumbore<double>, PointerLayout> tree(mesh);
     const AABB<double> b = mesh_bounds<double>(mesh);
@@ -467,33 +471,13 @@ TEST_CASE("visibility: kd-tree search agrees with the linear scan") {
 }
 
 // ---------------------------------------------------------------------------------------
-// VPL renderer
+// VPL gathering through sphere visibility
 // ---------------------------------------------------------------------------------------
 
 namespace {
 
-/// Closed box [-1, 1]^3 with a downward-facing emitter quad under the ceiling.
-VplScene<float> closed_box() {
-    VplScene<float> sc;
-    auto quad = [&](Vec3f a, Vec3f b, Vec3f c, Vec3f d, Rgb<float> alb, Rgb<float> le = Rgb<float>(0.f)) {
-        const std::vector<TriangleVertices<float>> q = {{a, b, c}, {a, c, d}};
-        sc.add(q, alb, le);
-    };
-    const Rgb<float> w(0.6f, 0.6f, 0.6f);
-    quad({-1, -1, -1}, {1, -1, -1}, {1, -1, 1}, {-1, -1, 1}, w);
-    quad({-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}, {1, 1, -1}, w);
-    quad({-1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {1, -1, -1}, w);
-    quad({-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}, w);
-    quad({-1, -1, -1}, {-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}, Rgb<float>(0.7f, 0.2f, 0.2f));
-    quad({1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}, Rgb<float>(0.2f, 0.7f, 0.2f));
-    const float l = 0.3f, y = 0.99f;
-    quad({-l, y, -l}, {l, y, -l}, {l, y, l}, {-l, y, l}, Rgb<float>(0.f), Rgb<float>(10.f, 10.f, 10.f));
-    return sc;
-}
-
 /// A roulette policy that never continues a walk.
 struct NeverContinue {
-    static constexpr bool has_radiance_estimate = false;
     float selection_weight(const Rgb<float>&, const Rgb<float>&) const { return 0.f; }
     float continuation(const Rgb<float>&, const Rgb<float>&, int) const { return 0.f; }
     Rgb<float> terminated(const Rgb<float>&) const { return Rgb<float>(0.f); }
@@ -503,34 +487,34 @@ struct NeverContinue {
 }  // namespace
 
 TEST_CASE("vpl: first-bounce power equals the emitted power; spheres without occluders match shadow rays") {
-    const VplScene<float> sc = closed_box();
+    // The closed box lit by a square of radiance 10 and area 0.36, seen from inside.
+    Scene<float> sc = occluder_box({}, Rgb<float>(10.f), true);
+    sc.camera.eye = Vec3f(0, 0, 0.95f);
+    sc.camera.target = Vec3f(0, 0, -1);
+    sc.camera.fov_y = 1.2f;
     const KdTree<float, MollerTrumbore<float>, PointerLayout> tree(sc.triangles);
     const std::size_t walks = 400;
     // With a roulette that never continues, every walk leaves exactly its first hit: the
     // total power is Le * pi * area exactly (every direction from the emitter hits the box).
-    const auto first = shoot_vpls(sc, tree, NeverContinue{}, walks, 3);
+    const auto first = shoot_scene_vpls(sc, tree, NeverContinue{}, walks, 3);
     CHECK(first.size() == walks);
     double total = 0;
     for (const auto& v : first) total += v.power[0];
     CHECK(total == doctest::Approx(10.0 * pi<double> * 0.36).epsilon(1e-4));
     // Full walks, gathering: no occluder inside the box, so an empty sphere set must give the
     // shadow-ray image up to the emitter quad's own (grazing) shadows.
-    const auto vpls = shoot_vpls(sc, tree, Roulette<float, 3>::spectral(), walks, 4);
+    const auto vpls = shoot_scene_vpls(sc, tree, Roulette<float, 3>::spectral(), walks, 4);
     CHECK(vpls.size() > walks);
-    PinholeCamera<float> cam;
-    cam.eye = Vec3f(0, 0, 0.95f);
-    cam.target = Vec3f(0, 0, -1);
-    cam.fov_y = 1.2f;
-    cam.width = cam.height = 24;
-    ShadowRayVisibility<decltype(tree)> rays(tree, 1e-4f);
+    const RenderSettings image{.width = 24, .height = 24, .spp = 1, .threads = 1, .pixel_jitter = false};
+    const VplSettings st{.min_distance = 0.1, .direct = false};
     const std::vector<Sphere<float>> none;
-    SphereVisibilityLinear<float> lin(none);
-    const auto a = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, rays, 0.1f);
-    const auto b = gather_vpls<float>(sc, tree, std::span<const Vpl<float>>(vpls), cam, lin, 0.1f);
+    const std::span<const Vpl<float>> vs(vpls);
+    const VplResult a = render_vpls(sc, tree, vs, ShadowRayVisibility<decltype(tree)>(tree, 1e-4f), image, st);
+    const VplResult b = render_vpls(sc, tree, vs, SphereVisibilityLinear<float>(none), image, st);
     bool finite = true;
-    for (const auto& p : a) finite &= p.is_finite() && p[0] >= 0;
+    for (const auto& p : a.image.pixels) finite &= p.is_finite() && p[0] >= 0;
     CHECK(finite);
-    const double e = relative_rmse<float>(b, a);
+    const double e = relative_rmse(std::span<const Rgb<float>>(b.image.pixels), std::span<const Rgb<float>>(a.image.pixels));
     MESSAGE("relative RMSE of the unoccluded box, spheres vs rays: " << e);
     CHECK(e < 0.01);
 }

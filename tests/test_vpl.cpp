@@ -1,7 +1,8 @@
 // Tests for glint/vpl: the VPL integrator agrees with the path tracer on Lambertian scenes
 // (area and point lights) within standard errors measured with fixed seeds; clamping the
 // geometry term darkens the image; gathering is exact for one VPL; images do not depend on
-// the thread count; light animation with path reuse: the frame weights sum to 1 and each
+// the thread count; the fixed-point gather at primary_points equals the Renderer's image;
+// light animation with path reuse: the frame weights sum to 1 and each
 // frame's image mean agrees with an independent VPL render.
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
@@ -67,13 +68,13 @@ void path_traced(const Scene<float>& s, const Accel& accel, int size, int spp, s
 
 /// Quadrant means of `runs` independent VPL renders (seeds 1..runs): their mean and
 /// standard error (sample standard deviation / sqrt(runs)).
-void vpl_runs(const Scene<float>& s, const Accel& accel, VplSettings st, int runs, std::vector<double>& mean,
-              std::vector<double>& se) {
+void vpl_runs(const Scene<float>& s, const Accel& accel, const RenderSettings& image, VplSettings st, int runs,
+              std::vector<double>& mean, std::vector<double>& se) {
     std::vector<double> sum(12, 0.0), sum2(12, 0.0);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
     for (int k = 0; k < runs; ++k) {
         st.seed = std::uint64_t(k + 1);
-        const auto q = quadrant_means(render_vpl(s, accel, classic(), vis, st).image);
+        const auto q = quadrant_means(render_vpl(s, accel, classic(), vis, image, st).image);
         for (std::size_t i = 0; i < 12; ++i) sum[i] += q[i], sum2[i] += q[i] * q[i];
     }
     mean.resize(12);
@@ -95,10 +96,18 @@ void check_agreement(const std::vector<double>& a, const std::vector<double>& sa
     }
 }
 
-VplSettings small_settings(int size, std::size_t walks, int threads) {
+/// size x size pixels, one camera ray through each pixel's centre.
+RenderSettings centres(int size, int threads) {
+    RenderSettings image;
+    image.width = image.height = size;
+    image.threads = threads;
+    image.spp = 1;
+    image.pixel_jitter = false;
+    return image;
+}
+
+VplSettings with_walks(std::size_t walks) {
     VplSettings st;
-    st.width = st.height = size;
-    st.threads = threads;
     st.vpl_walks = walks;
     return st;
 }
@@ -109,7 +118,7 @@ void agreement_with_path_tracer(const Scene<float>& s) {
     const Accel accel(s.triangles);
     std::vector<double> pm, ps, vm, vs;
     path_traced<Points>(s, accel, 16, 256, pm, ps);
-    vpl_runs(s, accel, small_settings(16, 64, 2), 32, vm, vs);
+    vpl_runs(s, accel, centres(16, 2), with_walks(64), 32, vm, vs);
     check_agreement(vm, vs, pm, ps);
 }
 
@@ -144,8 +153,8 @@ TEST_CASE("stress: bad settings and lightless scenes throw naming the value") {
     st.min_distance = -1;
     CHECK_THROWS_WITH_AS(st.validate(), doctest::Contains("min_distance -1"), Error);
     st = VplSettings{};
-    st.width = 0;
-    CHECK_THROWS_WITH_AS(st.validate(), doctest::Contains("0x256"), Error);
+    st.max_specular = -2;
+    CHECK_THROWS_WITH_AS(st.validate(), doctest::Contains("max_specular -2"), Error);
     Scene<float> s;
     const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
     s.add_quad(Vec3<float>(-1, 0, 1), Vec3<float>(1, 0, 1), Vec3<float>(1, 0, -1), Vec3<float>(-1, 0, -1), m);
@@ -167,16 +176,17 @@ TEST_CASE("agreement: clamping the geometry term only darkens; its bias is negat
     const Scene<float> s = builtin_scene<float>("cornell");
     const Accel accel(s.triangles);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
-    VplSettings st = small_settings(16, 64, 2);
+    const RenderSettings image = centres(16, 2);
+    VplSettings st = with_walks(64);
     st.direct = false;
     double sum = 0, sum2 = 0, level = 0;
     const int runs = 16;
     for (int k = 0; k < runs; ++k) {
         st.seed = std::uint64_t(k + 1);
         st.min_distance = 0;
-        const VplResult a = render_vpl(s, accel, classic(), vis, st);
+        const VplResult a = render_vpl(s, accel, classic(), vis, image, st);
         st.min_distance = 0.3;
-        const VplResult b = render_vpl(s, accel, classic(), vis, st);
+        const VplResult b = render_vpl(s, accel, classic(), vis, image, st);
         double diff = 0;
         bool never_brighter = true;
         for (std::size_t i = 0; i < a.image.size(); ++i)
@@ -198,12 +208,37 @@ TEST_CASE("exact: the VPL image does not depend on the thread count") {
     const Scene<float> s = builtin_scene<float>("cornell");
     const Accel accel(s.triangles);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
-    VplSettings st = small_settings(12, 16, 1);
-    const VplResult a = render_vpl(s, accel, classic(), vis, st);
-    st.threads = 3;
-    const VplResult b = render_vpl(s, accel, classic(), vis, st);
+    const VplSettings st = with_walks(16);
+    const VplResult a = render_vpl(s, accel, classic(), vis, centres(12, 1), st);
+    const VplResult b = render_vpl(s, accel, classic(), vis, centres(12, 3), st);
     CHECK(a.image.pixels == b.image.pixels);
     CHECK(a.vpls > 16);
+}
+
+TEST_CASE("exact: gathering at primary_points gives the Renderer's image, through a dielectric block") {
+    // The Cornell box with its blocks made of glass: camera rays reach diffuse points through
+    // Fresnel choices drawn from each pixel's sampler stream, which both passes must share.
+    Scene<float> s = builtin_scene<float>("cornell");
+    const auto glass = s.add_material(Material<float>::dielectric(1.5f));
+    for (std::size_t i = 10; i + 2 < s.triangles.size(); ++i) s.material_of[i] = glass;
+    const Accel accel(s.triangles);
+    const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
+    VplSettings st = with_walks(32);
+    st.direct = false;
+    st.min_distance = 0.1;
+    st.seed = 9;
+    const RenderSettings image = centres(24, 2);
+    const auto vpls = shoot_scene_vpls(s, accel, classic(), st.vpl_walks, st.seed);
+    const VplResult r = render_vpls(s, accel, std::span<const Vpl<float>>(vpls), vis, image, st);
+    const auto points = primary_points(s, accel, image, st);
+    const auto g = gather_image(s, std::span<const PixelPoint<float>>(points), std::span<const Vpl<float>>(vpls), vis,
+                                st.min_distance, 2);
+    REQUIRE(g.size() == r.image.pixels.size());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < g.size(); ++i)
+        for (std::size_t c = 0; c < 3; ++c) differ += g[i][c] != r.image.pixels[i][c];
+    CHECK(r.rays > g.size() + 50);  // one ray per pixel, and more through the glass
+    CHECK(differ == 0);
 }
 
 TEST_CASE("exact: balance weights sum to 1, keep zeros, and reject bad densities") {
@@ -269,12 +304,13 @@ TEST_CASE("agreement: each frame of the path-reuse animation equals independent 
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);
     const std::size_t F = 4, runs = 48;
     const auto path = track(F);
-    VplSettings st = small_settings(8, 32, 2);  // independent renders: 32 walks per frame
+    const RenderSettings image = centres(8, 2);
+    VplSettings st = with_walks(32);  // independent renders: 32 walks per frame
     st.direct = false;
     // Both sides clamp the geometry term alike: the clamped sum is still linear in the VPLs'
     // powers, so both estimate the same quantity, with far less variance than unclamped.
     st.min_distance = 0.25;
-    const auto points = primary_points(s, accel, st);
+    const auto points = primary_points(s, accel, image, st);
     // Per frame and band: sums over runs of the image mean, for reuse (off-line, on-line with
     // a window of 2 frames) and for independent VPL renders.
     std::vector<double> sum(3 * F * 3, 0.0), sum2(3 * F * 3, 0.0);
@@ -284,12 +320,12 @@ TEST_CASE("agreement: each frame of the path-reuse animation equals independent 
         opt.seed = 100 + r;
         LightAnimation<float> a = shoot_light_animation(s, accel, classic(), std::span<const Vec3<float>>(path),
                                                         Rgb<float>(4.0f, 3.5f, 3.0f), opt);
-        render_path_images(a, s, std::span<const PixelPoint<float>>(points), vis, st);
+        render_path_images(a, s, std::span<const PixelPoint<float>>(points), vis, st.min_distance, image.threads);
         for (std::size_t f = 0; f < F; ++f) {
             Scene<float> sf = s;
             sf.point_lights[0].position = path[f];
             st.seed = 1000 + r * F + f;
-            const VplResult v = render_vpl(sf, accel, classic(), vis, st);
+            const VplResult v = render_vpl(sf, accel, classic(), vis, image, st);
             std::vector<Rgb<float>> indep(v.indirect.pixels.begin(), v.indirect.pixels.end());
             const std::vector<Rgb<float>> img[3] = {a.frame_image(f), a.frame_image(f, 2), indep};
             for (std::size_t m = 0; m < 3; ++m)
@@ -388,7 +424,7 @@ TEST_CASE("exact: interpolating a linear function of position recorded at the la
     std::vector<Rgb<float>> values(grid.size());
     for (std::size_t r = 0; r < grid.size(); ++r) values[r] = f(grid.x[r]);
     const LightPathMap<float> map{grid, {}, {}, {}, {}};
-    const auto points = primary_points(s, accel, small_settings(16, 1, 1));
+    const auto points = primary_points(s, accel, centres(16, 1), VplSettings{});
     const auto img = light_path_map_image(map, s, std::span<const PixelPoint<float>>(points), std::span<const Rgb<float>>(values));
     int hits = 0;
     for (std::size_t i = 0; i < points.size(); ++i) {
@@ -428,12 +464,12 @@ TEST_CASE("agreement: the light path map's indirect irradiance equals VPL gather
             points[i].weight = Rgb<float>(1);
             points[i].hit = true;
         }
-        VplSettings st = small_settings(int(points.size()), 128, 2);
-        st.height = 1;
+        VplSettings st = with_walks(128);
         st.min_distance = 0.25;
         st.seed = std::uint64_t(900 + r);
         const auto vpls = shoot_scene_vpls(s, accel, classic(), st.vpl_walks, st.seed);
-        const auto vpl = gather_image(s, std::span<const PixelPoint<float>>(points), std::span<const Vpl<float>>(vpls), vis, st);
+        const auto vpl = gather_image(s, std::span<const PixelPoint<float>>(points), std::span<const Vpl<float>>(vpls), vis,
+                                    st.min_distance, 2);
         for (std::size_t c = 0; c < 3; ++c) {
             double a = 0, b = 0;
             for (std::size_t i = 0; i < points.size(); ++i) {

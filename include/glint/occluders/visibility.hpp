@@ -1,23 +1,24 @@
-// glint/occluders/visibility.hpp: approximate point-to-point visibility against occluder
-// spheres.
+// glint/occluders/visibility.hpp: point-to-point visibility policies for gathering from
+// point lights (VPLs): exact shadow rays through a ray accelerator (ShadowRayVisibility), and
+// the approximate tests against occluder spheres of Szécsi 2009, ch. 5.
 //
-// 000 section 5.1: for a shading point x, each sphere (c, R) is
-// pre-processed into the unit direction u = (c - x) / t, t = |c - x|, and
-// cos gamma = sqrt(t^2 - R^2) / t (the half-angle of the cone from x that contains the
-// sphere). A point light y at distance q = |y - x| in direction l is occluded by the sphere
-// when cos delta = u . l > cos gamma and q > t ("slightly bent, view-dependent occluder
-// disks": the light is compared with the centre's distance, not the sphere's surface).
-// 000 section 5.3.1: spheres entirely behind the tangent plane of x
-// (u . n t <= -R) are culled, and so are spheres farther than the light (t >= q, the same
-// comparison); the rest are scanned linearly (SphereVisibilityLinear) or searched in a
-// kd-tree (SphereVisibilityKdTree) built by object-median splits, which 000 found to
+// Szécsi 2009, §5.1: for a shading point x, each sphere (c, R) is pre-processed into the unit
+// direction u = (c - x) / t, t = |c - x|, and cos gamma = sqrt(t^2 - R^2) / t (the half-angle
+// of the cone from x that contains the sphere). A point light y at distance q = |y - x| in
+// direction l is occluded by the sphere when cos delta = u . l > cos gamma and q > t
+// ("slightly bent, view-dependent occluder disks": the light is compared with the centre's
+// distance, not the sphere's surface).
+// Szécsi 2009, §5.3.1: spheres entirely behind the tangent plane of x (u . n t <= -R) are
+// culled, and so are spheres farther than the light (t >= q, the same comparison); the rest
+// are scanned linearly (SphereVisibilityLinear) or searched in a kd-tree
+// (SphereVisibilityKdTree) built by object-median splits, which the dissertation found to
 // overtake the linear scan at about 800 spheres.
-// 000 section 5.3.2: the self-shadowing heuristic excludes spheres whose
-// centre is closer to x than twice their radius (t < 2R; factor configurable).
+// Szécsi 2009, §5.3.2: the self-shadowing heuristic excludes spheres whose centre is closer
+// to x than twice their radius (t < 2R; factor configurable).
 // A point x inside a sphere (t <= R, only without the heuristic) is occluded from every
 // light farther than the centre.
 //
-// Both searches evaluate the same per-sphere predicate (detail::occluder_view and
+// Both sphere searches evaluate the same per-sphere predicate (detail::occluder_view and
 // detail::occludes), so they agree exactly; the kd-tree computes a sphere's view lazily the
 // first time a light's segment reaches it for the current shading point.
 // Visibility policies (concept VisibilityPolicy) are stateful per thread: set_point(x, n),
@@ -35,7 +36,9 @@
 #include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
 #include <glint/occluders/spheres.hpp>
+#include <glint/trees/tree.hpp>
 
 namespace glint {
 
@@ -46,10 +49,29 @@ concept VisibilityPolicy = requires(V v, const Vec3<T>& p) {
     { v.visible(p) } -> std::same_as<bool>;
 };
 
+/// Exact visibility: a shadow ray through a RayAccelerator (trees/, BruteForce) from x, moved
+/// `epsilon` along n off its surface, to just short of y (a fraction epsilon of the segment).
+template <RayAccelerator Accel>
+class ShadowRayVisibility {
+public:
+    using T = typename Accel::scalar_type;
+    ShadowRayVisibility(const Accel& accel, T epsilon) : accel_(&accel), eps_(epsilon) {}
+    void set_point(const Vec3<T>& x, const Vec3<T>& n) { x_ = x + eps_ * n; }
+    bool visible(const Vec3<T>& y) const {
+        // Ray parameter in units of |y - x|: y itself is on a surface.
+        return !accel_->any_hit(Ray<T>{x_, y - x_, T(0), T(1) - eps_});
+    }
+
+private:
+    const Accel* accel_;
+    T eps_;
+    Vec3<T> x_{0};
+};
+
 template <Scalar T>
 struct SphereVisibilityOptions {
     bool self_shadow_heuristic = true;
-    T self_shadow_factor = T(2);  // 000 section 5.3.2: "the double of their radius"
+    T self_shadow_factor = T(2);  // Szécsi 2009, §5.3.2: "the double of their radius"
 };
 
 namespace detail {
@@ -81,7 +103,7 @@ inline bool occludes(const Vec3<T>& u, T cos_gamma, T t, const Vec3<T>& l, T q) 
 
 }  // namespace detail
 
-/// Linear scan over the spheres that survive culling at the shading point (000 section 5.3.1).
+/// Linear scan over the spheres that survive culling at the shading point (Szécsi 2009, §5.3.1).
 template <Scalar T>
 class SphereVisibilityLinear {
 public:
@@ -138,7 +160,7 @@ private:
     std::vector<T> ux_, uy_, uz_, cg_, t_;
 };
 
-/// Kd-tree search (000 section 5.3.1): object-median kd-tree over the spheres' boxes; a light
+/// Kd-tree search (Szécsi 2009, §5.3.1): object-median kd-tree over the spheres' boxes; a light
 /// walks the segment from x to y front to back and tests the spheres of the leaves it meets.
 template <Scalar T>
 class SphereVisibilityKdTree {

@@ -1,9 +1,9 @@
-// glint/vpl/light_animation.hpp: light animation with path reuse (000 chapter 7):
+// glint/vpl/light_animation.hpp: light animation with path reuse (Szécsi 2009, ch. 7):
 // a small light moves through F frames of a static scene; every frame's shooting
 // paths are reused in every frame by connecting their first hit z_1 to that frame's light
 // (Sbert, Szécsi and Szirmay-Kalos 2004; the balance heuristic of Veach and Guibas 1995).
 //
-// 000 section 7.1 (eq. 7.1). The path z^(f) = (z^(f), z_1, z_2, ...) shot
+// Szécsi 2009, §7.1 (eq. 7.1). The path z^(f) = (z^(f), z_1, z_2, ...) shot
 // in frame f is, in frame i, the path (z^(i), z_1, z_2, ...). With N paths per frame and the
 // balance heuristic over the F frames' sampling techniques, its weight in frame i is
 //   alpha^(i) = p^(i)(z^(i), z_1, z_2, ...) / sum_{j=1..F} p^(j)(z^(j), z_1, z_2, ...),
@@ -11,7 +11,7 @@
 // bar and put the summation limits and superscripts on separate lines; repaired from the
 // surrounding text: "the weight ... proportional to this probability", normalized over the
 // frames.) Only the first segment differs between the frames, so every later factor cancels
-// (000 section 7.2): p^(j) reduces to the density of z_1 as a first hit from z^(j),
+// (Szécsi 2009, §7.2): p^(j) reduces to the density of z_1 as a first hit from z^(j),
 //   q_j = p_light(omega_{z^(j) -> z_1}) xi(z^(j) -> z_1),  xi = V cos(theta_{z_1}) / |z^(j) - z_1|^2
 // (the repaired second formula of section 7.2; p(omega_1, z_1) is common to all frames and
 // cancels). glint's point light emits uniformly (p_light = 1 / 4 pi). The frame-i estimate of
@@ -40,7 +40,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/random.hpp>
-#include <glint/vpl/integrator.hpp>
+#include <glint/vpl/gather.hpp>
 #include <glint/vpl/shooting.hpp>
 
 namespace glint {
@@ -56,7 +56,7 @@ T point_source_density(const Vec3<T>& light, const Vec3<T>& z1, const Vec3<T>& n
     return c / (std::sqrt(r2) * r2) / (T(4) * pi<T>);
 }
 
-/// Balance-heuristic weights alpha_i = q_i / sum_j q_j (000 eq. 7.1, repaired); all zero when
+/// Balance-heuristic weights alpha_i = q_i / sum_j q_j (Szécsi 2009, eq. 7.1, repaired); all zero when
 /// every q_j is zero. Throws when the sizes differ or a density is negative or not finite.
 template <Scalar T>
 void balance_weights(std::span<const T> q, std::span<T> alpha) {
@@ -84,14 +84,14 @@ struct AnimationPath {
 
 struct AnimationOptions {
     std::size_t paths_per_frame = 1;
-    int branches = 1;            // continuations from the first hit (000 section 7.2.1)
-    bool dependent = false;      // the same random numbers in every frame (000's "dependent sampling")
+    int branches = 1;            // continuations from the first hit (Szécsi 2009, §7.2.1)
+    bool dependent = false;      // the same random numbers in every frame ("dependent sampling", Szécsi 2009, §7.2)
     std::uint64_t seed = 1;
     ShootingOptions shooting{};
 };
 
 /// Shoots one path from the point light at `light` with first-hit power `power`.
-template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+template <RayAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 AnimationPath<T> shoot_animation_path(const Scene<T>& s, const A& accel, const R& roulette, const Vec3<T>& light,
                                       const Rgb<T>& power, Pcg32& rng, const AnimationOptions& opt) {
@@ -137,8 +137,8 @@ struct LightAnimation {
         return sum > T(0) ? q[i] / sum : T(0);
     }
 
-    /// Frame i's indirect illumination: window 0 combines all frames (off-line, 000 section
-    /// 7.2); window W > 0 only frames i - W + 1 .. i (on-line, section 7.3).
+    /// Frame i's indirect illumination: window 0 combines all frames (off-line, Szécsi 2009,
+    /// §7.2); window W > 0 only frames i - W + 1 .. i (on-line, §7.3).
     std::vector<Rgb<T>> frame_image(std::size_t i, std::size_t window = 0) const {
         if (i >= frames()) throw Error("glint::LightAnimation: frame " + std::to_string(i) + " of " + std::to_string(frames()));
         if (images.size() != paths.size()) throw Error("glint::LightAnimation: render_path_images first");
@@ -157,7 +157,7 @@ struct LightAnimation {
 /// Shooting: paths_per_frame paths from each frame's light position (intensity I, uniform
 /// emission), then each reusable path's density q_j in every frame, visibility by a shadow
 /// ray from the frame's light to z1 (F connection rays per path; the own frame's is known).
-template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+template <RayAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 LightAnimation<T> shoot_light_animation(const Scene<T>& s, const A& accel, const R& roulette,
                                         std::span<const Vec3<T>> positions, const Rgb<T>& intensity,
@@ -192,14 +192,15 @@ LightAnimation<T> shoot_light_animation(const Scene<T>& s, const A& accel, const
     return a;
 }
 
-/// The indirect-illumination image of every path (gathered at `points` with visibility V).
+/// The indirect-illumination image of every path, gathered at `points` (primary_points)
+/// with visibility V, the geometry term clamped at min_distance (0: unclamped).
 template <Scalar T, class V>
     requires VisibilityPolicy<V, T>
 void render_path_images(LightAnimation<T>& a, const Scene<T>& s, std::span<const PixelPoint<T>> points,
-                        const V& visibility, const VplSettings& st) {
+                        const V& visibility, double min_distance, int threads) {
     a.images.clear();
     for (const AnimationPath<T>& p : a.paths)
-        a.images.push_back(gather_image(s, points, std::span<const Vpl<T>>(p.vpls), visibility, st));
+        a.images.push_back(gather_image(s, points, std::span<const Vpl<T>>(p.vpls), visibility, min_distance, threads));
 }
 
 }  // namespace glint

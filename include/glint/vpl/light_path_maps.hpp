@@ -1,8 +1,8 @@
-// glint/vpl/light_path_maps.hpp: precomputed light path maps (000 chapter 8)
+// glint/vpl/light_path_maps.hpp: precomputed light path maps (Szécsi 2009, ch. 8)
 // for diffuse scenes: the indirect illumination caused by any small light, moved
 // or recoloured at run time, from one visibility test per entry point and a weighted sum.
 //
-// Preprocessing (000 sections 8.1.3-8.2): E entry points z1 are sampled uniformly on the
+// Preprocessing (Szécsi 2009, §§8.1.3-8.2): E entry points z1 are sampled uniformly on the
 // surface area (a side of a Lambertian triangle, chosen with probability 1/2: density
 // p(z1) = 1 / (2 A)); each receives unit irradiance, i.e. the VPL power 2 A / E, and starts
 // a path tree of `branches` walks (shooting.hpp's shoot_path_tree, roulette and BRDF
@@ -14,22 +14,21 @@
 //   E_k = I nu(z0, z1^(k)) cos(theta'_{z1^(k)}) / |z0 - z1^(k)|^2
 // (nu: visibility by one shadow ray), and the indirect radiance of a diffuse reference point
 // is kd(x) / pi sum_k E_k S^(k)(x). Area lights: E_k is estimated from light samples
-// (EmitterSet::sample_point, the same shadow-ray test per sample), in place of 000's
+// (EmitterSet::sample_point, the same shadow-ray test per sample), in place of Szécsi 2009's
 // point-to-disc form-factor approximation.
 // Reference points (glint has no texture atlas): stratified surface points, the vertices of
 // every triangle's subdivision into g x g sub-triangles ((g + 1) (g + 2) / 2 per triangle);
 // a pixel interpolates the irradiance of the three points of the sub-triangle containing its
-// hit by its barycentrics there (linear per sub-triangle, continuous inside a triangle: 000
-// section 8.1.2's "linear interpolation between the reference points",
-// which 000 gets from texture filtering). By default the lattice is shrunk by 10 % toward
+// hit by its barycentrics there (linear per sub-triangle, continuous inside a triangle: the
+// "linear interpolation between the reference points" of Szécsi 2009, §8.1.2, which the
+// dissertation gets from texture filtering). By default the lattice is shrunk by 10 % toward
 // each triangle's centroid (LightPathMapOptions::inset: no point on an edge, linear
-// extrapolation between the lattice and the edges; lower error than the plain lattice,
-// measured in docs/vpl.md). A reference point is shaded on the side of its
-// triangle that faces the scene camera's eye (glint's LPM is two-sided only through that
-// choice).
-// Glossy materials are shaded with their diffuse part kd / pi (000's LPM is for diffuse
-// scenes); entry points and the paths' vertices follow shooting.hpp.
-// Clustering (000 section 8.2.1): entry points are grouped by k-means on their position and
+// extrapolation between the lattice and the edges; docs/vpl.md compares the error of both).
+// A reference point is shaded on the side of its triangle that faces the scene camera's eye
+// (glint's LPM is two-sided only through that choice).
+// Glossy materials are shaded with their diffuse part kd / pi (Szécsi 2009's light path maps
+// are for diffuse scenes); entry points and the paths' vertices follow shooting.hpp.
+// Clustering (Szécsi 2009, §8.2.1): entry points are grouped by k-means on their position and
 // normal; a cluster's pane is the sum of its members' items and its run-time weight is the
 // mean of its members' irradiances.
 #pragma once
@@ -37,6 +36,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <atomic>
 #include <limits>
 #include <span>
 #include <string>
@@ -45,7 +45,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/random.hpp>
-#include <glint/vpl/integrator.hpp>
+#include <glint/vpl/gather.hpp>
 #include <glint/vpl/shooting.hpp>
 
 namespace glint {
@@ -118,7 +118,7 @@ struct ReferenceGrid {
 
 struct LightPathMapOptions {
     std::size_t entry_points = 256;
-    int branches = 4;          // walks per entry point (000's splitting factor N_s)
+    int branches = 4;          // walks per entry point (the splitting factor N_s of Szécsi 2009, §8.1.4)
     int grid = 4;              // reference grid per triangle (g x g sub-triangles)
     double inset = 0.1;        // the grid's lattice shrunk by 1 - inset toward each centroid (0: on the edges; docs/vpl.md)
     std::size_t clusters = 0;  // 0: no clustering
@@ -215,7 +215,7 @@ void gather_panes(const Scene<T>& s, const std::vector<std::vector<Vpl<T>>>& tre
         map.ref_normal[r] = glm::dot(ng, s.camera.eye - map.grid.x[r]) >= T(0) ? ng : -ng;
     }
     const int blocks = int((n + 63) / 64);
-    detail::run_rows(blocks, opt.threads, [&](std::atomic<int>& next) {
+    detail::parallel_blocks(blocks, opt.threads, [&](std::atomic<int>& next) {
         V vis = visibility;
         const auto unit = [](const Vec3<T>&) { return Rgb<T>(T(1)); };
         for (int b = next++; b < blocks; b = next++)
@@ -230,7 +230,7 @@ void gather_panes(const Scene<T>& s, const std::vector<std::vector<Vpl<T>>>& tre
 
 /// Preprocessing: entry points, their path trees, and the items at every reference point
 /// (visibility policy V, one copy per thread).
-template <SceneAccelerator A, class R, class V, Scalar T = typename A::scalar_type>
+template <RayAccelerator A, class R, class V, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T> && VisibilityPolicy<V, T>
 LightPathMap<T> build_light_path_map(const Scene<T>& s, const A& accel, const R& roulette, const V& visibility,
                                      const LightPathMapOptions& opt) {
@@ -258,7 +258,7 @@ LightPathMap<T> build_light_path_map(const Scene<T>& s, const A& accel, const R&
 
 /// Run time: the irradiance E_k of every entry point from the lights of `lit` (same
 /// geometry), `samples` light samples each with one shadow ray (exact for one point light).
-template <SceneAccelerator A, Scalar T = typename A::scalar_type>
+template <RayAccelerator A, Scalar T = typename A::scalar_type>
 std::vector<Rgb<T>> entry_irradiance(const LightPathMap<T>& map, const Scene<T>& lit, const A& accel, int samples,
                                      std::uint64_t seed) {
     const EmitterSet<T> lights(lit);

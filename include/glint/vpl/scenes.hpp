@@ -1,4 +1,4 @@
-// glint/vpl/scenes.hpp: scenes for the light-animation experiments of 000 chapter 7 ("a
+// glint/vpl/scenes.hpp: scenes for the light-animation experiments of Szécsi 2009, ch. 7 ("a
 // small light source moving in a static scene", section 7.1) built from any Scene: its area
 // lights replaced by a point light, and a light track through the scene.
 #pragma once

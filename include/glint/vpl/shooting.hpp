@@ -1,20 +1,22 @@
 // glint/vpl/shooting.hpp: the shooting phase of the virtual light sources method over the
-// ordinary Scene (area and point lights, the path tracer's materials); Keller 1997, instant radiosity.
+// ordinary Scene (area and point lights, the path tracer's materials); Keller 1997, instant
+// radiosity, as Szécsi 2009, §1.4 presents it.
 //
-// 000 section 1.4. A shooting walk starts at a light sample z_0 with
-// direction omega_0 and leaves at every non-specular hit y a virtual point light (VPL) of
-// incoming power dPhi = Le(z_0, omega_0) / p_light(z_0, omega_0) * prod w / (p s) (the
-// formula's fraction bars and product limits were lost in the extraction; repaired from
-// Fig. 1.5 as in tracer/vpl.hpp). Emitters are chosen by power: an area-light triangle
-// (uniform point, cosine direction: dPhi = pi Le A_k / P_k) or a point light (uniform
-// direction: dPhi = 4 pi I / P_k), P_k the emitter's selection probability. The walk goes
-// on through scatter() with the hit material's own BRDF (SurfaceBrdf: diffuse and Phong
-// lobes) under a roulette policy; mirrors and dielectrics are followed deterministically
-// (Fresnel choice for dielectrics) and leave no VPL. A VPL reflects diffusely towards the
-// gathering point (f_r(y) = kd / pi: 000's diffuse estimator; its general
-// form would evaluate f_r(y) with the stored incoming direction, which
-// glint does not), so glossy light transport through a VPL is the method's approximation;
-// for Lambertian scenes the method is unbiased.
+// A shooting walk starts at a light sample z_0 with direction omega_0 and leaves at every
+// non-specular hit y a virtual point light (VPL) of incoming power
+//   dPhi = Le(z_0, omega_0) / p_light(z_0, omega_0) * prod w / (p s)
+// (Szécsi 2009, §1.4 and its Fig. 1.5: p_light and p are the light-sample and direction
+// densities, s the continuation probability, w = f_r cos; the formula's fraction bars and
+// product limits are repaired from the figure). Emitters are chosen by power: an area-light
+// triangle (uniform point, cosine direction: dPhi = pi Le A_k / P_k) or a point light
+// (uniform direction: dPhi = 4 pi I / P_k), P_k the emitter's selection probability. The
+// walk goes on through scatter() with the hit material's own BRDF (SurfaceBrdf: diffuse and
+// Phong lobes) under a roulette policy; mirrors and dielectrics are followed
+// deterministically (Fresnel choice for dielectrics) and leave no VPL. A VPL reflects
+// diffusely towards the gathering point (f_r(y) = kd / pi, the diffuse estimator of Szécsi
+// 2009, §1.4; its general form would evaluate f_r(y) with the stored incoming direction,
+// which glint does not), so glossy light transport through a VPL is the method's
+// approximation; for Lambertian scenes the method is unbiased.
 #pragma once
 
 #include <algorithm>
@@ -35,14 +37,19 @@
 #include <glint/sampling/warps.hpp>
 #include <glint/tracer/brdf.hpp>
 #include <glint/tracer/scene.hpp>
-#include <glint/tracer/vpl.hpp>
 #include <glint/trees/tree.hpp>
 
 namespace glint {
 
-/// A ray accelerator over a Scene's triangles (hit.id: the scene's triangle index).
-template <class A>
-concept SceneAccelerator = RayAccelerator<A> && Scalar<typename A::scalar_type>;
+/// A virtual point light: where a shooting walk hit a non-specular surface, with the power
+/// that arrived there.
+template <Scalar T>
+struct Vpl {
+    Vec3<T> position{0};
+    Vec3<T> normal{0, 0, 1};  // facing the side the light arrived from
+    Rgb<T> power{};           // incoming power dPhi
+    Rgb<T> albedo{};          // kd at the hit: the VPL reflects kd / pi
+};
 
 /// A roulette policy that a shooting walk can use (a radiance estimate's offset is reflected
 /// radiance, which a walk carrying power has no use for: shooting walks ignore it).
@@ -141,7 +148,7 @@ private:
 /// Options of the shooting phase.
 struct ShootingOptions {
     int max_depth = 1024;  // cap on a walk's vertices, far beyond where roulette stops walks
-    int branches = 1;      // continuations from the first hit (000 section 7.2.1's path splitting)
+    int branches = 1;      // continuations from the first hit (path splitting, Szécsi 2009, §7.2.1)
 };
 
 namespace detail {
@@ -159,7 +166,7 @@ Ray<T> vpl_spawn(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& dir) {
 /// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
 /// appending a VPL at each non-specular hit; roulette decides on the normalized throughput.
 /// `first_depth` counts the scattering vertices before the ray (for the roulette).
-template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+template <RayAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, Ray<T> ray, const Rgb<T>& power,
                          Pcg32& rng, int max_depth, std::vector<Vpl<T>>& out, int first_depth = 0) {
@@ -198,8 +205,8 @@ void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, R
 
 /// A path tree from a Lambertian point z1 (normal n1 on the lit side, material m) that
 /// received `power`: the VPL at z1, then `branches` walks leaving z1, each with 1 / branches
-/// of the power (000 section 7.2.1's splitting; 000 section 8.1.4's N_s paths per entry point).
-template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+/// of the power (the splitting of Szécsi 2009, §7.2.1; the N_s paths per entry point of §8.1.4).
+template <RayAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 void shoot_path_tree(const Scene<T>& s, const A& accel, const R& roulette, const Vec3<T>& z1, const Vec3<T>& n1,
                      const Material<T>& m, const Rgb<T>& power, int branches, Pcg32& rng, int max_depth,
@@ -221,7 +228,7 @@ void shoot_path_tree(const Scene<T>& s, const A& accel, const R& roulette, const
 
 /// Shooting phase: `walks` walks from the scene's emitters (chosen by power), stream `seed`.
 /// Each VPL's power already carries the 1 / walks of the estimator.
-template <SceneAccelerator A, class R, Scalar T = typename A::scalar_type>
+template <RayAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 std::vector<Vpl<T>> shoot_scene_vpls(const Scene<T>& s, const A& accel, const R& roulette, std::size_t walks,
                                      std::uint64_t seed, const ShootingOptions& opt = {}) {

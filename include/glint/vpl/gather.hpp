@@ -1,0 +1,202 @@
+// glint/vpl/gather.hpp: the gathering phase of the virtual light sources method at one point
+// (Szécsi 2009, §1.4; Keller 1997): what a camera ray sees through mirrors and dielectrics,
+// direct illumination from the real lights, and the VPLs' illumination through a visibility
+// policy; and the same VPL sum over a fixed array of points (gather_image).
+//
+// A shading point x seen through a pixel (after any mirror or dielectric vertices, followed
+// deterministically with a Fresnel choice) gets
+//   L(x) = Le(x) + L_direct(x) + sum_vpl f_r(x, wi) dPhi (kd_y / pi) cos(theta_x) cos(theta_y) / |x - y|^2 V(x, y)
+// where f_r(x) is the hit material's full BRDF (SurfaceBrdf) and the VPL reflects diffusely.
+// L_direct samples the real lights (emitter by power, uniform on an area light; shadow rays
+// through RayQueries). V(x, y) is a VisibilityPolicy (occluders/visibility.hpp): exact shadow
+// rays (ShadowRayVisibility) or the occluder-sphere searches of Szécsi 2009, ch. 5
+// (approximate). The VPL geometry term diverges as |x - y| -> 0; the usual clamp replaces
+// |x - y|^2 by max(|x - y|^2, d_min^2) (VplSettings::min_distance; 0 = off; Kollig and Keller
+// 2004 analyse the bias it leaves). Clamping only removes energy, so its bias is negative.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/occluders/visibility.hpp>
+#include <glint/tracer/brdf.hpp>
+#include <glint/tracer/scene.hpp>
+#include <glint/tracer/shading.hpp>
+#include <glint/vpl/shooting.hpp>
+
+namespace glint {
+
+/// The VPL method's own settings; the image's (size, samples, threads) are the renderer's
+/// RenderSettings.
+struct VplSettings {
+    std::size_t vpl_walks = 256; // shooting walks (each leaves a VPL per non-specular hit)
+    double min_distance = 0;     // geometry-term clamp (0: unclamped, unbiased)
+    int light_samples = 1;       // real-light samples per pixel for direct illumination
+    bool direct = true;          // emission seen directly plus direct illumination
+    bool indirect = true;        // the VPLs' illumination
+    std::uint64_t seed = 1;      // shooting and the pixels' sampler streams
+    ShootingOptions shooting{};
+    int max_specular = 16;       // mirror/dielectric vertices followed from the camera
+
+    void validate() const {
+        if (!(min_distance >= 0) || !std::isfinite(min_distance))
+            throw Error("glint::VplSettings: min_distance " + std::to_string(min_distance) + " must be finite and >= 0");
+        if (light_samples < 1) throw Error("glint::VplSettings: light_samples " + std::to_string(light_samples) + " < 1");
+        if (max_specular < 0) throw Error("glint::VplSettings: max_specular " + std::to_string(max_specular) + " < 0");
+    }
+};
+
+/// The first non-specular point seen along a camera ray, with the camera path's weight.
+template <Scalar T>
+struct PixelPoint {
+    Vec3<T> x{0}, n{0}, wo{0};  // position, normal facing the viewer, direction to the viewer
+    Rgb<T> weight{};            // product of the specular reflectances before x
+    Rgb<T> emitted{};           // emission seen along the camera path (weighted)
+    std::uint32_t material = 0;
+    std::uint32_t triangle = 0;  // the scene triangle at x, and x's barycentrics (u, v) on it
+    T u = 0, v = 0;
+    bool hit = false;
+};
+
+/// A source of independent uniforms in [0, 1): a callable returning T (a sampler's get_1d, a
+/// Pcg32 stream).
+template <class U, class T>
+concept UniformSource = std::invocable<U&> && std::convertible_to<std::invoke_result_t<U&>, T>;
+
+/// Follows a camera ray through mirrors and dielectrics (at most max_specular of them; the
+/// dielectrics' Fresnel choices drawn from `uniform`) to the first diffuse or glossy point.
+template <class A, class U, Scalar T>
+    requires UniformSource<U, T>
+PixelPoint<T> surface_seen(const Scene<T>& s, RayQueries<A, T>& rays, Ray<T> ray, int max_specular, U&& uniform) {
+    PixelPoint<T> p;
+    p.weight = Rgb<T>(T(1));
+    p.emitted = Rgb<T>(T(0));
+    for (int k = 0; k <= max_specular; ++k) {
+        StoreHit<T> hit;
+        if (!rays.closest_hit(ray, hit)) return p;
+        const Material<T>& m = s.materials[s.material_of[hit.id]];
+        const Vec3<T> ng = s.normal(hit.id), d = safe_normalize(ray.direction);
+        const bool front = glm::dot(ng, d) < T(0);
+        const Vec3<T> x = ray.at(hit.t), n = front ? ng : -ng;
+        if (front && m.emissive()) p.emitted += p.weight * m.emission;
+        if (!m.specular()) {
+            p.x = x, p.n = n, p.wo = -d, p.material = s.material_of[hit.id], p.hit = true;
+            p.triangle = hit.id, p.u = hit.u, p.v = hit.v;
+            return p;
+        }
+        p.weight *= specular_albedo(m);
+        ray = detail::vpl_spawn(x, n, specular_direction(m, d, ng, T(uniform())));
+    }
+    return p;
+}
+
+/// Direct illumination at p from `samples` real-light samples (shadow rays through `rays`),
+/// three uniforms each.
+template <class A, class U, Scalar T>
+    requires UniformSource<U, T>
+Rgb<T> direct_light(const Scene<T>& s, RayQueries<A, T>& rays, const EmitterSet<T>& lights, const PixelPoint<T>& p,
+                    int samples, U&& uniform) {
+    const Frame<T> frame = Frame<T>::from_normal(p.n);
+    const SurfaceBrdf<T> brdf(s.materials[p.material], frame.to_local(p.wo));
+    Rgb<T> sum(T(0));
+    for (int i = 0; i < samples; ++i) {
+        T pdf;
+        const T u = T(uniform());
+        const T u0 = T(uniform());
+        const LightSample<T> ls = lights.sample_point(u, Vec2<T>(u0, T(uniform())), pdf);
+        const Vec3<T> d = ls.position - p.x;
+        const T r2 = glm::dot(d, d);
+        const Vec3<T> wi = d / std::sqrt(r2);
+        const bool point = ls.normal == Vec3<T>(0);
+        const T cos_l = point ? T(1) : -glm::dot(wi, ls.normal);
+        const Vec3<T> wl = frame.to_local(wi);
+        if (!(cos_l > T(0)) || wl.z <= T(0) || !(pdf > T(0))) continue;
+        const Rgb<T> f = brdf.f(wl);
+        if (f.max() <= T(0)) continue;
+        const Ray<T> r0 = detail::vpl_spawn(p.x, p.n, wi);
+        const Vec3<T> y = point ? ls.position : detail::vpl_spawn(ls.position, ls.normal, -wi).origin;
+        if (!rays.unoccluded(Ray<T>{r0.origin, y - r0.origin, T(0), T(1) - T(1e-4)})) continue;
+        sum += ls.power * f * (wl.z * cos_l / (r2 * pdf));
+    }
+    return sum * (p.weight / T(samples));
+}
+
+/// Sum over the VPLs of dPhi (kd_y / pi) w(wi) cos(theta_x) cos(theta_y) / max(r^2, d2min)
+/// V(x, y) at point x (normal n), w(wi) = brdf(wi) (f_r for radiance, 1 for irradiance).
+template <Scalar T, class V, class Brdf>
+    requires VisibilityPolicy<V, T>
+Rgb<T> vpl_sum(const Vec3<T>& x, const Vec3<T>& n, std::span<const Vpl<T>> vpls, V& vis, T d2min, const Brdf& brdf) {
+    Rgb<T> sum(T(0));
+    for (const Vpl<T>& v : vpls) {
+        const Vec3<T> d = v.position - x;
+        const T r2 = glm::dot(d, d);
+        if (!(r2 > T(0))) continue;
+        const Vec3<T> wi = d / std::sqrt(r2);
+        const T cx = glm::dot(n, wi), cy = -glm::dot(v.normal, wi);
+        if (cx <= T(0) || cy <= T(0)) continue;  // facing away: no contribution, no test
+        const Rgb<T> f = brdf(wi);
+        if (f.max() <= T(0) || !vis.visible(v.position)) continue;
+        sum += v.power * v.albedo * f * (cx * cy / (std::max(r2, d2min) * pi<T>));
+    }
+    return sum;
+}
+
+/// Sum of the VPLs' illumination reflected at p towards the viewer (without p.weight),
+/// visibility by policy `vis`; d2min is the squared clamp distance (0: unclamped).
+template <Scalar T, class V>
+    requires VisibilityPolicy<V, T>
+Rgb<T> gather_point(const Scene<T>& s, const PixelPoint<T>& p, std::span<const Vpl<T>> vpls, V& vis, T d2min) {
+    const Frame<T> frame = Frame<T>::from_normal(p.n);
+    const SurfaceBrdf<T> brdf(s.materials[p.material], frame.to_local(p.wo));
+    vis.set_point(p.x, p.n);
+    return vpl_sum(p.x, p.n, vpls, vis, d2min, [&](const Vec3<T>& wi) { return brdf.f(frame.to_local(wi)); });
+}
+
+namespace detail {
+
+/// Runs worker(next) on `threads` threads (0: hardware concurrency); workers take block
+/// indices from the shared counter until none of the `blocks` is left.
+template <class Worker>
+void parallel_blocks(int blocks, int threads, const Worker& worker) {
+    std::atomic<int> next{0};
+    int n = threads > 0 ? threads : int(std::thread::hardware_concurrency());
+    n = std::clamp(n, 1, std::max(blocks, 1));
+    std::vector<std::thread> pool;
+    for (int i = 1; i < n; ++i) pool.emplace_back([&] { worker(next); });
+    worker(next);
+    for (auto& t : pool) t.join();
+}
+
+}  // namespace detail
+
+/// The VPLs' illumination at fixed points (weighted by each point's camera path): the same
+/// VPL sums at the same points many times over (one image per shooting path in light
+/// animation, one per frame or walk count in light path maps' comparisons) with no camera ray
+/// and no random number, which is why it is a loop of its own beside the Renderer. Blocks
+/// of 64 points in parallel, one copy of the visibility policy per thread.
+template <Scalar T, class V>
+    requires VisibilityPolicy<V, T>
+std::vector<Rgb<T>> gather_image(const Scene<T>& s, std::span<const PixelPoint<T>> points, std::span<const Vpl<T>> vpls,
+                                 const V& visibility, double min_distance, int threads) {
+    std::vector<Rgb<T>> out(points.size(), Rgb<T>(T(0)));
+    const T d2min = T(min_distance * min_distance);
+    const int blocks = int((points.size() + 63) / 64);
+    detail::parallel_blocks(blocks, threads, [&](std::atomic<int>& next) {
+        V vis = visibility;
+        for (int b = next++; b < blocks; b = next++)
+            for (std::size_t i = std::size_t(b) * 64; i < std::min(points.size(), std::size_t(b + 1) * 64); ++i)
+                if (points[i].hit) out[i] = gather_point(s, points[i], vpls, vis, d2min) * points[i].weight;
+    });
+    return out;
+}
+
+}  // namespace glint
