@@ -76,7 +76,7 @@ concept UniformSource = std::invocable<U&> && std::convertible_to<std::invoke_re
 /// dielectrics' Fresnel choices drawn from `uniform`) to the first diffuse or glossy point.
 template <class A, class U, Scalar T>
     requires UniformSource<U, T>
-PixelPoint<T> surface_seen(const Scene<T>& s, RayQueries<A, T>& rays, Ray<T> ray, int max_specular, U&& uniform) {
+PixelPoint<T> surface_seen(const Scene<T>& s, RayQueries<A>& rays, Ray<T> ray, int max_specular, U&& uniform) {
     PixelPoint<T> p;
     p.weight = Rgb<T>(T(1));
     p.emitted = Rgb<T>(T(0));
@@ -103,7 +103,7 @@ PixelPoint<T> surface_seen(const Scene<T>& s, RayQueries<A, T>& rays, Ray<T> ray
 /// three uniforms each.
 template <class A, class U, Scalar T>
     requires UniformSource<U, T>
-Rgb<T> direct_light(const Scene<T>& s, RayQueries<A, T>& rays, const EmitterSet<T>& lights, const PixelPoint<T>& p,
+Rgb<T> direct_light(const Scene<T>& s, RayQueries<A>& rays, const EmitterSet<T>& lights, const PixelPoint<T>& p,
                     int samples, U&& uniform) {
     const Frame<T> frame = Frame<T>::from_normal(p.n);
     const SurfaceBrdf<T> brdf(s.materials[p.material], frame.to_local(p.wo));

@@ -65,7 +65,7 @@ public:
     template <class S>
         requires Sampler<S, T>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state, V& vis) const {
-        RayQueries<A, T> rays(accel_);
+        RayQueries<A> rays(accel_);
         const auto uniform = [&sampler] { return sampler.get_1d(); };
         const PixelPoint<T> p = surface_seen(scene_, rays, ray, st_.max_specular, uniform);
         PathSample<T> out;
@@ -167,7 +167,7 @@ public:
     template <class S>
         requires Sampler<S, T>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state) const {
-        RayQueries<A, T> rays(accel_);
+        RayQueries<A> rays(accel_);
         state = surface_seen(scene_, rays, ray, max_specular_, [&sampler] { return sampler.get_1d(); });
         return {state.emitted, rays.rays(), false};
     }
