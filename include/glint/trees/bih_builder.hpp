@@ -1,7 +1,7 @@
 // glint/trees/bih_builder.hpp: bounding interval hierarchy builder, after Waechter and
 // Keller, "Instant ray tracing: the bounding interval hierarchy" (EGSR 2006).
 //
-// 000 section 4.2: the BIH is a kd-tree-like binary tree whose node stores
+// Szécsi 2009, §4.2: the BIH is a kd-tree-like binary tree whose node stores
 // two planes on one axis, the maximum of the left child's triangles and the minimum of the
 // right child's, so each triangle is referenced exactly once and the two children may
 // overlap or leave empty space between them.
@@ -129,7 +129,7 @@ private:
 template <Scalar T>
 struct BihBuilder {
     using scalar_type = T;
-    static constexpr const char* name = "bih";
+    using node_type = BihNode<T>;  // traversed in these nodes (tree.hpp)
     static constexpr TreeKind kind = TreeKind::bih;
     BihBuildOptions options{};
 

@@ -1,7 +1,7 @@
 // glint/trees/kdtree_builder.hpp: SAH kd-tree builder, O(n log n), after Wald and Havran,
 // "On building fast kd-trees for ray tracing, and on doing that in O(N log N)" (2006).
 //
-// 000 section 4.2 names the kd-tree (with BVH and BIH) as the scheme with
+// Szécsi 2009, §4.2 names the kd-tree (with BVH and BIH) as the scheme with
 // the lowest expected number of intersections: its cell boundaries are placed around the
 // objects. This builder places them by the surface area heuristic:
 //
@@ -336,7 +336,7 @@ private:
 template <Scalar T>
 struct KdTreeBuilder {
     using scalar_type = T;
-    static constexpr const char* name = "kd";
+    using node_type = KdNode<T>;  // traversed in these nodes (tree.hpp)
     static constexpr TreeKind kind = TreeKind::kd;
     KdBuildOptions options{};
 
