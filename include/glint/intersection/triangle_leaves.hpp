@@ -11,10 +11,12 @@
 // full, compile-time width), and for intersectors with frames (IVM, Szécsi 2009, §4.1) the
 // per-group frame origins; what a reference counts (padded records, or groups of records
 // sharing a frame) is its business, not the tree's. A query's leaf callable is a
-// LeafQuery, made once per query (it prepares the ray, keeps the hit and maps its record to
-// the user's triangle); the tree traverses the query's ray and calls it for the leaves:
-//   LeafQuery<P, false> leaf(leaves, ray, hit);
-//   if (tree.intersect<false>(leaf.ray, leaf)) hit = leaf.hit();
+// LeafQuery, made once per query (it maps the hit's record to the user's triangle); the tree traverses the query's ray and calls it for the leaves:
+//   Ray<T> r = ray_before(ray, hit);
+//   StoreHit<T> h = hit;
+//   const auto world = leaves.prepare(r);
+//   LeafQuery<P, false> leaf(leaves, r, world, h);
+//   if (tree.intersect<false>(r, leaf)) hit = leaf.hit();
 // A tree over other primitives passes a leaf callable of its own (tests/test_trees.cpp puts
 // spheres in a WideBvh's leaves).
 //
@@ -91,21 +93,31 @@ private:
     TriangleStore<P> store_;
 };
 
+/// The ray of a closest-hit query for `hit`: its tmax lowered to hit.t (a NaN tmax kept: no hit).
+template <class T>
+[[gnu::always_inline]] inline Ray<T> ray_before(const Ray<T>& ray, const StoreHit<T>& hit) {
+    Ray<T> r = ray;
+    r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+    return r;
+}
+
 /// One query's leaf callable over TriangleLeaves<P> (a LeafTest), the one thing the leaves
-/// hand a tree: the tree traverses `ray` and calls the query for the leaves it enters.
-/// Any = false: closest hit with t in (ray.tmin, min(ray.tmax, hit.t)), each hit lowering
-/// ray.tmax; hit() is then the nearest hit, its id the user's triangle index. Any = true:
-/// whether any triangle is hit with t in (ray.tmin, ray.tmax).
+/// hand a tree, which traverses the query's ray and calls it for the leaves it enters. It
+/// tests with the caller's `ray`, `world` = leaves.prepare(ray) and `hit` (locals of the
+/// query, so that the compiler keeps them in registers): Any = false, closest hit with t in (ray.tmin, ray.tmax), lowering
+/// ray.tmax to each hit found, hit() then being the nearest hit with the user's triangle
+/// index; Any = true, whether any triangle is hit.
 template <TriangleIntersector P, bool Any>
 class LeafQuery {
 public:
     using T = typename P::scalar_type;
 
-    LeafQuery(const TriangleLeaves<P>& leaves, const Ray<T>& r, const StoreHit<T>& hit = {})
-        : ray(clamped(r, hit)), leaves_(leaves), world_(leaves.prepare(ray)), hit_(hit) {}
+    [[gnu::always_inline]] LeafQuery(const TriangleLeaves<P>& leaves, Ray<T>& ray, const typename P::RayData& world,
+                                     StoreHit<T>& hit)
+        : leaves_(leaves), ray_(ray), world_(world), hit_(hit) {}
     /// Tests leaf (first, count); true when it holds a hit.
     [[gnu::always_inline]] bool operator()(std::uint32_t first, std::uint32_t count) {
-        return leaves_.template test<Any>(first, count, ray, world_, hit_);
+        return leaves_.template test<Any>(first, count, ray_, world_, hit_);
     }
     /// The nearest hit found (closest hit, after a traversal that found one).
     StoreHit<T> hit() const {
@@ -114,17 +126,11 @@ public:
         return h;
     }
 
-    Ray<T> ray;  // the query's ray: the tree traverses it, the leaf tests lower its tmax
-
 private:
-    static Ray<T> clamped(Ray<T> r, const StoreHit<T>& hit) {
-        r.tmax = hit.t < r.tmax ? hit.t : r.tmax;  // keeps a NaN tmax (no hit)
-        return r;
-    }
-
     const TriangleLeaves<P>& leaves_;
-    typename P::RayData world_;
-    StoreHit<T> hit_;
+    Ray<T>& ray_;
+    const typename P::RayData& world_;
+    StoreHit<T>& hit_;
 };
 
 }  // namespace glint

@@ -31,9 +31,8 @@
 namespace glint {
 
 struct BihBuildOptions {
-    // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time
-    // (SIMD batches): on incoherent rays 16 was 1.4x (bunny) and 1.7x (128k-triangle knot)
-    // faster than Waechter and Keller's 4, and faster than 8 and 24.
+    // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time (SIMD
+    // batches), so leaves larger than Waechter and Keller's 4 pay (docs/notes/trees.md).
     std::uint32_t leaf_size = 16;
     int max_depth = 56;           // at most 56 (the traversal stack holds 64 entries)
 };

@@ -20,8 +20,7 @@
 //   level and cannot hold a split node, so they stay unused (and count as wasted).
 // Subtrees are filled breadth-first between subtrees: pending pointers form a queue, and a
 // pointer's target is chosen only when the pointer leaves the queue, so that every hole made
-// up to then (by this subtree and by its siblings) is available to it. (Choosing targets
-// when the pointer is written left 3 times more slots unused on BIHs.)
+// up to then (by this subtree and by its siblings) is available to it.
 //
 // Accounting (LayoutStats): slots allocated, split/leaf/pointer nodes, wasted slots, node
 // bytes and node bytes per triangle. Szécsi 2009, Fig. 4.6 compares exactly these node bytes.

@@ -92,20 +92,26 @@ public:
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit) const { return closest(ray, hit); }
     /// closest_hit(), counting the nodes, leaves and records it tests into `counters`.
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters& counters) const {
-        LeafQuery<P, false> leaf(leaves_, ray, hit);
+        Ray<float> r = ray_before(ray, hit);
+        StoreHit<float> h = hit;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, false> leaf(leaves_, r, world, h);
         const auto counted = [&](std::uint32_t first, std::uint32_t count) {
             ++counters.leaves;
             counters.records += leaves_.records(first, count);
             return leaf(first, count);
         };
-        if (!bvh_.template intersect<false>(leaf.ray, counted, [&] { ++counters.nodes; })) return false;
+        if (!bvh_.template intersect<false>(r, counted, [&] { ++counters.nodes; })) return false;
         hit = leaf.hit();
         return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
-        LeafQuery<P, true> leaf(leaves_, ray);
-        return bvh_.template intersect<true>(leaf.ray, leaf);
+        Ray<float> r = ray;
+        StoreHit<float> h;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, true> leaf(leaves_, r, world, h);
+        return bvh_.template intersect<true>(r, leaf);
     }
 
     const WideBvh<N, B, L>& bvh() const { return bvh_; }
@@ -116,8 +122,13 @@ public:
 
 private:
     [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit) const {
-        LeafQuery<P, false> leaf(leaves_, ray, hit);
-        if (!bvh_.template intersect<false>(leaf.ray, leaf)) return false;
+        // On local copies: the compiler keeps them in registers (the caller's `hit` could
+        // alias the traversal stack's floats).
+        Ray<float> r = ray_before(ray, hit);
+        StoreHit<float> h = hit;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, false> leaf(leaves_, r, world, h);
+        if (!bvh_.template intersect<false>(r, leaf)) return false;
         hit = leaf.hit();
         return true;
     }

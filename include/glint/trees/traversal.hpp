@@ -88,15 +88,21 @@ public:
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const {
-        LeafQuery<P, false> leaf(leaves_, ray, hit);
-        if (!intersect<false>(leaf.ray, leaf)) return false;
+        Ray<T> r = ray_before(ray, hit);  // local copies: the compiler keeps them in registers
+        StoreHit<T> h = hit;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, false> leaf(leaves_, r, world, h);
+        if (!intersect<false>(r, leaf)) return false;
         hit = leaf.hit();
         return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<T>& ray) const {
-        LeafQuery<P, true> leaf(leaves_, ray);
-        return intersect<true>(leaf.ray, leaf);
+        Ray<T> r = ray;
+        StoreHit<T> h;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, true> leaf(leaves_, r, world, h);
+        return intersect<true>(r, leaf);
     }
 
     const LayoutStats& stats() const { return stats_; }
