@@ -1,6 +1,14 @@
 // glint/trees/binary_bvh.hpp: the binary BVH the binned SAH builder (bvh_builder.hpp) makes
 // and the wide collapse (wide_collapse.hpp) reads: its build options, its node slots, and
 // the clippers that chop primitives for spatial splits (clip_triangle for triangles).
+//
+// The builder's tree has node slots assigned from the reference ranges, not
+// from the order of work: a node over n references at slot s has its left child at s + 1
+// and its right child at s + 2 n_L (a subtree over n references needs at most 2n - 1 slots;
+// with spatial splits n counts the room a subtree has for references, see BinnedSah).
+// So subtrees built by different threads never share an allocator, and the tree (every
+// slot, every primitive order) is the same for any thread count. The wide collapse
+// (wide_collapse.hpp) reads it from the root.
 #pragma once
 
 #include <algorithm>

@@ -17,14 +17,7 @@
 // polygon against the bin's planes), and a plane that cuts references in two wins when its
 // SAH cost is lower; a reference then sits on both sides, each piece bounded by its part
 // of the primitive. The references grow to at most spatial_budget times the primitives.
-//
-// The result is a binary tree whose node slots are assigned from the reference ranges, not
-// from the order of work: a node over n references at slot s has its left child at s + 1
-// and its right child at s + 2 n_L (a subtree over n references needs at most 2n - 1 slots;
-// with spatial splits n counts the room a subtree has for references, see BinnedSah).
-// So subtrees built by different threads never share an allocator, and the tree (every
-// slot, every primitive order) is the same for any thread count. The wide collapse
-// (wide_collapse.hpp) reads it from the root.
+// Node slots: binary_bvh.hpp.
 #pragma once
 
 #include <algorithm>
