@@ -56,7 +56,7 @@ struct WideBoxTest {
     float o[3], inv[3];
     int near[3], far[3];  // bounds rows of the entry and exit planes per axis
 
-    explicit WideBoxTest(const Ray<float>& r) {
+    [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
         for (int a = 0; a < 3; ++a) {
             o[a] = r.origin[a];
             inv[a] = 1.0f / r.direction[a];
@@ -164,7 +164,7 @@ struct WideBoxTest<4, false, Signed> {
     __m128 o[3], inv[3];
     int near[3], far[3];
 
-    explicit WideBoxTest(const Ray<float>& r) {
+    [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
         const WideBoxTest<4, true> s(r);
         for (int a = 0; a < 3; ++a) {
             o[a] = _mm_set1_ps(s.o[a]);
@@ -173,7 +173,7 @@ struct WideBoxTest<4, false, Signed> {
             far[a] = s.far[a];
         }
     }
-    unsigned test(const WideBvhNode<4>& n, float tmin, float tmax, float* tn) const {
+    [[gnu::always_inline]] unsigned test(const WideBvhNode<4>& n, float tmin, float tmax, float* tn) const {
         __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
         for (int a = 0; a < 3; ++a) {
             const __m128 tl = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n.bounds[near[a]]), o[a]), inv[a]);
