@@ -1,10 +1,10 @@
-// bench_trees: ray-shooting throughput of glint's trees (000 sections 4.2-4.4) against
+// bench_trees: ray-shooting throughput of glint's trees (Szécsi 2009, §4.2-4.4) against
 // Embree 3's rtcIntersect1 on the very same rays, single thread.
 //
 //   bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N]
 //               [--no-generated] [--only SCENE] [--all | --few] [--memory]
 //
-// For every scene (generated: the 2880-triangle torus knot of 000 section 5, "teapot in a
+// For every scene (generated: the 2880-triangle torus knot of Szécsi 2009, §5, "teapot in a
 // stadium", a 128k-triangle torus knot; plus each --mesh) and two ray sets (primary camera
 // rays; incoherent diffuse rays leaving surface points on both sides), it builds every
 // tree x layout x intersector combination, traces every ray for its closest hit and prints
@@ -27,7 +27,7 @@
 // wide collapse); --build-threads N builds the
 // timed trees on N threads (the CSV's build_threads); --bvh-siblings 1 places a node's inner
 // children side by side (WideNodeOrder::sibling_blocks); --compact-subtrees adds bvh8 and bvh4
-// (Moller-Trumbore) in 000's compact subtrees of 4 KiB (WideCompactSubtrees<18> and <36>,
+// (Moller-Trumbore) in Szécsi 2009's compact subtrees of 4 KiB (WideCompactSubtrees<18> and <36>,
 // layout soa-compact18 / soa-compact36) and bvh4 in the collapse's order. --sbvh adds the 8-wide BVH with
 // spatial splits (BvhBuildOptions::spatial_splits; tree sbvh8, Moller-Trumbore, paired with
 // Embree like every row) and prints its references and build time, then times it against
@@ -41,7 +41,7 @@
 // --set primary|incoherent: run one ray set. --big adds knot-2m, a 2,048,000-triangle torus knot.
 // --only SCENE: run one scene (by name: torus-knot, stadium, knot-128k, or a mesh's file stem).
 // --memory: print only the node-memory table (pointer, havran-K, compact-K for K = 3 ... 63,
-// kd-tree and BIH; 000 Fig. 4.6) and exit.
+// kd-tree and BIH; Szécsi 2009, Fig. 4.6) and exit.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -52,6 +52,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <glint/core/error.hpp>
@@ -142,6 +143,24 @@ Mesh<float> read_obj(const std::string& path) {
     }
     if (m.empty()) throw Error("'" + path + "' has no faces");
     return m;
+}
+
+/// The table's labels: the library's types carry none.
+const char* intersector_label(std::type_identity<MollerTrumbore<float>>) { return "MollerTrumbore"; }
+const char* intersector_label(std::type_identity<Wald<float>>) { return "Wald"; }
+const char* intersector_label(std::type_identity<Watertight<float>>) { return "Watertight"; }
+const char* intersector_label(std::type_identity<Ivm<float>>) { return "Ivm"; }
+std::string layout_label(std::type_identity<PointerLayout>) { return "pointer"; }
+template <std::uint32_t K>
+std::string layout_label(std::type_identity<HavranSubtrees<K>>) { return "havran-" + std::to_string(K); }
+template <std::uint32_t K>
+std::string layout_label(std::type_identity<CompactSubtrees<K>>) { return "compact-" + std::to_string(K); }
+/// The wide BVH's layout column: the box format, then the node layout if not the collapse's order.
+template <WideBoxes B>
+std::string wide_layout_label(std::type_identity<WideBuildOrder>) { return B == WideBoxes::floats ? "soa" : "soa-q8"; }
+template <WideBoxes B, std::uint32_t K>
+std::string wide_layout_label(std::type_identity<WideCompactSubtrees<K>>) {
+    return wide_layout_label<B>(std::type_identity<WideBuildOrder>{}) + "-compact" + std::to_string(K);
 }
 
 struct RaySet {
@@ -310,10 +329,10 @@ void time_sets(const Scene& sc, const Accel& acc, const Peer* peer, const Option
             }
         }
         WideBvhCounters counted;
-        if constexpr (requires { acc.closest_hit(rays[0], std::declval<StoreHit<float>&>(), &counted); }) {
+        if constexpr (requires { acc.closest_hit(rays[0], std::declval<StoreHit<float>&>(), counted); }) {
             for (const auto& r : rays) {
                 StoreHit<float> h;
-                acc.closest_hit(r, h, &counted);
+                acc.closest_hit(r, h, counted);
             }
         }
         Row row = base;
@@ -357,9 +376,9 @@ void run_combination(const Scene& sc, const TimedTree& built, const Peer* peer, 
     const Accel acc(sc.mesh, built.tree);
     Row base;
     base.scene = sc.name;
-    base.tree = Accel::builder_type::name;
-    base.layout = Accel::layout_type::label();
-    base.intersector = Accel::intersector_type::name;
+    base.tree = built.tree.kind == TreeKind::kd ? "kd" : "bih";
+    base.layout = layout_label(std::type_identity<typename Accel::layout_type>{});
+    base.intersector = intersector_label(std::type_identity<typename Accel::intersector_type>{});
     base.build_s = built.seconds + seconds_since(t0);
     base.node_bytes = acc.stats().node_bytes();
     base.bytes_per_tri = acc.stats().bytes_per_triangle();
@@ -379,14 +398,14 @@ void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector
     const double build_s = seconds_since(t0);
     Row base;
     base.scene = sc.name;
-    base.tree = spatial ? (N == 8 ? "sbvh8" : "sbvh4") : MeshBvh<P, N, B, L>::name;
+    base.tree = std::string(spatial ? "sbvh" : "bvh") + std::to_string(N);
     if (spatial)
         std::printf("# %s %s: %zu references for %zu triangles (x%.3f, budget x%.2f), build %.4f s on %u thread(s)\n",
                     sc.name.c_str(), base.tree.c_str(), acc.bvh().prims().size(), sc.mesh.size(),
                     double(acc.bvh().prims().size()) / double(sc.mesh.size()), double(bo.spatial_budget),
                     build_s, bo.threads);
-    base.layout = MeshBvh<P, N, B, L>::layout_label();
-    base.intersector = P::name;
+    base.layout = wide_layout_label<B>(std::type_identity<L>{});
+    base.intersector = intersector_label(std::type_identity<P>{});
     base.build_s = build_s;
     base.node_bytes = acc.bvh().stats().node_bytes;
     base.bytes_per_tri = double(base.node_bytes) / double(sc.mesh.size());
@@ -516,7 +535,7 @@ void memory_row(const std::string& scene, const char* tree, const BuiltTree<floa
                 p.bytes_per_triangle(), h.bytes_per_triangle(), c.bytes_per_triangle());
 }
 
-/// --memory: node bytes of pointer, havran-K and compact-K for K = 3 ... 63 (000 Fig. 4.6).
+/// --memory: node bytes of pointer, havran-K and compact-K for K = 3 ... 63 (Szécsi 2009, Fig. 4.6).
 void memory_table(const std::vector<std::pair<std::string, Mesh<float>>>& scenes) {
     std::puts("| scene      | tree |  K | pointer B  | havran-K B | compact-K B | saving | ptr B/tri | hav B/tri | cmp B/tri |");
     std::puts("|------------|------|----|------------|------------|------------|--------|----------|----------|----------|");
@@ -647,7 +666,7 @@ int main(int argc, char** argv) try {
         }
         if (!opt.wide || !opt.few || opt.quantized) run_wide<MollerTrumbore<float>, 8, WideBoxes::quantized>(sc, peer.get(), opt, rows);
         if (!opt.wide || !opt.few) run_wide<Wald<float>, 8>(sc, peer.get(), opt, rows);
-        if (opt.compact) {  // 000's compact subtrees against the collapse's order, 8 and 4 wide (4 KiB units)
+        if (opt.compact) {  // Szécsi 2009's compact subtrees against the collapse's order, 8 and 4 wide (4 KiB units)
             run_wide<MollerTrumbore<float>, 8, WideBoxes::floats, WideCompactSubtrees<18>>(sc, peer.get(), opt, rows);
             run_wide<MollerTrumbore<float>, 4>(sc, peer.get(), opt, rows);
             run_wide<MollerTrumbore<float>, 4, WideBoxes::floats, WideCompactSubtrees<36>>(sc, peer.get(), opt, rows);

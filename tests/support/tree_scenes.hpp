@@ -1,8 +1,8 @@
 // tests/support/tree_scenes.hpp: generated test scenes and ray sets for the trees' tests and
 // benchmarks (a fixture, not part of the library and not installed; tests, benchmarks and
 // examples find it through glint_build's include path): a tessellated sphere, a torus knot
-// (000 section 5 uses one of 2880 triangles), a random triangle soup, "teapot in a stadium"
-// (000 section 4.2: a huge ground plane with a small dense object), a flat grid;
+// (Szécsi 2009, §5 uses one of 2880 triangles), a random triangle soup, "teapot in a stadium"
+// (Szécsi 2009, §4.2: a huge ground plane with a small dense object), a flat grid;
 // primary camera rays and incoherent diffuse rays leaving surface points on both sides.
 #pragma once
 
@@ -53,7 +53,7 @@ Mesh<T> make_sphere(int stacks, int slices, Vec3<T> centre = Vec3<T>(0), T radiu
 }
 
 /// (p, q) torus knot as a tube: 2 * segments * sides triangles; segments = 120, sides = 12
-/// gives 000 section 5's 2880 triangles.
+/// gives Szécsi 2009, §5's 2880 triangles.
 template <Scalar T>
 Mesh<T> make_torus_knot(int segments = 120, int sides = 12, int p = 2, int q = 3, T tube = T(0.25)) {
     auto curve = [&](double s) {

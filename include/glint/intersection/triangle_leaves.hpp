@@ -8,14 +8,17 @@
 // v2's `intersect(ray, ..., leaf_fn)` works the same way). TriangleLeaves<P> is that
 // storage for triangles of intersector P: it owns the records (a TriangleStore<P>), their
 // padding to whole batches of batch_width records (so a leaf runs P's batch kernel at its
-// full, compile-time width), and for intersectors with frames (IVM, 000 section 4.1) the
+// full, compile-time width), and for intersectors with frames (IVM, Szécsi 2009, §4.1) the
 // per-group frame origins; what a reference counts (padded records, or groups of records
-// sharing a frame) is its business, not the tree's. A tree's leaf callable is
-// `[&](first, count) { return leaves.test<Any>(first, count, ray, world, hit); }` with
-// world = leaves.prepare(ray), made once per query; closest_hit() and any_hit() write that
-// wrapper once for every tree, taking the tree's traversal as a callable
-// `traverse(ray, leaf)` (a TreeTraversal). A tree over other primitives passes a leaf
-// callable of its own (tests/test_trees.cpp puts spheres in a WideBvh's leaves).
+// sharing a frame) is its business, not the tree's. A query's leaf callable is a
+// LeafQuery, made once per query (it maps the hit's record to the user's triangle); the tree traverses the query's ray and calls it for the leaves:
+//   Ray<T> r = ray_before(ray, hit);
+//   StoreHit<T> h = hit;
+//   const auto world = leaves.prepare(r);
+//   LeafQuery<P, false> leaf(leaves, r, world, h);
+//   if (tree.intersect<false>(r, leaf)) hit = leaf.hit();
+// A tree over other primitives passes a leaf callable of its own (tests/test_trees.cpp puts
+// spheres in a WideBvh's leaves).
 //
 // Thread safety: leaf tests are const and keep their state in the caller's callable.
 #pragma once
@@ -36,19 +39,6 @@ namespace glint {
 template <class F>
 concept LeafTest = requires(F f, std::uint32_t i) {
     { f(i, i) } -> std::convertible_to<bool>;
-};
-
-namespace detail {
-/// The leaf callable type a TreeTraversal is checked with (its stand-in for a real one).
-using LeafProbe = bool (*)(std::uint32_t, std::uint32_t);
-}  // namespace detail
-
-/// A tree's traversal as TriangleLeaves' queries take it: `traverse(ray, leaf)` runs the tree
-/// over `ray` (a Ray<T>&, whose tmax the leaf callable lowers), calling the LeafTest `leaf`
-/// for the leaves the ray enters, and returns whether any call returned true.
-template <class F, class T>
-concept TreeTraversal = requires(F f, Ray<T>& r, detail::LeafProbe leaf) {
-    { f(r, leaf) } -> std::convertible_to<bool>;
 };
 
 /// Triangle records of intersector P laid out for tree leaves (see the file comment).
@@ -86,41 +76,6 @@ public:
         return true;
     }
 
-    /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)) through a tree's traversal
-    /// (`traverse(r, leaf)`, a TreeTraversal); true when `hit` was updated, hit.id then being
-    /// the user's triangle index. With `record_count`, adds the record slots tested to it.
-    template <class Traverse>
-        requires TreeTraversal<Traverse, T>
-    [[gnu::always_inline]] bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit, Traverse&& traverse,
-                                            std::uint64_t* record_count = nullptr) const {
-        // On local copies: the compiler keeps them in registers (the caller's `hit` could
-        // alias the traversal stack's floats).
-        StoreHit<T> h = hit;
-        Ray<T> r = ray;
-        r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
-        const auto world = prepare(r);
-        if (!traverse(r, [&](std::uint32_t first, std::uint32_t count) {
-                if (record_count) *record_count += records(first, count);
-                return test<false>(first, count, r, world, h);
-            }))
-            return false;
-        hit = h;
-        hit.id = id(h.id);  // the leaf test reports the record
-        return true;
-    }
-    /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays), through a
-    /// tree's traversal as in closest_hit().
-    template <class Traverse>
-        requires TreeTraversal<Traverse, T>
-    [[gnu::always_inline]] bool any_hit(const Ray<T>& ray, Traverse&& traverse) const {
-        StoreHit<T> h;
-        Ray<T> r = ray;
-        const auto world = prepare(r);
-        return traverse(r, [&](std::uint32_t first, std::uint32_t count) {
-            return test<true>(first, count, r, world, h);
-        });
-    }
-
     /// The user's triangle index of record `record` (a closest hit's hit.id).
     std::uint32_t id(std::uint32_t record) const { return store_.id(record); }
     /// Record slots (padding included) that testing leaf (first, count) reads.
@@ -136,6 +91,47 @@ public:
 
 private:
     TriangleStore<P> store_;
+};
+
+/// The ray of a closest-hit query for `hit`: its tmax lowered to hit.t (a NaN tmax kept: no hit).
+template <class T>
+[[gnu::always_inline]] inline Ray<T> ray_before(const Ray<T>& ray, const StoreHit<T>& hit) {
+    Ray<T> r = ray;
+    r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+    return r;
+}
+
+/// One query's leaf callable over TriangleLeaves<P> (a LeafTest), the one thing the leaves
+/// hand a tree, which traverses the query's ray and calls it for the leaves it enters. It
+/// tests with the caller's `ray`, `world` = leaves.prepare(ray) and `hit`, locals of the
+/// query that the compiler keeps in registers (a query owning copies of them made GCC copy
+/// the ray through the stack; docs/notes/trees.md). Any = false: closest hit with t in
+/// (ray.tmin, ray.tmax), lowering ray.tmax to each hit found, hit() then being the nearest
+/// hit with the user's triangle index. Any = true: whether any triangle is hit.
+template <TriangleIntersector P, bool Any>
+class LeafQuery {
+public:
+    using T = typename P::scalar_type;
+
+    [[gnu::always_inline]] LeafQuery(const TriangleLeaves<P>& leaves, Ray<T>& ray, const typename P::RayData& world,
+                                     StoreHit<T>& hit)
+        : leaves_(leaves), ray_(ray), world_(world), hit_(hit) {}
+    /// Tests leaf (first, count); true when it holds a hit.
+    [[gnu::always_inline]] bool operator()(std::uint32_t first, std::uint32_t count) {
+        return leaves_.template test<Any>(first, count, ray_, world_, hit_);
+    }
+    /// The nearest hit found (closest hit, after a traversal that found one).
+    StoreHit<T> hit() const {
+        StoreHit<T> h = hit_;
+        h.id = leaves_.id(hit_.id);  // the leaf test reports the record
+        return h;
+    }
+
+private:
+    const TriangleLeaves<P>& leaves_;
+    Ray<T>& ray_;
+    const typename P::RayData& world_;
+    StoreHit<T>& hit_;
 };
 
 }  // namespace glint

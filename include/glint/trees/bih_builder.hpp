@@ -1,7 +1,7 @@
 // glint/trees/bih_builder.hpp: bounding interval hierarchy builder, after Waechter and
 // Keller, "Instant ray tracing: the bounding interval hierarchy" (EGSR 2006).
 //
-// 000 section 4.2: the BIH is a kd-tree-like binary tree whose node stores
+// Szécsi 2009, §4.2: the BIH is a kd-tree-like binary tree whose node stores
 // two planes on one axis, the maximum of the left child's triangles and the minimum of the
 // right child's, so each triangle is referenced exactly once and the two children may
 // overlap or leave empty space between them.
@@ -31,9 +31,8 @@
 namespace glint {
 
 struct BihBuildOptions {
-    // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time
-    // (SIMD batches): on incoherent rays 16 was 1.4x (bunny) and 1.7x (128k-triangle knot)
-    // faster than Waechter and Keller's 4, and faster than 8 and 24.
+    // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time (SIMD
+    // batches), so leaves larger than Waechter and Keller's 4 pay (docs/notes/trees.md).
     std::uint32_t leaf_size = 16;
     int max_depth = 56;           // at most 56 (the traversal stack holds 64 entries)
 };
@@ -129,7 +128,7 @@ private:
 template <Scalar T>
 struct BihBuilder {
     using scalar_type = T;
-    static constexpr const char* name = "bih";
+    using node_type = BihNode<T>;  // traversed in these nodes (tree.hpp)
     static constexpr TreeKind kind = TreeKind::bih;
     BihBuildOptions options{};
 

@@ -17,14 +17,7 @@
 // polygon against the bin's planes), and a plane that cuts references in two wins when its
 // SAH cost is lower; a reference then sits on both sides, each piece bounded by its part
 // of the primitive. The references grow to at most spatial_budget times the primitives.
-//
-// The result is a binary tree whose node slots are assigned from the reference ranges, not
-// from the order of work: a node over n references at slot s has its left child at s + 1
-// and its right child at s + 2 n_L (a subtree over n references needs at most 2n - 1 slots;
-// with spatial splits n counts the room a subtree has for references, see BinnedSah).
-// So subtrees built by different threads never share an allocator, and the tree (every
-// slot, every primitive order) is the same for any thread count. The wide collapse
-// (wide_bvh.hpp) reads it from the root.
+// Node slots: binary_bvh.hpp.
 #pragma once
 
 #include <algorithm>
@@ -42,120 +35,9 @@
 #include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/trees/binary_bvh.hpp>
 
 namespace glint {
-
-/// Where the wide collapse (wide_bvh.hpp) puts a node's children in the node array: each
-/// child's subtree right after it (depth first), or a node's inner children side by side in
-/// one block, then their subtrees (000 §4.4's idea of placing a node's children together).
-enum class WideNodeOrder { depth_first, sibling_blocks };
-
-/// Cost constants and limits of the binned SAH build (docs/trees.md: how they were chosen).
-struct BvhBuildOptions {
-    float traversal_cost = 1.0f;     // C_T, per binary node
-    float intersection_cost = 1.0f;  // C_I, per started leaf block
-    std::uint32_t leaf_block = 8;    // primitives tested together (the batch kernel's width)
-    std::uint32_t max_leaf = 16;     // at most this many primitives per leaf (1 ... 16)
-    std::uint32_t bins = 16;         // centre bins per axis (2 ... 64)
-    unsigned threads = 1;            // build threads; 0: std::thread::hardware_concurrency()
-    WideNodeOrder node_order = WideNodeOrder::depth_first;  // the wide nodes' order in memory
-    float wide_node_cost = 1.0f;     // C_N, per wide node, in the wide collapse (wide_bvh.hpp)
-    // Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
-    // where the best object split's two boxes overlap by more than spatial_alpha times the
-    // root's surface area; references stay at most spatial_budget times the primitives.
-    bool spatial_splits = false;
-    float spatial_alpha = 1e-5f;
-    float spatial_budget = 1.5f;
-
-    void check() const {
-        auto bad = [](const std::string& what) { throw Error("BvhBuildOptions: " + what); };
-        if (!(traversal_cost >= 0) || !(intersection_cost > 0) || !(wide_node_cost >= 0) ||
-            !std::isfinite(traversal_cost) || !std::isfinite(intersection_cost) || !std::isfinite(wide_node_cost))
-            bad("costs must be finite, traversal_cost >= 0, intersection_cost > 0 and wide_node_cost >= 0 (got " +
-                std::to_string(traversal_cost) + ", " + std::to_string(intersection_cost) + ", " +
-                std::to_string(wide_node_cost) + ")");
-        if (leaf_block < 1 || max_leaf < 1 || max_leaf > 16)
-            bad("leaf_block >= 1 and max_leaf in 1 ... 16 (got " + std::to_string(leaf_block) + ", " +
-                std::to_string(max_leaf) + ")");
-        if (bins < 2 || bins > 64) bad("bins in 2 ... 64 (got " + std::to_string(bins) + ")");
-        if (!(spatial_alpha >= 0 && spatial_alpha <= 1) || !(spatial_budget >= 1 && spatial_budget <= 4))
-            bad("spatial_alpha in 0 ... 1 and spatial_budget in 1 ... 4 (got " + std::to_string(spatial_alpha) + ", " +
-                std::to_string(spatial_budget) + ")");
-    }
-    /// Leaf blocks started by n primitives: the unit in which the SAH counts C_I.
-    std::uint32_t blocks(std::uint32_t n) const { return (n + leaf_block - 1) / leaf_block; }
-    unsigned thread_count() const {
-        return threads ? threads : std::max(1u, std::thread::hardware_concurrency());
-    }
-};
-
-/// One slot of the binary tree. A leaf has right == 0 (slot 0 is the root, never a child).
-struct BinaryBvhNode {
-    AABB<float> box;
-    std::uint32_t begin = 0, count = 0;  // primitive range (a leaf's contents, an inner node's span)
-    std::uint32_t right = 0;             // inner: the right child's slot; the left one is this slot + 1
-    bool leaf() const { return right == 0; }
-};
-
-/// The binned SAH tree: `nodes` has 2n - 1 slots for n primitives (unused slots stay
-/// default); `prims` is the primitive order, leaf ranges index it.
-struct BinaryBvh {
-    std::vector<BinaryBvhNode> nodes;
-    std::vector<std::uint32_t> prims;
-    bool empty() const { return prims.empty(); }
-};
-
-/// What spatial splits need from a primitive: clip(p, axis, region) is a box holding every
-/// point of primitive p that lies in `region`'s slab on `axis`, within `region` (empty when
-/// there is none). `region` is a box already holding p's part in the node.
-template <class C>
-concept PrimitiveClipper = requires(const C& clip, std::uint32_t p, int axis, const AABB<float>& region) {
-    { clip(p, axis, region) } -> std::convertible_to<AABB<float>>;
-};
-
-/// No clipper: the build makes object splits only (BvhBuildOptions::spatial_splits refused).
-struct NoClipper {
-    AABB<float> operator()(std::uint32_t, int, const AABB<float>&) const { return {}; }
-};
-
-namespace detail {
-/// The next float after finite x toward +infinity (dir = 1) or -infinity (dir = -1).
-inline float float_step(float x, int dir) {
-    if (x == 0.0f) return dir > 0 ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
-    const auto bits = std::bit_cast<std::uint32_t>(x);
-    return std::bit_cast<float>((x > 0) == (dir > 0) ? bits + 1 : bits - 1);
-}
-}  // namespace detail
-
-/// The box of the part of triangle (a, b, c) between the planes of `region` on `axis`, within
-/// `region`, never smaller than that part (Stich et al. 2009 §3: a chopped reference is
-/// bounded by the triangle's part, not by its box's). That part's corners lie on the edges:
-/// each edge's piece between the two planes is found in double precision, the box of the
-/// pieces' ends rounded two floats outward (one for the rounding to float; the double's own
-/// error is far below the other), then intersected with `region` (whose planes are exact).
-inline AABB<float> clip_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, int axis, const AABB<float>& region) {
-    const Vec3d v[3] = {Vec3d(a), Vec3d(b), Vec3d(c)};
-    const double w0 = region.lo[axis], w1 = region.hi[axis];
-    Vec3d lo(infinity<double>), hi(-infinity<double>);
-    for (int i = 0; i < 3; ++i) {
-        Vec3d p = v[i], q = v[i == 2 ? 0 : i + 1];
-        if (p[axis] > q[axis]) std::swap(p, q);
-        if (q[axis] < w0 || p[axis] > w1) continue;  // the edge misses the slab
-        const Vec3d d = q - p;
-        const double inv = d[axis] > 0 ? 1.0 / d[axis] : 0.0;
-        const Vec3d e0 = p + d * std::max(0.0, (w0 - p[axis]) * inv);
-        const Vec3d e1 = d[axis] > 0 ? p + d * std::min(1.0, (w1 - p[axis]) * inv) : q;
-        lo = glm::min(lo, glm::min(e0, e1));
-        hi = glm::max(hi, glm::max(e0, e1));
-    }
-    AABB<float> out;
-    if (!(lo[axis] <= hi[axis])) return out;  // no point of the triangle between the planes
-    for (int ax = 0; ax < 3; ++ax) {  // two ulps out: one for rounding to float, one for the double's error
-        out.lo[ax] = std::max(region.lo[ax], detail::float_step(detail::float_step(float(lo[ax]), -1), -1));
-        out.hi[ax] = std::min(region.hi[ax], detail::float_step(detail::float_step(float(hi[ax]), 1), 1));
-    }
-    return out;
-}
 
 namespace detail {
 
@@ -194,7 +76,7 @@ class BinnedSah {
 public:
     BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, BinaryBvh& out)
         : refs_(refs), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
-          spatial_(opt.spatial_splits && !std::same_as<Clip, NoClipper>),
+          spatial_(opt.spatial_splits),
           min_overlap_(opt.spatial_alpha * root_area) {}
 
     void node(std::uint32_t slot, std::uint32_t b, std::uint32_t e, std::uint32_t cap, const AABB<float>& box,
@@ -490,14 +372,12 @@ inline void bvh_compact(BinaryBvh& out, const std::vector<BvhRef>& refs, std::ui
 
 /// Builds the binned SAH tree over the primitives whose box is not empty and finite
 /// (others are left out: they can never be hit). With opt.spatial_splits, `clip` chops
-/// primitives at split planes (clip_triangle for triangles); a primitive may then be in
+/// primitives at split planes (clip_triangle for triangles; NoClipper chops their boxes); a primitive may then be in
 /// several leaves (prims holds it once per leaf), at most opt.spatial_budget times the
 /// primitives in all.
 template <PrimitiveClipper Clip = NoClipper>
 BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
     opt.check();
-    if (opt.spatial_splits && std::same_as<Clip, NoClipper>)
-        throw Error("build_binary_bvh: spatial_splits needs a clipper for the primitives (MeshBvh gives triangles one)");
     std::vector<detail::BvhRef> refs;
     AABB<float> root;
     for (std::uint32_t i = 0; i < boxes.size(); ++i) {

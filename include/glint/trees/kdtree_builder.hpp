@@ -1,7 +1,7 @@
 // glint/trees/kdtree_builder.hpp: SAH kd-tree builder, O(n log n), after Wald and Havran,
 // "On building fast kd-trees for ray tracing, and on doing that in O(N log N)" (2006).
 //
-// 000 section 4.2 names the kd-tree (with BVH and BIH) as the scheme with
+// Szécsi 2009, §4.2 names the kd-tree (with BVH and BIH) as the scheme with
 // the lowest expected number of intersections: its cell boundaries are placed around the
 // objects. This builder places them by the surface area heuristic:
 //
@@ -12,18 +12,10 @@
 // - K_I (`intersection_cost`, default 0.07): one triangle test in units of K_T. Leaves are
 //   padded to whole batches and tested with the SIMD batch kernel (8 triangles at once),
 //   while a traversal step is a chain of dependent loads, compares and a hard-to-predict
-//   choice: measured on incoherent rays (bunny, 128k-triangle knot, Moller-Trumbore and
-//   Wald kernels), K_I = 0.05-0.1 was fastest (0.05 best on the knot, 0.1 on the bunny,
-//   0.07 within 3% of the best on both), 1.2 was 1.5-2x slower and built 5-20x more nodes.
-//   Re-swept after the batch kernels got 1.6x faster (docs/trees.md, `bench_trees --ki`):
-//   incoherent rays on the knot now prefer 0.03-0.05 (0.67-0.73 of Embree against 0.64 at
-//   0.07), the bunny is flat over 0.04-0.1, and primary rays prefer larger K_I (bunny 0.81
-//   of Embree at 0.03, 1.12 at 0.07, 1.26 at 0.15), so 0.07 stays the default;
+//   choice, so a test costs far less than a step (docs/notes/trees.md: the measurements);
 // - lambda = 1 - `empty_bonus` (default 0.9) when one side is empty and has volume: the
 //   empty-space cut-off of Wald and Havran, which favours cutting empty space away. Since
-//   traversal never enters empty leaves, an empty cell costs no step of its own; a bonus
-//   of 0.1 was 3-5% faster than 0.2 on both scenes (0.2 cuts so much empty space that the
-//   extra splits cost more steps than they save);
+//   traversal never enters empty leaves, an empty cell costs no step of its own;
 // - a node becomes a leaf when no split is cheaper than cost(leaf), or at depth
 //   `max_depth` (default 8 + 1.3 log2 N, at most 56, which bounds the traversal stack).
 //
@@ -336,7 +328,7 @@ private:
 template <Scalar T>
 struct KdTreeBuilder {
     using scalar_type = T;
-    static constexpr const char* name = "kd";
+    using node_type = KdNode<T>;  // traversed in these nodes (tree.hpp)
     static constexpr TreeKind kind = TreeKind::kd;
     KdBuildOptions options{};
 

@@ -1,15 +1,15 @@
 // glint/trees/layouts.hpp: node layouts, the policies that encode a BuiltTree into an
 // array of equal-size nodes (tree.hpp's EncodedNode) and tell traversal where children are.
 //
-// 000 section 4.4 (Fig. 4.3):
+// Szécsi 2009, §4.4 (Fig. 4.3):
 // - PointerLayout: every split node carries the index of its first child; the two children
 //   are adjacent (right = left + 1), so one index per split node suffices.
-// - HavranSubtrees<K> (Havran 2001, as 000 describes it): the tree is cut into compact
+// - HavranSubtrees<K> (Havran 2001, as Szécsi 2009 describes it): the tree is cut into compact
 //   subtrees of K = 2^d - 1 slots; inside a subtree the children of local slot n are
 //   2n + 1 and 2n + 2. The last level of a subtree holds pointers only: every node that
 //   falls on it, split or leaf, becomes a pointer to the root of a fresh subtree. Slots below
 //   a leaf inside a subtree ("orphaned trees below leaf nodes") stay unused.
-// - CompactSubtrees<K> (000's layout): the same compact subtrees, but
+// - CompactSubtrees<K> (Szécsi 2009's layout): the same compact subtrees, but
 //   (a) a leaf that falls on the pointer level is stored in the pointer's slot ("the pointer
 //   level of the cache line may also contain leaves"), and (b) when a branch ends early, the
 //   would-be children of the leaf become roots of free subtrees whose locations are
@@ -20,11 +20,10 @@
 //   level and cannot hold a split node, so they stay unused (and count as wasted).
 // Subtrees are filled breadth-first between subtrees: pending pointers form a queue, and a
 // pointer's target is chosen only when the pointer leaves the queue, so that every hole made
-// up to then (by this subtree and by its siblings) is available to it. (Choosing targets
-// when the pointer is written left 3 times more slots unused on BIHs.)
+// up to then (by this subtree and by its siblings) is available to it.
 //
 // Accounting (LayoutStats): slots allocated, split/leaf/pointer nodes, wasted slots, node
-// bytes and node bytes per triangle. 000 Fig. 4.6 compares exactly these node bytes.
+// bytes and node bytes per triangle. Szécsi 2009, Fig. 4.6 compares exactly these node bytes.
 #pragma once
 
 #include <algorithm>
@@ -54,9 +53,6 @@ inline void check_index(std::size_t i) {
 
 /// Every split node stores its first child's index; children are adjacent.
 struct PointerLayout {
-    static constexpr const char* name = "pointer";
-    static std::string label() { return name; }
-
     template <class T, class Node>
     static LayoutStats encode(const BuiltTree<T>& tree, std::span<const std::array<std::uint32_t, 2>> leaf_groups,
                               std::vector<Node>& out) {
@@ -97,7 +93,7 @@ private:
 
 namespace detail {
 
-/// Compact subtrees of K = 2^d - 1 slots, with (Compact) or without (Havran) 000's reuse of
+/// Compact subtrees of K = 2^d - 1 slots, with (Compact) or without (Havran) Szécsi 2009's reuse of
 /// orphaned subtrees and leaves in pointer slots.
 template <std::uint32_t K, bool Compact>
 struct SubtreeLayout {
@@ -105,8 +101,6 @@ struct SubtreeLayout {
     static constexpr std::uint32_t subtree_size = K;
     static constexpr std::uint32_t depth = std::bit_width(K);  // d levels
     static constexpr std::uint32_t half = (K - 1) / 2;         // local slots >= half: pointer level
-
-    static std::string label() { return std::string(Compact ? "compact-" : "havran-") + std::to_string(K); }
 
     template <class Node>
     static std::uint32_t first_child(const Node&, std::uint32_t index, std::uint32_t base) {
@@ -230,7 +224,7 @@ private:
 template <std::uint32_t K>
 struct HavranSubtrees : detail::SubtreeLayout<K, false> {};
 
-/// 000's compact subtrees of K nodes: leaves in pointer slots, orphaned subtrees reused.
+/// Szécsi 2009's compact subtrees of K nodes: leaves in pointer slots, orphaned subtrees reused.
 template <std::uint32_t K>
 struct CompactSubtrees : detail::SubtreeLayout<K, true> {};
 

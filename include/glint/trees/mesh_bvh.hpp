@@ -7,7 +7,7 @@
 //   if (bvh.closest_hit(ray, hit)) ...
 //
 // Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
-// intersector's batch kernel through the leaf callable WideBvh::intersect takes), laid out
+// intersector's batch kernel through the leaf callable, a LeafQuery, WideBvh::intersect takes), laid out
 // in the order traversal meets the nodes.
 // The mesh is read only while building; the accelerator keeps its own records.
 // With BvhBuildOptions::spatial_splits (bvh_builder.hpp) a triangle may have a record in
@@ -77,10 +77,6 @@ public:
     using scalar_type = float;
     using T = float;
     using intersector_type = P;
-    static constexpr const char* name = N == 8 ? "bvh8" : "bvh4";
-    static constexpr const char* boxes_label = WideBvh<N, B, L>::boxes_label;
-    /// The benchmarks' layout column (box format and node layout).
-    static std::string layout_label() { return WideBvh<N, B, L>::layout_label(); }
 
     /// From the user's indexed mesh (hits report the index of the user's triangle).
     explicit MeshBvh(const IndexedMesh<float>& mesh, const BvhBuildOptions& opt = {}) {
@@ -93,14 +89,29 @@ public:
     }
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
-    /// With `counters`, counts nodes, leaves and records tested.
-    /// (Two instances of one traversal: without counters the counting is compiled out.)
-    bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters = nullptr) const {
-        return counters ? closest<true>(ray, hit, counters) : closest<false>(ray, hit, nullptr);
+    bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit) const { return closest(ray, hit); }
+    /// closest_hit(), counting the nodes, leaves and records it tests into `counters`.
+    bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters& counters) const {
+        Ray<float> r = ray_before(ray, hit);
+        StoreHit<float> h = hit;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, false> leaf(leaves_, r, world, h);
+        const auto counted = [&](std::uint32_t first, std::uint32_t count) {
+            ++counters.leaves;
+            counters.records += leaves_.records(first, count);
+            return leaf(first, count);
+        };
+        if (!bvh_.template intersect<false>(r, counted, [&] { ++counters.nodes; })) return false;
+        hit = leaf.hit();
+        return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
-        return leaves_.any_hit(ray, [&](Ray<float>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return bvh_.template intersect<true>(r, leaf); });
+        Ray<float> r = ray;
+        StoreHit<float> h;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, true> leaf(leaves_, r, world, h);
+        return bvh_.template intersect<true>(r, leaf);
     }
 
     const WideBvh<N, B, L>& bvh() const { return bvh_; }
@@ -110,13 +121,16 @@ public:
     std::size_t total_bytes() const { return bvh_.stats().node_bytes + leaves_.bytes(); }
 
 private:
-    template <bool Counted>
-    [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters* counters) const {
-        if constexpr (!Counted) counters = nullptr;  // a constant: the counting disappears
-        return leaves_.closest_hit(
-            ray, hit,
-            [&](Ray<float>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return bvh_.template intersect<false>(r, leaf, counters); },
-            counters ? &counters->records : nullptr);
+    [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit) const {
+        // On local copies: the compiler keeps them in registers (the caller's `hit` could
+        // alias the traversal stack's floats).
+        Ray<float> r = ray_before(ray, hit);
+        StoreHit<float> h = hit;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, false> leaf(leaves_, r, world, h);
+        if (!bvh_.template intersect<false>(r, leaf)) return false;
+        hit = leaf.hit();
+        return true;
     }
 
     template <class Get>

@@ -1,10 +1,11 @@
 // glint/trees/traversal.hpp: the tree accelerator (builder x intersector x layout) and its
 // closest-hit and any-hit traversal.
 //
-// 000 section 4.3: starting at the root, at a split node the children are
+// Szécsi 2009, §4.3: starting at the root, at a split node the children are
 // labelled near and far by the sign of the ray direction on the split axis; the ray
 // segments inside the two cells come from one ray-plane intersection (kd-tree) or two
-// (BIH; 000 says "four", counting the GPU BIH's four planes). If only one
+// (BIH; Szécsi 2009 says "four", counting the GPU BIH's four planes; the node computes
+// them, EncodedNode::distances). If only one
 // cell has a non-empty segment it is entered; otherwise the far cell and its segment are
 // pushed on a stack and the near cell is entered. At a leaf all its triangles are tested
 // and the nearest kept; a popped cell whose segment starts beyond the best hit is skipped.
@@ -54,7 +55,7 @@ class TreeAccelerator {
 public:
     using scalar_type = typename P::scalar_type;
     using T = scalar_type;
-    using Node = std::conditional_t<B::kind == TreeKind::kd, KdNode<T>, BihNode<T>>;
+    using Node = typename B::node_type;
     using builder_type = B;
     using intersector_type = P;
     using layout_type = L;
@@ -67,7 +68,7 @@ public:
     /// or for several intersectors).
     TreeAccelerator(std::span<const TriangleVertices<T>> tris, const BuiltTree<T>& tree) {
         if (tree.kind != B::kind || tree.triangle_count != tris.size())
-            throw Error(std::string("TreeAccelerator: the built tree is not a ") + B::name + " tree over these " +
+            throw Error("TreeAccelerator: the built tree is not of this builder's kind over these " +
                         std::to_string(tris.size()) + " triangles");
         bounds_ = tree.bounds;
         std::vector<std::array<std::uint32_t, 2>> groups(tree.nodes.size(), {0u, 0u});
@@ -87,11 +88,21 @@ public:
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); true when `hit` was updated.
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) const {
-        return leaves_.closest_hit(ray, hit, [&](Ray<T>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return intersect<false>(r, leaf); });
+        Ray<T> r = ray_before(ray, hit);  // local copies: the compiler keeps them in registers
+        StoreHit<T> h = hit;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, false> leaf(leaves_, r, world, h);
+        if (!intersect<false>(r, leaf)) return false;
+        hit = leaf.hit();
+        return true;
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<T>& ray) const {
-        return leaves_.any_hit(ray, [&](Ray<T>& r, auto&& leaf) __attribute__((always_inline)) -> bool { return intersect<true>(r, leaf); });
+        Ray<T> r = ray;
+        StoreHit<T> h;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, true> leaf(leaves_, r, world, h);
+        return intersect<true>(r, leaf);
     }
 
     const LayoutStats& stats() const { return stats_; }
@@ -101,7 +112,7 @@ public:
     /// Node bytes plus triangle-record bytes.
     std::size_t total_bytes() const { return stats_.node_bytes() + leaves_.bytes(); }
 
-    /// Closest (Any = false) or any hit through a leaf callable (LeafTest):
+    /// Closest (Any = false) or any hit through a leaf callable (LeafTest, e.g. a LeafQuery):
     /// `leaf(first, count)` is called for the non-empty leaves the ray enters, near to far,
     /// with the leaf's reference in the TriangleLeaves (leaves()); for closest hit it lowers
     /// ray.tmax to each hit it finds, and cells beyond ray.tmax are skipped.
@@ -189,25 +200,15 @@ private:
         const std::uint32_t first = L::first_child(n, index, base);
         const std::uint32_t ng = neg[axis];
         T tn, tf;
-        if constexpr (B::kind == TreeKind::kd) {
-            tn = tf = (n.plane[0] - org[axis]) * inv[axis];
-        } else {
-            const T tl = (n.plane[0] - org[axis]) * inv[axis];
-            const T tr = (n.plane[1] - org[axis]) * inv[axis];
-            tn = ng ? tr : tl;
-            tf = ng ? tl : tr;
-        }
+        n.distances(org[axis], inv[axis], ng, tn, tf);
         const std::uint32_t near = first + ng, far = first + 1 - ng;
-        // Empty leaves (the empty space the SAH cut off) are never entered: on incoherent
-        // rays they were two of every three leaves visited, each a step and a pop
-        // (knot-128k: 7.7 leaves per ray, 2.5 of them with triangles).
+        // Empty leaves (the empty space the SAH cut off) are never entered.
         const bool visit_near = !(tn < t0) & !nodes[near].is_empty_leaf();
         const bool visit_far = !(tf > t1) & !nodes[far].is_empty_leaf();
         if (!(visit_near | visit_far)) return false;
         // The far cell is always written to the stack but kept only when both cells are
         // entered; the cell entered is the near one if its segment is not empty, else the
-        // far one. (The compiler turns the selects into a predicted branch; forcing bitwise
-        // selects measured 20% slower on knot-128k.)
+        // far one.
         const T near_t1 = tn < t1 ? tn : t1, far_t0 = tf > t0 ? tf : t0;
         stack[sp] = Entry{far, base, far_t0, t1};
         sp += int(visit_near & visit_far);

@@ -2,7 +2,7 @@
 // builders, the equal-size node formats the layouts encode it into, and the concepts that
 // connect builders, layouts and accelerators.
 //
-// 000 section 4.2: a kd-tree splits a cell with one axis-aligned plane into
+// Szécsi 2009, §4.2: a kd-tree splits a cell with one axis-aligned plane into
 // two disjoint cells, so a triangle crossing the plane is referenced from both; a BIH
 // (bounding interval hierarchy) stores two planes per node, the left child's maximum and the
 // right child's minimum along the axis, so every triangle is referenced once and the children
@@ -70,16 +70,17 @@ struct BuiltTree {
     }
 };
 
-/// A builder: a policy that turns triangles into a BuiltTree.
+/// A builder: a policy that turns triangles into a BuiltTree of its kind, and names the
+/// encoded node format its trees are traversed in.
 template <class B>
 concept TreeBuilder = requires(const B b, std::span<const TriangleVertices<typename B::scalar_type>> tris) {
-    { B::name } -> std::convertible_to<const char*>;
+    typename B::node_type;
     { B::kind } -> std::convertible_to<TreeKind>;
     { b.build(tris) } -> std::same_as<BuiltTree<typename B::scalar_type>>;
 };
 
 // ---------------------------------------------------------------------------------------
-// Encoded nodes. 000 section 4.4: "Every element has the same size, but it
+// Encoded nodes. Szécsi 2009, §4.4: "Every element has the same size, but it
 // can be of three different types": a leaf (triangle count and start of its block in the
 // leaf list), a splitting node (plane position(s) and axis) and a pointer node (an index to
 // another node). glint's nodes describe themselves in the low bits of one 32-bit word:
@@ -89,7 +90,7 @@ concept TreeBuilder = requires(const B b, std::span<const TriangleVertices<typen
 //                          leaf), the first index in the plane slot's bits; the range counts
 //                          groups for intersectors with frames (IVM), records otherwise;
 //   word & 7 == 7:         pointer; word >> 3 = index of the node it stands for.
-// A kd node is 8 bytes for float (one plane), a BIH node 12 (two planes). Repair: 000 says
+// A kd node is 8 bytes for float (one plane), a BIH node 12 (two planes). Repair: Szécsi 2009 says
 // one bit marks a leaf and the position inside the subtree tells pointers from splits; we
 // spend one more bit so that traversal needs no position arithmetic to tell them apart.
 // ---------------------------------------------------------------------------------------
@@ -141,6 +142,14 @@ struct EncodedNode {
     std::uint32_t target() const { return word >> 3; }    // pointer nodes
     std::uint32_t group_count() const { return word >> 3; }  // leaves: groups or records
     std::uint32_t group_begin() const { return detail::unpack_index<T>(plane[0]); }
+    /// Split nodes: where a ray (origin o and inverse direction inv on the node's axis, neg:
+    /// the direction's sign bit there) crosses into the near child's side (tn) and out of the
+    /// far child's (tf): one plane gives both for a kd node, two planes for a BIH node.
+    [[gnu::always_inline]] void distances(T o, T inv, std::uint32_t neg, T& tn, T& tf) const {
+        const T tl = (plane[0] - o) * inv, tr = (plane[Planes - 1] - o) * inv;
+        tn = neg ? tr : tl;
+        tf = neg ? tl : tr;
+    }
 
     static EncodedNode split(const BuildNode<T>& b, std::uint32_t child) {
         EncodedNode n{};
@@ -192,7 +201,6 @@ template <class L>
 concept NodeLayout = requires(const BuiltTree<float>& t, std::vector<KdNode<float>>& out,
                               std::span<const std::array<std::uint32_t, 2>> leaf_groups,
                               const KdNode<float>& n, std::uint32_t i) {
-    { L::label() } -> std::convertible_to<std::string>;
     { L::encode(t, leaf_groups, out) } -> std::same_as<LayoutStats>;
     { L::first_child(n, i, i) } -> std::same_as<std::uint32_t>;
     { L::block_base(i) } -> std::same_as<std::uint32_t>;
