@@ -64,6 +64,7 @@
 #include <glint/trees/traversal.hpp>
 
 #include "support/args.hpp"
+#include "support/intersector_names.hpp"
 #include "tree_scenes.hpp"
 
 #ifdef GLINT_HAVE_EMBREE
@@ -359,7 +360,7 @@ void run_combination(const Scene& sc, const TimedTree& built, const Peer* peer, 
     base.scene = sc.name;
     base.tree = Accel::builder_type::name;
     base.layout = Accel::layout_type::label();
-    base.intersector = Accel::intersector_type::name;
+    base.intersector = bench::intersector_name<typename Accel::intersector_type>;
     base.build_s = built.seconds + seconds_since(t0);
     base.node_bytes = acc.stats().node_bytes();
     base.bytes_per_tri = acc.stats().bytes_per_triangle();
@@ -386,7 +387,7 @@ void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector
                     double(acc.bvh().prims().size()) / double(sc.mesh.size()), double(bo.spatial_budget),
                     build_s, bo.threads);
     base.layout = MeshBvh<P, N, B, L>::layout_label();
-    base.intersector = P::name;
+    base.intersector = bench::intersector_name<P>;
     base.build_s = build_s;
     base.node_bytes = acc.bvh().stats().node_bytes;
     base.bytes_per_tri = double(base.node_bytes) / double(sc.mesh.size());

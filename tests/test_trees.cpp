@@ -40,6 +40,7 @@
 #include <glint/trees/brute_force.hpp>
 #include <glint/trees/layouts.hpp>
 #include <glint/trees/mesh_bvh.hpp>
+#include "../benchmarks/support/intersector_names.hpp"
 #include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 
@@ -297,7 +298,7 @@ void check_agreement(const Scene& sc, const std::vector<StoreHit<float>>& ref, c
             check_any(shadow, tree.any_hit(shadow), tree.closest_hit(shadow, hs));
         }
     }
-    std::string what = sc.name + " " + P::name + " ";
+    std::string what = sc.name + " " + bench::intersector_name<P> + " ";
     if constexpr (requires { Accel::layout_type::label(); })
         what += std::string(Accel::builder_type::name) + " " + Accel::layout_type::label();
     else
@@ -593,7 +594,7 @@ void check_nan_interval() {
             ++aimed;
         }
     }
-    INFO(std::string(P::name));
+    INFO(std::string(bench::intersector_name<P>));
     CHECK(aimed > 100);
     CHECK(brute_hit == 0);
     CHECK(trees_hit == 0);
