@@ -9,6 +9,7 @@
 // containers can store it field by field in blocks (SoaView) and load it back bit for bit.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <concepts>
@@ -172,7 +173,7 @@ template <class P>
 /// compile time, as tree leaves call it, the lane loop is straight-line SIMD code. P's own
 /// `batch` where it has one, else test_lanes.
 template <class P>
-[[gnu::always_inline]] inline void batch(const RecordView<P>& view, std::size_t first, std::size_t n,
+inline void batch(const RecordView<P>& view, std::size_t first, std::size_t n,
                                          const RayDataOf<P>& r, typename P::scalar_type* ts,
                                          typename P::scalar_type* us, typename P::scalar_type* vs) {
     if constexpr (requires { P::batch(view, first, n, r, ts, us, vs); }) P::batch(view, first, n, r, ts, us, vs);

@@ -316,26 +316,26 @@ private:
     template <bool Any>
     bool traverse(BlockRef b, const Ray<T>& ray, StoreHit<T>& hit) const {
         const RecordView<P> v = view();
-        T limit = std::min(ray.tmax, hit.t);
+        Ray<T> local = ray;
+        local.tmax = std::min(ray.tmax, hit.t);
         bool found = false;
         T ts[W], us[W], vs[W];
         for (std::uint32_t gi = b.group_begin; gi < b.group_end; ++gi) {
             const Group& g = groups_[gi];
-            Ray<T> local = Frame::local(ray, g.origin);
-            local.tmax = limit;
+            local.origin = Frame::local(ray, g.origin).origin;
             const RayData rd = P::prepare(local);
             // Batches end at block boundaries: an unpadded group may start mid-block.
             for (std::size_t first = g.begin, n; first < g.end; first += n) {
                 n = std::min<std::size_t>(W - first % W, g.end - first);
                 detail::batch<P>(v, first, n, rd, ts, us, vs);
-                // Most blocks have no hit closer than the limit: one cheap test first.
+                // Most blocks have no hit closer than tmax: one cheap test first.
                 bool any = false;
-                for (std::size_t k = 0; k < n; ++k) any |= ts[k] < limit;
+                for (std::size_t k = 0; k < n; ++k) any |= ts[k] < local.tmax;
                 if (!any) continue;
                 if constexpr (Any) return true;
                 for (std::size_t k = 0; k < n; ++k) {
-                    if (ts[k] < limit) {
-                        limit = ts[k];
+                    if (ts[k] < local.tmax) {
+                        local.tmax = ts[k];
                         hit.t = ts[k];
                         hit.u = us[k];
                         hit.v = vs[k];
