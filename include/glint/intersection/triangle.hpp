@@ -242,14 +242,12 @@ public:
     /// group's frame and the interval (ray.tmin, min(ray.tmax, hit.t)); `world` is
     /// P::prepare(ray), made once per query (the IdentityFrame uses it as it is).
     template <bool Any>
-    [[gnu::always_inline]] bool test_leaf(std::uint32_t first, std::uint32_t count, const Ray<T>& ray,
-                                          const RayData& world, StoreHit<T>& hit) const {
-        return Frame::template each_group<Any>(*this, first, count,
-                                               [&](std::uint32_t begin, std::uint32_t end, const Vec3<T>& origin) {
-                                                   return test_batches<Any>(
-                                                       begin, end, Frame::template prepare<P>(ray, origin, hit.t, world),
-                                                       hit);
-                                               });
+    bool test_leaf(std::uint32_t first, std::uint32_t count, const Ray<T>& ray, const RayData& world,
+                   StoreHit<T>& hit) const {
+        auto group = [&](std::uint32_t begin, std::uint32_t end, const Vec3<T>& origin) __attribute__((always_inline)) {
+            return test_batches<Any>(begin, end, Frame::template prepare<P>(ray, origin, hit.t, world), hit);
+        };
+        return Frame::template each_group<Any>(*this, first, count, group);
     }
 
 private:
