@@ -61,7 +61,7 @@ struct CountingIvm {
         ++counted_tests;
         return rec.test(r, t, u, v);
     }
-    static void batch(const RecordView<CountingIvm>& v, std::size_t first, std::size_t n, const RayData& r, float* ts,
+    static void batch(const RecordView<Ivm<float>>& v, std::size_t first, std::size_t n, const RayData& r, float* ts,
                       float* us, float* vs) {
         counted_tests += n;
         detail::batch<Ivm<float>>(v, first, n, r, ts, us, vs);
