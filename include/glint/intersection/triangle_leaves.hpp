@@ -9,7 +9,7 @@
 // storage for triangles of intersector P: it owns the records (a TriangleStore<P>), their
 // padding to whole batches of batch_width records (so a leaf runs P's batch kernel at its
 // full, compile-time width), and the frames of its records
-// (frame.hpp: none for most tests, an origin per group for the IVM, Szécsi 2009, §4.1); what
+// (frame.hpp: the identity for most tests, an origin per group for the IVM, Szécsi 2009, §4.1); what
 // a reference counts (padded records, or groups of records sharing a frame) is the frame's
 // business, not the tree's. A tree's leaf callable is
 // `[&](first, count) { return leaves.test<Any>(first, count, ray, world, hit); }` with
