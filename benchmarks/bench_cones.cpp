@@ -51,27 +51,20 @@ thread_local std::uint64_t counted_tests = 0;
 
 struct CountingIvm {
     using scalar_type = float;
+    using frame = OffsetFrames;
     using RayData = Ivm<float>::RayData;
-    static constexpr const char* name = "CountingIvm";
-    static constexpr bool uses_frame = true;
-    static constexpr int field_count = 9;
     Ivm<float> rec;
 
     static CountingIvm build(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return {Ivm<float>::build(a, b, c)}; }
     static RayData prepare(const Ray<float>& r) { return Ivm<float>::prepare(r); }
-    static bool test(const float (&x)[9], const RayData& r, float& t, float& u, float& v) {
-        return Ivm<float>::test(x, r, t, u, v);
-    }
-    bool intersect(const RayData& r, TriangleHit<float>& h) const {
+    bool test(const RayData& r, float& t, float& u, float& v) const {
         ++counted_tests;
-        return rec.intersect(r, h);
+        return rec.test(r, t, u, v);
     }
-    void store(float* out) const { rec.store(out); }
-    static CountingIvm load(const SoaView<float, 9>& v, std::size_t i) { return {Ivm<float>::load(v, i)}; }
-    static void batch(const SoaView<float, 9>& v, std::size_t first, std::size_t n, const RayData& r, float* ts,
+    static void batch(const RecordView<Ivm<float>>& v, std::size_t first, std::size_t n, const RayData& r, float* ts,
                       float* us, float* vs) {
         counted_tests += n;
-        Ivm<float>::batch(v, first, n, r, ts, us, vs);
+        detail::batch<Ivm<float>>(v, first, n, r, ts, us, vs);
     }
 };
 static_assert(TriangleIntersector<CountingIvm>);

@@ -23,6 +23,7 @@
 #include <glint/intersection/watertight.hpp>
 
 #include "../tests/intersection_cases.hpp"
+#include "support/intersector_names.hpp"
 
 using namespace glint;
 
@@ -35,7 +36,7 @@ template <class P>
 struct ScalarSetup {
     using T = typename P::scalar_type;
     std::vector<P> records;
-    std::vector<typename P::RayData> rays;
+    std::vector<RayDataOf<P>> rays;
     ScalarSetup() {
         const auto cases = testing::random_cases<T>(42, kPairs);
         for (const auto& c : cases) {
@@ -43,10 +44,8 @@ struct ScalarSetup {
             TriangleStore<P> store;
             const std::uint32_t id = 0;
             store.add_block(std::span(&c.tri, 1), std::span(&id, 1));
-            Ray<T> local = c.ray;
-            local.origin -= store.group(0).origin;
             records.push_back(store.record(0));
-            rays.push_back(P::prepare(local));
+            rays.push_back(P::prepare(TriangleStore<P>::Frame::local(c.ray, store.group(0).origin)));
         }
     }
 };
@@ -58,7 +57,7 @@ void scalar(benchmark::State& state) {
     for (auto _ : state) {
         for (std::size_t i = 0; i < kPairs; ++i) {
             TriangleHit<typename P::scalar_type> h;
-            const bool hit = s.records[i].intersect(s.rays[i], h);
+            const bool hit = intersect_record(s.records[i], s.rays[i], h);
             benchmark::DoNotOptimize(hit);  // keeps the loop one test at a time
             hits += hit;
         }
@@ -105,7 +104,7 @@ void batch(benchmark::State& state) {
 
 template <class P>
 std::string bench_name(const char* kind) {
-    std::string n = std::string(kind) + "/" + P::name;
+    std::string n = std::string(kind) + "/" + bench::intersector_name<P>;
     if (sizeof(typename P::scalar_type) == 8) n += "/Double";
     return n;
 }
@@ -178,7 +177,7 @@ int main(int argc, char** argv) {
     }
     const auto ivm = collector.ns_per_test.find("Scalar/Ivm"), mt = collector.ns_per_test.find("Scalar/MollerTrumbore");
     if (ivm != collector.ns_per_test.end() && mt != collector.ns_per_test.end())
-        std::printf("\nIVM / Moller-Trumbore time per scalar float test: %.3f (000 section 4.1.1 claims < 1)\n",
+        std::printf("\nIVM / Moller-Trumbore time per scalar float test: %.3f (Szécsi 2009, §4.1.1 claims < 1)\n",
                     ivm->second / mt->second);
     return 0;
 }

@@ -65,6 +65,7 @@
 #include <glint/trees/traversal.hpp>
 
 #include "support/args.hpp"
+#include "support/intersector_names.hpp"
 #include "tree_scenes.hpp"
 
 #ifdef GLINT_HAVE_EMBREE
@@ -145,11 +146,7 @@ Mesh<float> read_obj(const std::string& path) {
     return m;
 }
 
-/// The table's labels: the library's types carry none.
-const char* intersector_label(std::type_identity<MollerTrumbore<float>>) { return "MollerTrumbore"; }
-const char* intersector_label(std::type_identity<Wald<float>>) { return "Wald"; }
-const char* intersector_label(std::type_identity<Watertight<float>>) { return "Watertight"; }
-const char* intersector_label(std::type_identity<Ivm<float>>) { return "Ivm"; }
+/// The table's labels: the library's types carry none (intersectors: support/intersector_names.hpp).
 std::string layout_label(std::type_identity<PointerLayout>) { return "pointer"; }
 template <std::uint32_t K>
 std::string layout_label(std::type_identity<HavranSubtrees<K>>) { return "havran-" + std::to_string(K); }
@@ -378,7 +375,7 @@ void run_combination(const Scene& sc, const TimedTree& built, const Peer* peer, 
     base.scene = sc.name;
     base.tree = built.tree.kind == TreeKind::kd ? "kd" : "bih";
     base.layout = layout_label(std::type_identity<typename Accel::layout_type>{});
-    base.intersector = intersector_label(std::type_identity<typename Accel::intersector_type>{});
+    base.intersector = bench::intersector_name<typename Accel::intersector_type>;
     base.build_s = built.seconds + seconds_since(t0);
     base.node_bytes = acc.stats().node_bytes();
     base.bytes_per_tri = acc.stats().bytes_per_triangle();
@@ -405,7 +402,7 @@ void run_wide(const Scene& sc, const Peer* peer, const Options& opt, std::vector
                     double(acc.bvh().prims().size()) / double(sc.mesh.size()), double(bo.spatial_budget),
                     build_s, bo.threads);
     base.layout = wide_layout_label<B>(std::type_identity<L>{});
-    base.intersector = intersector_label(std::type_identity<P>{});
+    base.intersector = bench::intersector_name<P>;
     base.build_s = build_s;
     base.node_bytes = acc.bvh().stats().node_bytes;
     base.bytes_per_tri = double(base.node_bytes) / double(sc.mesh.size());

@@ -20,6 +20,7 @@
 #include <glint/intersection/watertight.hpp>
 
 #include "../tests/intersection_cases.hpp"
+#include "support/intersector_names.hpp"
 
 using namespace glint;
 using namespace glint::testing;
@@ -40,7 +41,7 @@ void run_policy(std::vector<Row>& rows, std::size_t scale) {
     const std::string prec = sizeof(T) == 4 ? "float" : "double";
     auto add = [&](const std::string& category, const std::vector<Case<T>>& cases) {
         const Agreement a = measure_agreement<P>(cases, kBand);
-        rows.push_back({P::name, prec, category, a.pairs, a.reference_hits, a.false_miss, a.false_hit,
+        rows.push_back({bench::intersector_name<P>, prec, category, a.pairs, a.reference_hits, a.false_miss, a.false_hit,
                         a.false_miss_far + a.false_hit_far, a.max_t_ulps});
     };
     add("random", random_cases<T>(2024, 100 * scale));
@@ -54,7 +55,7 @@ void run_policy(std::vector<Row>& rows, std::size_t scale) {
 
     std::size_t rays_total = 0;
     const std::size_t leaks_total = closed_mesh_leaks<P>(rays_total);
-    rows.push_back({P::name, prec, "closed-mesh", rays_total, rays_total, leaks_total, 0, leaks_total, 0});
+    rows.push_back({bench::intersector_name<P>, prec, "closed-mesh", rays_total, rays_total, leaks_total, 0, leaks_total, 0});
 }
 
 }  // namespace

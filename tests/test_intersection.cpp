@@ -14,10 +14,15 @@
 #include <glint/intersection/wald.hpp>
 #include <glint/intersection/watertight.hpp>
 
+#include <glint/trees/brute_force.hpp>
+#include <glint/trees/mesh_bvh.hpp>
+
+#include "../benchmarks/support/intersector_names.hpp"
 #include "intersection_cases.hpp"
 
 using namespace glint;
 using namespace glint::testing;
+using glint::bench::intersector_name;
 
 #define GLINT_ALL_POLICIES                                                                 \
     Ivm<float>, MollerTrumbore<float>, Wald<float>, Watertight<float>, Ivm<double>,        \
@@ -87,12 +92,10 @@ TEST_CASE_TEMPLATE("agreement: batch kernel equals the scalar test", P, GLINT_AL
         std::uint32_t best_id = ~0u;
         for (std::size_t g = 0; g < store.group_count(); ++g) {
             const auto& grp = store.group(g);
-            Ray<T> local = c.ray;
-            local.origin -= grp.origin;
-            const auto rd = P::prepare(local);
+            const auto rd = P::prepare(TriangleStore<P>::Frame::local(c.ray, grp.origin));
             for (std::uint32_t i = grp.begin; i < grp.end; ++i) {
                 TriangleHit<T> h;
-                if (store.record(i).intersect(rd, h) && h.t < best) {
+                if (intersect_record(store.record(i), rd, h) && h.t < best) {
                     best = h.t;
                     best_id = store.id(i);
                 }
@@ -102,7 +105,7 @@ TEST_CASE_TEMPLATE("agreement: batch kernel equals the scalar test", P, GLINT_AL
         if (b != (best_id != ~0u) || (b && (batch_hit.id != best_id))) ++mismatches;
         CHECK(store.any_hit(block, c.ray) == b);
     }
-    INFO(P::name, " hits ", hits, " mismatches ", mismatches);
+    INFO(intersector_name<P>, " hits ", hits, " mismatches ", mismatches);
     CHECK(hits > 1000);
     // Vectorized and scalar code may round differently (FMA contraction); allow only
     // a handful of edge cases out of 20000.
@@ -113,7 +116,7 @@ template <class P>
 void check_agreement(const char* what, const Agreement& a, std::size_t expected_pairs) {
     std::printf("  %-10s %-16s %-6s pairs %zu  ref hits %zu  disagreements %zu (miss %zu, hit %zu)  "
                 "widest %.2g ulps  max t err %.2g ulps\n",
-                what, P::name, sizeof(typename P::scalar_type) == 4 ? "float" : "double", a.pairs,
+                what, intersector_name<P>, sizeof(typename P::scalar_type) == 4 ? "float" : "double", a.pairs,
                 a.reference_hits, a.false_miss + a.false_hit, a.false_miss, a.false_hit,
                 a.max_disagreement_ulps, a.max_t_ulps);
     CHECK(a.pairs == expected_pairs);
@@ -196,7 +199,7 @@ TEST_CASE_TEMPLATE("stress: rays through shared edges and vertices of a closed m
     using T = typename P::scalar_type;
     std::size_t total = 0;
     const std::size_t total_leaks = closed_mesh_leaks<P>(total);
-    std::printf("  closed-mesh %-16s %-6s rays %zu leaks %zu (%.3g%%)\n", P::name,
+    std::printf("  closed-mesh %-16s %-6s rays %zu leaks %zu (%.3g%%)\n", intersector_name<P>,
                 sizeof(T) == 4 ? "float" : "double", total, total_leaks,
                 100.0 * double(total_leaks) / double(total));
     CHECK(total > 20000);
@@ -240,4 +243,85 @@ TEST_CASE("IVM frames: blocks get well-conditioned frames, split only when neede
     }
     // Bad input is reported, not ignored.
     CHECK_THROWS_AS(store.add_block(tris, std::span<const std::uint32_t>(ids).first(3)), Error);
+}
+
+namespace {
+/// A user's intersector with only what the concept asks for: the scalar type, build,
+/// prepare and test. No name, no frame, no batch kernel, no load or store: the containers
+/// derive them. It restates Möller-Trumbore's arithmetic operation for operation, so that
+/// every hit must equal MollerTrumbore<float>'s bit for bit, ties at shared edges included.
+struct UserTriangle {
+    using scalar_type = float;
+    Vec3f v0, e1, e2;
+
+    struct Shot {
+        Vec3f o, d;
+        float tmin, tmax;
+    };
+    static UserTriangle build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+        if (detail::degenerate_triangle(a, b, c)) return {Vec3f(a), Vec3f(0), Vec3f(0)};
+        return {Vec3f(a), Vec3f(b - a), Vec3f(c - a)};
+    }
+    static Shot prepare(const Ray<float>& r) { return {r.origin, r.direction, r.tmin, r.tmax}; }
+    bool test(const Shot& r, float& t, float& u, float& v) const {
+        const float px = r.d.y * e2.z - r.d.z * e2.y, py = r.d.z * e2.x - r.d.x * e2.z,
+                    pz = r.d.x * e2.y - r.d.y * e2.x;
+        const float det = e1.x * px + e1.y * py + e1.z * pz, inv = 1.0f / det;
+        const float sx = r.o.x - v0.x, sy = r.o.y - v0.y, sz = r.o.z - v0.z;
+        u = (sx * px + sy * py + sz * pz) * inv;
+        const float qx = sy * e1.z - sz * e1.y, qy = sz * e1.x - sx * e1.z, qz = sx * e1.y - sy * e1.x;
+        v = (r.d.x * qx + r.d.y * qy + r.d.z * qz) * inv;
+        t = (e2.x * qx + e2.y * qy + e2.z * qz) * inv;
+        return (det != 0.0f) & (u >= 0.0f) & (v >= 0.0f) & (u + v <= 1.0f) & (t > r.tmin) & (t < r.tmax);
+    }
+};
+static_assert(TriangleIntersector<UserTriangle>);
+static_assert(field_count<UserTriangle> == 9);
+
+/// Rays on which two accelerators differ: in hit or miss, any hit, the triangle, t, u or v.
+template <class A, class B>
+std::size_t count_disagreements(const A& a, const B& b, const std::vector<Ray<float>>& rays, std::size_t& hits) {
+    std::size_t bad = 0;
+    hits = 0;
+    for (const auto& r : rays) {
+        StoreHit<float> ha, hb;
+        const bool x = a.closest_hit(r, ha), y = b.closest_hit(r, hb);
+        hits += x;
+        bad += x != y || ha.id != hb.id || ha.t != hb.t || ha.u != hb.u || ha.v != hb.v || a.any_hit(r) != b.any_hit(r);
+    }
+    return bad;
+}
+}  // namespace
+
+TEST_CASE("a user's intersector with only build, prepare and test plugs into every container") {
+    // A closed sphere and an offset one (the rays cross both); rays at the first one's
+    // edges and vertices, and random rays at random triangles.
+    const auto sphere = icosphere<float>(3, Vec3f(0.2f, -0.1f, 0.3f), 1.0f);
+    auto tris = sphere.triangles();
+    const auto other = icosphere<float>(2, Vec3f(1.5f, 0.5f, -0.5f), 0.7f).triangles();
+    tris.insert(tris.end(), other.begin(), other.end());
+    std::vector<Ray<float>> rays = edge_vertex_rays(sphere, 3, 4);
+    const auto cases = random_cases<float>(11, 20000);
+    for (const auto& c : cases) rays.push_back(c.ray);
+
+    // Triangle: the scalar path.
+    std::size_t single_bad = 0;
+    for (const auto& c : cases) {
+        TriangleHit<float> hu, hm;
+        const bool x = Triangle<UserTriangle>(c.tri[0], c.tri[1], c.tri[2]).intersect(c.ray, hu);
+        const bool y = Triangle<MollerTrumbore<float>>(c.tri[0], c.tri[1], c.tri[2]).intersect(c.ray, hm);
+        single_bad += x != y || hu.t != hm.t || hu.u != hm.u || hu.v != hm.v;
+    }
+    CHECK(single_bad == 0);
+
+    // A TriangleStore under brute force (the batch path with blocks cut mid-batch), and a
+    // wide BVH over TriangleLeaves (padded leaves, full batches).
+    std::size_t hits = 0;
+    CHECK(count_disagreements(BruteForce<UserTriangle>(tris), BruteForce<MollerTrumbore<float>>(tris), rays, hits) ==
+          0);
+    CHECK(hits > rays.size() / 4);
+    const MeshBvh<UserTriangle> user_bvh(tris);
+    CHECK(count_disagreements(user_bvh, MeshBvh<MollerTrumbore<float>>(tris), rays, hits) == 0);
+    CHECK(hits > rays.size() / 4);
+    CHECK(user_bvh.leaves().store().size() % batch_width == 0);  // padded leaves
 }

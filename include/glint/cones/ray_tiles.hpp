@@ -250,7 +250,7 @@ private:
         std::span<const std::uint8_t> active;
         std::span<StoreHit<T>> hits;
         const TileGrid& grid;
-        SoaView<T, P::field_count> view;
+        RecordView<P> view;
     };
 
     /// The rays of the rectangle [x0, x1) x [y0, y1): their cone, then every triangle's
@@ -311,14 +311,14 @@ private:
     /// one-record block (the same translation into the record's frame, the same batch
     /// kernel with n = 1, the same strict "closer than the best so far" update), without
     /// rebuilding the view for every ray.
-    static void test_ray(const SoaView<T, P::field_count>& view, const typename TriangleStore<P>::Group& g,
+    static void test_ray(const RecordView<P>& view, const typename TriangleStore<P>::Group& g,
                          std::uint32_t id, const Ray<T>& ray, StoreHit<T>& hit) {
         Ray<T> local = ray;
         local.tmax = std::min(ray.tmax, hit.t);
         local.origin = ray.origin - g.origin;
         const auto rd = P::prepare(local);
         T t, u, v;
-        P::batch(view, g.begin, 1, rd, &t, &u, &v);
+        detail::batch<P>(view, g.begin, 1, rd, &t, &u, &v);
         if (t < local.tmax) {
             hit.t = t;
             hit.u = u;
@@ -327,7 +327,7 @@ private:
         }
     }
 
-    void test_rays(const SoaView<T, P::field_count>& view, typename TriangleStore<P>::BlockRef ref,
+    void test_rays(const RecordView<P>& view, typename TriangleStore<P>::BlockRef ref,
                    std::span<const Ray<T>> rays, std::span<const std::uint32_t> idx, std::span<StoreHit<T>> hits) const {
         for (std::uint32_t gi = ref.group_begin; gi < ref.group_end; ++gi) {
             const auto& g = store_.group(gi);

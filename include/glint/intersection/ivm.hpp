@@ -1,7 +1,7 @@
 // glint/intersection/ivm.hpp: ray-triangle intersection with the inverse vertex matrix.
 //
-// 000 section 4.1, Szecsi's IVM test. With the triangle's vertices as the
-// columns of V = [v0, v1, v2], the record is exactly the 9 scalars of M = V^-1 (the IVM):
+// Szécsi 2009, §4.1. With the triangle's vertices as the columns of V = [v0, v1, v2], the
+// record is exactly the 9 scalars of M = V^-1 (the IVM):
 //   - barycentrics of a point x are b = M x (eq. 4.8);
 //   - every vertex satisfies [1,1,1] M v_i = 1, so the plane is q' . x = 1 with the row
 //     q' = [1,1,1] M (eq. 4.12, the plane's point nearest the origin inverted in the unit
@@ -12,23 +12,20 @@
 // after dividing numerator and denominator by q.q; we use the q' (= q / q.q) form so that
 // only the IVM is stored.
 //
-// Which 9 scalars. We store the rows m0, m1 of M and q' = m0 + m1 + m2 instead of m2: the
-// same 9 numbers up to an exact linear recombination, so still exactly the IVM. Why:
-// summing the three rows in precision T cancels badly for slivers (each row is ~1/(L h)
-// for a triangle of size L and height h, their sum ~1/L), which tilted the plane by
-// eps * L / h and gave false hits hundreds of ulps from any edge in our sliver stress test.
-// Rounding q' once from double keeps the plane accurate; the third barycentric is then
-// b2 = q' . x - b0 - b1 = 1 - b0 - b1 on the plane, and the sign test is unchanged.
+// Which 9 scalars: the rows m0, m1 of M and q' = m0 + m1 + m2 instead of m2, the same 9
+// numbers up to an exact linear recombination. Summing the three rows in precision T
+// cancels badly for slivers (each row is ~1/(L h) for a triangle of size L and height h,
+// their sum ~1/L) and tilts the plane by eps * L / h; q' rounded once from double keeps the
+// plane accurate. The third barycentric is then b2 = q' . x - b0 - b1 = 1 - b0 - b1 on the
+// plane, and the sign test is unchanged.
 //
 // The frame. V is singular when the triangle's plane passes through the origin, and
-// ill-conditioned when it passes near it. 000 asks for a modelling space that avoids this;
-// glint makes it automatic: records are built in a translated frame whose origin is chosen
-// away from every plane of the block (detail::choose_frame in triangle.hpp: 26 candidates
-// around the block's box, and blocks split until each group has quality >= 1/8), and the ray
-// is translated once per group. A standalone Triangle<Ivm<T>> gets its own frame (centroid
-// moved off the plane by the triangle's size). Degenerate (zero-area) triangles, and any
-// record whose inverse is not finite, are stored as all zeros: then q' = 0, t = 1/0 is
-// infinite and the test reports a miss, never a wrong hit.
+// ill-conditioned when it passes near it. Szécsi 2009, §4.1 asks for a modelling space that
+// avoids this; glint makes it automatic: the IVM's frame is OffsetFrames (frame.hpp), whose
+// origins lie away from every plane of their group, and the ray is translated once per
+// group. Degenerate (zero-area) triangles, and any record whose inverse is not finite, are
+// stored as all zeros: then q' = 0, t = 1/0 is infinite and the test reports a miss, never
+// a wrong hit.
 #pragma once
 
 #include <algorithm>
@@ -37,6 +34,7 @@
 #include <type_traits>
 
 #include <glint/core/math.hpp>
+#include <glint/intersection/frame.hpp>
 #include <glint/intersection/triangle.hpp>
 
 namespace glint {
@@ -45,9 +43,7 @@ template <Scalar T>
 struct Ivm {
     using scalar_type = T;
     using RayData = detail::PlainRay<T>;
-    static constexpr const char* name = "Ivm";
-    static constexpr bool uses_frame = true;
-    static constexpr int field_count = 9;
+    using frame = OffsetFrames;
 
     // m[0], m[1]: rows 0 and 1 of M = [v0 v1 v2]^-1 (b_i = m[i] . x); m[2]: q' = [1,1,1] M.
     Vec3<T> m[3]{};
@@ -84,33 +80,16 @@ struct Ivm {
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
 
-    /// The test, written once for the scalar and the batch path: x = (m0, m1, q'), t from
-    /// the plane q' . x = 1, then the three barycentrics' signs (bitwise &, not &&: without
-    /// short-circuit branches the batch loop vectorizes on AVX2 too).
-    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
-        const T qx = x[6], qy = x[7], qz = x[8];
-        t = (T(1) - (qx * r.o.x + qy * r.o.y + qz * r.o.z)) / (qx * r.d.x + qy * r.d.y + qz * r.d.z);
+    /// t from the plane q' . x = 1, then the three barycentrics' signs (bitwise &, not &&:
+    /// without short-circuit branches the batch loop vectorizes).
+    [[gnu::always_inline]] bool test(const RayData& r, T& t, T& u, T& v) const {
+        const Vec3<T>& q = m[2];
+        t = (T(1) - (q.x * r.o.x + q.y * r.o.y + q.z * r.o.z)) / (q.x * r.d.x + q.y * r.d.y + q.z * r.d.z);
         const T px = r.o.x + r.d.x * t, py = r.o.y + r.d.y * t, pz = r.o.z + r.d.z * t;
-        const T b0 = x[0] * px + x[1] * py + x[2] * pz;
-        u = x[3] * px + x[4] * py + x[5] * pz;
+        const T b0 = m[0].x * px + m[0].y * py + m[0].z * pz;
+        u = m[1].x * px + m[1].y * py + m[1].z * pz;
         v = T(1) - b0 - u;
         return (t > r.tmin) & (t < r.tmax) & (b0 >= T(0)) & (u >= T(0)) & (v >= T(0));
-    }
-
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
-
-    void store(T* out) const {
-        for (int k = 0; k < 9; ++k) out[k] = m[k / 3][k % 3];
-    }
-    static Ivm load(const SoaView<T, field_count>& v, std::size_t i) {
-        Ivm r;
-        for (int k = 0; k < 9; ++k) r.m[k / 3][k % 3] = *v.field(k, i);
-        return r;
-    }
-
-    static void batch(const SoaView<T, field_count>& v, std::size_t first, std::size_t n,
-                      const RayData& r, T* ts, T* us, T* vs) {
-        detail::test_lanes<Ivm>(v, first, n, r, ts, us, vs);
     }
 };
 

@@ -8,10 +8,11 @@
 // v2's `intersect(ray, ..., leaf_fn)` works the same way). TriangleLeaves<P> is that
 // storage for triangles of intersector P: it owns the records (a TriangleStore<P>), their
 // padding to whole batches of batch_width records (so a leaf runs P's batch kernel at its
-// full, compile-time width), and for intersectors with frames (IVM, Szécsi 2009, §4.1) the
-// per-group frame origins; what a reference counts (padded records, or groups of records
-// sharing a frame) is its business, not the tree's. A query's leaf callable is a
-// LeafQuery, made once per query (it maps the hit's record to the user's triangle); the tree traverses the query's ray and calls it for the leaves:
+// full, compile-time width), and the frames of its records (frame.hpp: the identity for most
+// tests, an origin per group for the IVM, Szécsi 2009, §4.1); what a reference counts (padded
+// records, or groups of records sharing a frame) is the frame's business, not the tree's. A
+// query's leaf callable is a LeafQuery, made once per query (it maps the hit's record to the
+// user's triangle); the tree traverses the query's ray and calls it for the leaves:
 //   Ray<T> r = ray_before(ray, hit);
 //   StoreHit<T> h = hit;
 //   const auto world = leaves.prepare(r);
@@ -51,26 +52,19 @@ public:
     /// triangle indices); returns its reference (first, count).
     std::pair<std::uint32_t, std::uint32_t> add(std::span<const TriangleVertices<T>> tris,
                                                 std::span<const std::uint32_t> ids) {
-        const auto ref = store_.add_block(tris, ids, TriangleStore<P>::Padding::batches);
-        if constexpr (P::uses_frame) return {ref.group_begin, ref.group_end - ref.group_begin};
-        const auto& g = store_.group(ref.group_begin);  // one group in the world frame
-        constexpr std::uint32_t w = std::uint32_t(batch_width);
-        return {g.begin, (g.end - g.begin + w - 1) / w * w};
+        return store_.leaf(store_.add_block(tris, ids, TriangleStore<P>::Padding::batches));
     }
 
-    /// The per-query ray data of test(): P's prepared ray in the world frame (intersectors
-    /// with frames prepare the ray per group instead, and ignore it).
-    typename P::RayData prepare(const Ray<T>& ray) const {
-        if constexpr (P::uses_frame) return {};
-        else return P::prepare(ray);
-    }
+    /// The per-query ray data of test(): P's prepared ray in the world frame (with offset
+    /// frames, the leaf prepares the ray again per group).
+    RayDataOf<P> prepare(const Ray<T>& ray) const { return P::prepare(ray); }
     /// Tests leaf (first, count) with the interval (ray.tmin, ray.tmax); `world` is
     /// prepare(ray) of the query. For closest hit (Any = false) keeps the nearest hit in
     /// `hit` (hit.id is then a record index: map it with id()) and lowers ray.tmax to it;
     /// ray.tmax must not exceed hit.t. True when the leaf holds a hit.
     template <bool Any>
     [[gnu::always_inline]] bool test(std::uint32_t first, std::uint32_t count, Ray<T>& ray,
-                                     const typename P::RayData& world, StoreHit<T>& hit) const {
+                                     const RayDataOf<P>& world, StoreHit<T>& hit) const {
         if (!store_.template test_leaf<Any>(first, count, ray, world, hit)) return false;
         if constexpr (!Any) ray.tmax = hit.t;
         return true;
@@ -80,11 +74,7 @@ public:
     std::uint32_t id(std::uint32_t record) const { return store_.id(record); }
     /// Record slots (padding included) that testing leaf (first, count) reads.
     std::uint64_t records(std::uint32_t first, std::uint32_t count) const {
-        if constexpr (!P::uses_frame) return count;
-        std::uint64_t n = 0;
-        for (std::uint32_t g = first; g < first + count; ++g)
-            n += (store_.group(g).end - store_.group(g).begin + batch_width - 1) / batch_width * batch_width;
-        return n;
+        return store_.leaf_records(first, count);
     }
     std::size_t bytes() const { return store_.bytes(); }
     const TriangleStore<P>& store() const { return store_; }

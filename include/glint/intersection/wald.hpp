@@ -4,8 +4,8 @@
 // section 7.1: intersect the ray with the plane written as x_k + n_u x_u + n_v x_v = n_d
 // (k the dominant axis of the normal, (u, v) the other two in cyclic order), then compute
 // the barycentrics of the hit projected onto the (u, v) plane from two precomputed affine
-// functions. 9 scalars plus the axis k. 000 section 4.1.1 cites it among the tests the IVM
-// competes with. The coefficients are derived here by Cramer's rule on the projected edges
+// functions. 9 scalars plus the axis k. Szécsi 2009, §4.1.1 cites it among the tests the
+// IVM competes with. The coefficients are derived here by Cramer's rule on the projected edges
 // (c = v1 - v0, b = v2 - v0), whose 2x2 determinant is the normal's k component.
 //
 // A degenerate triangle (no dominant normal) gets n_d = NaN, so every t is NaN: a miss.
@@ -25,14 +25,11 @@ template <Scalar T>
 struct Wald {
     using scalar_type = T;
     using RayData = detail::PlainRay<T>;
-    static constexpr const char* name = "Wald";
-    static constexpr bool uses_frame = false;
-    static constexpr int field_count = 10;  // 9 coefficients + the axis, stored as a scalar
 
     T n_u = 0, n_v = 0, n_d = std::numeric_limits<T>::quiet_NaN();
     T beta_u = 0, beta_v = 0, beta_d = 0;    // beta  = barycentric of v1
     T gamma_u = 0, gamma_v = 0, gamma_d = 0; // gamma = barycentric of v2
-    std::uint32_t k = 0;
+    T k = 0;  // the dominant axis 0, 1 or 2, as a scalar: a record holds scalars only
 
     static Wald build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         Wald r;
@@ -41,7 +38,7 @@ struct Wald {
         if (detail::degenerate_triangle(a, b, c)) return r;
         const int kk = max_abs_axis(n), u = (kk + 1) % 3, v = (kk + 2) % 3;
         const double nk = n[kk];  // = ec_u * eb_v - ec_v * eb_u
-        r.k = static_cast<std::uint32_t>(kk);
+        r.k = T(kk);
         r.n_u = T(n[u] / nk);
         r.n_v = T(n[v] / nk);
         r.n_d = T(glm::dot(n, a) / nk);
@@ -56,12 +53,10 @@ struct Wald {
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
 
-    /// The test, written once for the scalar and the batch path: x = (n_u, n_v, n_d,
-    /// beta_u, beta_v, beta_d, gamma_u, gamma_v, gamma_d, k). The record's axis k selects
-    /// the ray's components by selects, not by indexing (blends in the batch loop, not
-    /// gathers); bitwise &, not &&: with && GCC vectorizes the loop only with AVX-512 masks.
-    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
-        const bool k0 = x[9] == T(0), k1 = x[9] == T(1);
+    /// The record's axis k selects the ray's components by selects, not by indexing (blends
+    /// in the batch loop, not gathers); bitwise &, not &&, so that the loop vectorizes.
+    [[gnu::always_inline]] bool test(const RayData& r, T& t, T& u, T& v) const {
+        const bool k0 = k == T(0), k1 = k == T(1);
         // (k, u, v) = (x, y, z), (y, z, x) or (z, x, y)
         const T ok_ = k0 ? r.o.x : (k1 ? r.o.y : r.o.z);
         const T ou = k0 ? r.o.y : (k1 ? r.o.z : r.o.x);
@@ -69,31 +64,11 @@ struct Wald {
         const T dk = k0 ? r.d.x : (k1 ? r.d.y : r.d.z);
         const T du = k0 ? r.d.y : (k1 ? r.d.z : r.d.x);
         const T dv = k0 ? r.d.z : (k1 ? r.d.x : r.d.y);
-        t = (x[2] - ok_ - x[0] * ou - x[1] * ov) / (dk + x[0] * du + x[1] * dv);
+        t = (n_d - ok_ - n_u * ou - n_v * ov) / (dk + n_u * du + n_v * dv);
         const T hu = ou + t * du, hv = ov + t * dv;
-        u = hu * x[3] + hv * x[4] + x[5];
-        v = hu * x[6] + hv * x[7] + x[8];
+        u = hu * beta_u + hv * beta_v + beta_d;
+        v = hu * gamma_u + hv * gamma_v + gamma_d;
         return (t > r.tmin) & (t < r.tmax) & (u >= T(0)) & (v >= T(0)) & (u + v <= T(1));
-    }
-
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
-
-    void store(T* out) const {
-        const T vals[10] = {n_u, n_v, n_d, beta_u, beta_v, beta_d, gamma_u, gamma_v, gamma_d, T(k)};
-        std::copy(vals, vals + 10, out);
-    }
-    static Wald load(const SoaView<T, field_count>& s, std::size_t i) {
-        Wald r;
-        T* dst[9] = {&r.n_u, &r.n_v, &r.n_d, &r.beta_u, &r.beta_v, &r.beta_d,
-                     &r.gamma_u, &r.gamma_v, &r.gamma_d};
-        for (int f = 0; f < 9; ++f) *dst[f] = *s.field(f, i);
-        r.k = static_cast<std::uint32_t>(*s.field(9, i));
-        return r;
-    }
-
-    static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
-                      const RayData& r, T* ts, T* us, T* vs) {
-        detail::test_lanes<Wald>(s, first, n, r, ts, us, vs);
     }
 };
 

@@ -55,9 +55,6 @@ inline double edge_function(double a, double b, double c, double d) {
 template <Scalar T>
 struct Watertight {
     using scalar_type = T;
-    static constexpr const char* name = "Watertight";
-    static constexpr bool uses_frame = false;
-    static constexpr int field_count = 9;
 
     struct RayData {
         Vec3<T> o;
@@ -67,7 +64,7 @@ struct Watertight {
         T tmin, tmax;
     };
 
-    Vec3<T> v[3]{};
+    Vec3<T> vtx[3]{};  // the vertices
 
     /// Stores the vertices as given. A degenerate triangle (|e1 x e2| <= 2^-60 * longest
     /// edge^2, as for the other policies) is stored as NaN vertices, which every comparison
@@ -77,12 +74,12 @@ struct Watertight {
         Watertight r;
         if (detail::degenerate_triangle(a, b, c)) {
             const T nan = std::numeric_limits<T>::quiet_NaN();
-            for (auto& p : r.v) p = Vec3<T>(nan);
+            for (auto& p : r.vtx) p = Vec3<T>(nan);
             return r;
         }
-        r.v[0] = Vec3<T>(a);
-        r.v[1] = Vec3<T>(b);
-        r.v[2] = Vec3<T>(c);
+        r.vtx[0] = Vec3<T>(a);
+        r.vtx[1] = Vec3<T>(b);
+        r.vtx[2] = Vec3<T>(c);
         return r;
     }
 
@@ -104,15 +101,15 @@ struct Watertight {
         return d;
     }
 
-    /// The test, written once for the scalar and the batch path: x holds the three
-    /// vertices' coordinates on the ray's axes (kx, ky, kz), as select_fields orders them.
-    /// Bitwise (not short-circuit) logic keeps the batch loop branch-free.
-    [[gnu::always_inline]] static bool test(const T (&x)[field_count], const RayData& r, T& t, T& u, T& v) {
+    /// The test on a record whose vertices' coordinates are ordered by the ray's axes
+    /// (kx, ky, kz), as select_fields orders them. Bitwise (not short-circuit) logic keeps
+    /// the batch loop branch-free.
+    [[gnu::always_inline]] bool test(const RayData& r, T& t, T& u, T& v) const {
         T px[3], py[3], pz[3], sx[3], sy[3], m = 0;
         for (int i = 0; i < 3; ++i) {
-            px[i] = x[3 * i] - r.okx;
-            py[i] = x[3 * i + 1] - r.oky;
-            pz[i] = x[3 * i + 2] - r.okz;
+            px[i] = vtx[i].x - r.okx;
+            py[i] = vtx[i].y - r.oky;
+            pz[i] = vtx[i].z - r.okz;
             sx[i] = px[i] - r.sx * pz[i];
             sy[i] = py[i] - r.sy * pz[i];
             m = std::max(m, shear_magnitude(px[i], py[i], pz[i], r));
@@ -132,29 +129,12 @@ struct Watertight {
 
     /// Orders a record's fields for test(): each vertex's coordinates on kx, ky, kz (the
     /// ray's axes are the same for every record: the fields are picked once per run).
-    static void select_fields(const T* const (&in)[field_count], const RayData& r, const T* (&out)[field_count]) {
+    static void select_fields(const T* const (&in)[9], const RayData& r, const T* (&out)[9]) {
         for (int i = 0; i < 3; ++i) {
             out[3 * i] = in[3 * i + r.kx];
             out[3 * i + 1] = in[3 * i + r.ky];
             out[3 * i + 2] = in[3 * i + r.kz];
         }
-    }
-
-    bool intersect(const RayData& r, TriangleHit<T>& hit) const { return detail::test_record(*this, r, hit); }
-
-    void store(T* out) const {
-        for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) out[3 * i + k] = v[i][k];
-    }
-    static Watertight load(const SoaView<T, field_count>& s, std::size_t i) {
-        Watertight r;
-        for (int f = 0; f < 9; ++f) r.v[f / 3][f % 3] = *s.field(f, i);
-        return r;
-    }
-
-    static void batch(const SoaView<T, field_count>& s, std::size_t first, std::size_t n,
-                      const RayData& r, T* ts, T* us, T* vs) {
-        detail::test_lanes<Watertight>(s, first, n, r, ts, us, vs);
     }
 
 private:

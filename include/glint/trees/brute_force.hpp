@@ -21,19 +21,14 @@ public:
     using scalar_type = typename P::scalar_type;
     using T = scalar_type;
 
-    /// All triangles in one block of the store; for intersectors whose records live in a
-    /// frame (IVM), one block per triangle, so that every record gets the best frame of its
-    /// own (a scene-wide frame far from small triangles costs IVM precision). The blocks'
-    /// groups are consecutive, so one BlockRef spans them all.
+    /// All triangles in one block, each in the frame it would have alone
+    /// (TriangleStore::add_each): one group in the identity frame; with offset frames (IVM)
+    /// a group per triangle, so that every record gets the best frame of its own (a
+    /// scene-wide frame far from small triangles costs IVM precision).
     explicit BruteForce(std::span<const TriangleVertices<T>> tris) {
         std::vector<std::uint32_t> ids(tris.size());
         std::iota(ids.begin(), ids.end(), 0u);
-        if constexpr (P::uses_frame) {
-            for (std::size_t i = 0; i < tris.size(); ++i) store_.add_block(tris.subspan(i, 1), std::span(ids).subspan(i, 1));
-            all_ = {0, static_cast<std::uint32_t>(store_.group_count())};
-        } else {
-            all_ = store_.add_block(tris, ids);
-        }
+        all_ = store_.add_each(tris, ids);
     }
 
     /// Closest hit with t in (ray.tmin, min(ray.tmax, hit.t)); hit.id is the triangle index.

@@ -1,0 +1,200 @@
+// glint/intersection/frame.hpp: where a triangle record's coordinates live, and how a ray
+// gets there.
+//
+// Records are built from vertices relative to a frame origin, and a ray is translated into
+// that frame before the test. A policy names its frame with `using frame = ...`; without
+// one it gets the IdentityFrame: world coordinates, every step of which is the identity and
+// compiles away. The IVM test needs OffsetFrames (Szécsi 2009, §4.1 assumes that no
+// triangle plane passes through the origin, see ivm.hpp): every group of records gets an
+// origin away from its planes.
+//
+// The containers (Triangle, TriangleStore, TriangleLeaves, BruteForce) always call the
+// frame: choose() when they build, local()/prepare() when they query, and for tree leaves
+// leaf(), each_group() and records(), which decide what a leaf reference (first, count)
+// counts: padded records in the identity frame (no indirection), groups of records sharing
+// an origin with offset frames.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <utility>
+
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/intersection/intersector.hpp>
+
+namespace glint {
+
+namespace detail {
+
+/// How well a frame origin suits the IVM of triangle (a, b, c) given relative to world:
+/// the distance of the origin from the triangle's plane divided by (distance to the
+/// triangle + triangle size). The IVM's rounding error in barycentrics grows as 1 /
+/// quality; 0 means the plane passes through the frame origin. Degenerate triangles (which
+/// never hit) get +inf so they do not constrain the choice.
+inline double frame_quality(const Vec3d& origin, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d n = glm::cross(b - a, c - a);
+    const double n_len = glm::length(n);
+    const double size = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+    if (!(n_len > 0.0) || !(size > 0.0) || !std::isfinite(n_len)) return infinity<double>;
+    const Vec3d centroid = (a + b + c) / 3.0;
+    const double plane_dist = std::abs(glm::dot(n / n_len, origin - a));
+    return plane_dist / (glm::length(origin - centroid) + size);
+}
+
+/// Quality a frame must reach, else the block is split in two and each half gets its own
+/// frame. With quality >= 1/8 the IVM's barycentric error stays within about 8 ulps of the
+/// frame's coordinates (tests/test_intersection.cpp measures it).
+inline constexpr double min_frame_quality = 1.0 / 8.0;
+
+/// Best frame origin for a set of triangles: among 26 candidates around their bounding box
+/// (centre + {-1,0,1}^3 * box diagonal, centre excluded), the one of greatest minimum
+/// quality. For a single triangle: its centroid moved off its plane by its size, which has
+/// quality 1/2 or more.
+template <class T>
+Vec3d choose_frame(std::span<const TriangleVertices<T>> tris, double& quality) {
+    auto dv = [](const Vec3<T>& p) { return Vec3d(p); };
+    if (tris.size() == 1) {
+        const Vec3d a = dv(tris[0][0]), b = dv(tris[0][1]), c = dv(tris[0][2]);
+        const double size = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        const Vec3d n = safe_normalize(glm::cross(b - a, c - a), Vec3d(0, 0, 1));
+        const Vec3d origin = (a + b + c) / 3.0 + n * (size > 0 ? size : 1.0);
+        quality = frame_quality(origin, a, b, c);
+        return origin;
+    }
+    Vec3d lo(infinity<double>), hi(-infinity<double>);
+    for (const auto& t : tris)
+        for (const auto& p : t) {
+            lo = glm::min(lo, dv(p));
+            hi = glm::max(hi, dv(p));
+        }
+    const Vec3d centre = (lo + hi) * 0.5;
+    double reach = glm::length(hi - lo);
+    if (!(reach > 0.0)) reach = std::max(1.0, glm::length(centre));
+    Vec3d best = centre + Vec3d(reach);
+    quality = -1.0;
+    for (int i = -1; i <= 1; ++i)
+        for (int j = -1; j <= 1; ++j)
+            for (int k = -1; k <= 1; ++k) {
+                if (i == 0 && j == 0 && k == 0) continue;
+                const Vec3d cand = centre + Vec3d(i, j, k) * reach;
+                double q = infinity<double>;
+                for (const auto& t : tris) q = std::min(q, frame_quality(cand, dv(t[0]), dv(t[1]), dv(t[2])));
+                if (q > quality) {
+                    quality = q;
+                    best = cand;
+                }
+            }
+    return best;
+}
+
+/// Record slots of `n` records padded to whole batches.
+inline std::uint32_t padded(std::uint32_t n) {
+    constexpr std::uint32_t w = std::uint32_t(batch_width);
+    return (n + w - 1) / w * w;
+}
+
+}  // namespace detail
+
+/// World coordinates: the origin is 0 for every triangle, a ray is used as it is, and a tree
+/// leaf is a run of padded records, tested with the ray prepared once per query.
+struct IdentityFrame {
+    template <class T>
+    static Vec3d choose(std::span<const TriangleVertices<T>>, double& quality) {
+        quality = infinity<double>;
+        return Vec3d(0.0);
+    }
+    template <class T>
+    static const Ray<T>& local(const Ray<T>& ray, const Vec3<T>&) {
+        return ray;
+    }
+    /// The ray data for a group at `origin`: the query's own.
+    template <class P, class T>
+    [[gnu::always_inline]] static const RayDataOf<P>& prepare(const Ray<T>&, const Vec3<T>&, T,
+                                                              const RayDataOf<P>& world) {
+        return world;
+    }
+    /// The leaf reference of a padded block: its records, padding included.
+    template <class Store>
+    static std::pair<std::uint32_t, std::uint32_t> leaf(const Store& s, typename Store::BlockRef ref) {
+        const auto& g = s.group(ref.group_begin);  // one group in the world frame
+        return {g.begin, detail::padded(g.end - g.begin)};
+    }
+    /// Calls fn(begin, end, origin) for the record runs of leaf (first, count).
+    template <bool Any, class Store, class Fn>
+    [[gnu::always_inline]] static bool each_group(const Store&, std::uint32_t first, std::uint32_t count, Fn&& fn) {
+        return fn(first, first + count, Vec3<typename Store::T>(0));
+    }
+    template <class Store>
+    static std::uint64_t records(const Store&, std::uint32_t, std::uint32_t count) {
+        return count;
+    }
+};
+
+/// A frame per group of records, with its origin away from the group's triangle planes
+/// (detail::choose_frame; blocks are split until each group reaches
+/// detail::min_frame_quality); a tree leaf is a run of groups, and the ray is translated
+/// and prepared once per group.
+struct OffsetFrames {
+    template <class T>
+    static Vec3d choose(std::span<const TriangleVertices<T>> tris, double& quality) {
+        // Rounded to T: the origin exactly as rays will be translated by it.
+        return Vec3d(Vec3<T>(detail::choose_frame<T>(tris, quality)));
+    }
+    template <class T>
+    static Ray<T> local(const Ray<T>& ray, const Vec3<T>& origin) {
+        Ray<T> r = ray;
+        r.origin -= origin;
+        return r;
+    }
+    /// The ray data for a group at `origin`, with the interval (ray.tmin, min(ray.tmax, limit)).
+    template <class P, class T>
+    [[gnu::always_inline]] static RayDataOf<P> prepare(const Ray<T>& ray, const Vec3<T>& origin, T limit,
+                                                       const RayDataOf<P>&) {
+        Ray<T> r = local(ray, origin);
+        r.tmax = limit < ray.tmax ? limit : ray.tmax;  // keeps a NaN tmax (no hit)
+        return P::prepare(r);
+    }
+    template <class Store>
+    static std::pair<std::uint32_t, std::uint32_t> leaf(const Store&, typename Store::BlockRef ref) {
+        return {ref.group_begin, ref.group_end - ref.group_begin};
+    }
+    template <bool Any, class Store, class Fn>
+    [[gnu::always_inline]] static bool each_group(const Store& s, std::uint32_t first, std::uint32_t count, Fn&& fn) {
+        bool found = false;
+        for (const std::uint32_t end = first + count; first < end; ++first) {
+            const auto& g = s.group(first);
+            if (fn(g.begin, g.end, g.origin)) {
+                if constexpr (Any) return true;
+                found = true;
+            }
+        }
+        return found;
+    }
+    template <class Store>
+    static std::uint64_t records(const Store& s, std::uint32_t first, std::uint32_t count) {
+        std::uint64_t n = 0;
+        for (std::uint32_t g = first; g < first + count; ++g) n += detail::padded(s.group(g).end - s.group(g).begin);
+        return n;
+    }
+};
+
+namespace detail {
+template <class P>
+struct FrameOf {
+    using type = IdentityFrame;
+};
+template <class P>
+    requires requires { typename P::frame; }
+struct FrameOf<P> {
+    using type = typename P::frame;
+};
+}  // namespace detail
+
+/// The frame of policy P: P::frame, or the IdentityFrame.
+template <class P>
+using FrameOf = typename detail::FrameOf<P>::type;
+
+}  // namespace glint
