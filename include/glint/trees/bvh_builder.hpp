@@ -22,9 +22,7 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
 #include <cmath>
-#include <concepts>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -59,10 +57,8 @@ struct SahSplit {
     std::uint32_t n_left = 0, n_right = 0;
 };
 
-/// The recursive build (Wald 2007), with spatial splits (Stich, Friedrich, Dietrich,
-/// "Spatial splits in bounding volume hierarchies", HPG 2009) when a clipper is given and
-/// the options ask for them. One object per build, shared by its threads.
-///
+/// The recursive build (Wald 2007), with spatial splits (Stich et al. 2009) where the options
+/// ask for them. One object per build, shared by its threads.
 /// A node owns a range [b, cap) of the reference array: its references are [b, e), and
 /// [e, cap) is room for the references its spatial splits add. A split gives each child the
 /// room in proportion to its references (as Embree's spatial-split builder does) and moves
