@@ -106,6 +106,12 @@ struct IdentityFrame {
         quality = infinity<double>;
         return Vec3d(0.0);
     }
+    /// Whether TriangleStore::add_each appends a triangle to the previous one's group: always,
+    /// as every record shares the one world frame.
+    template <class T>
+    static bool joins(const Vec3<T>&, const Vec3<T>&) {
+        return true;
+    }
     template <class T>
     static const Ray<T>& local(const Ray<T>& ray, const Vec3<T>&) {
         return ray;
@@ -142,6 +148,13 @@ struct OffsetFrames {
     static Vec3d choose(std::span<const TriangleVertices<T>> tris, double& quality) {
         // Rounded to T: the origin exactly as rays will be translated by it.
         return Vec3d(Vec3<T>(detail::choose_frame<T>(tris, quality)));
+    }
+    /// TriangleStore::add_each gives every triangle a group of its own, even where two
+    /// neighbours chose the same origin: the reference that the trees and the ray-tile engine
+    /// are compared with bit for bit tests each record alone, in its own frame.
+    template <class T>
+    static bool joins(const Vec3<T>&, const Vec3<T>&) {
+        return false;
     }
     template <class T>
     static Ray<T> local(const Ray<T>& ray, const Vec3<T>& origin) {

@@ -136,19 +136,21 @@ public:
         return ref;
     }
     /// Appends one unpadded block in which every triangle gets the frame it would have
-    /// alone, consecutive triangles of the same frame sharing a group: one group in the
-    /// IdentityFrame, a group per triangle with OffsetFrames (the best frame each record can
-    /// have). What brute force, the reference of the trees, stores.
+    /// alone, a triangle joining the previous one's group where the frame says so: one group
+    /// in the IdentityFrame, a group per triangle with OffsetFrames (the best frame each
+    /// record can have). What brute force, the reference of the trees, stores.
     BlockRef add_each(std::span<const TriangleVertices<T>> tris, std::span<const std::uint32_t> ids) {
         check_ids(tris.size(), ids.size());
         BlockRef ref{static_cast<std::uint32_t>(groups_.size()), 0};
         for (std::size_t i = 0; i < tris.size(); ++i) {
-            double quality;
-            const Vec3<T> o(Frame::template choose<T>(tris.subspan(i, 1), quality));
-            const bool same = groups_.size() > ref.group_begin && groups_.back().origin == o;
-            if (!same) groups_.push_back({o, static_cast<std::uint32_t>(ids_.size()), 0});
-            push_triangle(tris[i], Vec3d(o), ids[i]);
-            groups_.back().end = static_cast<std::uint32_t>(ids_.size());
+            // Built as add_block builds a triangle alone (the same code, so the same record
+            // bits: the ray-tile engine's per-triangle blocks are compared with these exactly).
+            add_groups(tris.subspan(i, 1), ids.subspan(i, 1), false);
+            const std::size_t n = groups_.size();
+            if (n >= ref.group_begin + 2 && Frame::joins(groups_[n - 2].origin, groups_[n - 1].origin)) {
+                groups_[n - 2].end = groups_[n - 1].end;
+                groups_.pop_back();
+            }
         }
         ref.group_end = static_cast<std::uint32_t>(groups_.size());
         return ref;

@@ -95,7 +95,7 @@ template <class T>
 /// hand a tree, which traverses the query's ray and calls it for the leaves it enters. It
 /// tests with the caller's `ray`, `world` = leaves.prepare(ray) and `hit`, locals of the
 /// query that the compiler keeps in registers (a query owning copies of them made GCC copy
-/// the ray through the stack; docs/notes/trees.md). Any = false: closest hit with t in
+/// the ray through the stack; docs/history/trees.md). Any = false: closest hit with t in
 /// (ray.tmin, ray.tmax), lowering ray.tmax to each hit found, hit() then being the nearest
 /// hit with the user's triangle index. Any = true: whether any triangle is hit.
 template <TriangleIntersector P, bool Any>

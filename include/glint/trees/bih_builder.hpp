@@ -32,7 +32,7 @@ namespace glint {
 
 struct BihBuildOptions {
     // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time (SIMD
-    // batches), so leaves larger than Waechter and Keller's 4 pay (docs/notes/trees.md).
+    // batches), so leaves larger than Waechter and Keller's 4 pay (docs/history/trees.md).
     std::uint32_t leaf_size = 16;
     int max_depth = 56;           // at most 56 (the traversal stack holds 64 entries)
 };

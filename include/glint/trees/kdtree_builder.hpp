@@ -12,7 +12,7 @@
 // - K_I (`intersection_cost`, default 0.07): one triangle test in units of K_T. Leaves are
 //   padded to whole batches and tested with the SIMD batch kernel (8 triangles at once),
 //   while a traversal step is a chain of dependent loads, compares and a hard-to-predict
-//   choice, so a test costs far less than a step (docs/notes/trees.md: the measurements);
+//   choice, so a test costs far less than a step (docs/history/trees.md: the measurements);
 // - lambda = 1 - `empty_bonus` (default 0.9) when one side is empty and has volume: the
 //   empty-space cut-off of Wald and Havran, which favours cutting empty space away. Since
 //   traversal never enters empty leaves, an empty cell costs no step of its own;
