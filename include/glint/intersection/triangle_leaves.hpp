@@ -103,7 +103,7 @@ class LeafQuery {
 public:
     using T = typename P::scalar_type;
 
-    [[gnu::always_inline]] LeafQuery(const TriangleLeaves<P>& leaves, Ray<T>& ray, const typename P::RayData& world,
+    [[gnu::always_inline]] LeafQuery(const TriangleLeaves<P>& leaves, Ray<T>& ray, const RayDataOf<P>& world,
                                      StoreHit<T>& hit)
         : leaves_(leaves), ray_(ray), world_(world), hit_(hit) {}
     /// Tests leaf (first, count); true when it holds a hit.
@@ -120,7 +120,7 @@ public:
 private:
     const TriangleLeaves<P>& leaves_;
     Ray<T>& ray_;
-    const typename P::RayData& world_;
+    const RayDataOf<P>& world_;
     StoreHit<T>& hit_;
 };
 
