@@ -9,10 +9,10 @@
 // origin away from its planes.
 //
 // The containers (Triangle, TriangleStore, TriangleLeaves, BruteForce) always call the
-// frame: choose() when they build, local()/prepare() when they query, and for tree leaves
-// leaf(), each_group() and records(), which decide what a leaf reference (first, count)
-// counts: padded records in the identity frame (no indirection), groups of records sharing
-// an origin with offset frames.
+// frame: choose() when they build, local() when they query, and for tree leaves leaf(),
+// test_leaf() and records(), which decide what a leaf reference (first, count) counts and
+// how it is tested: padded records in the identity frame (no indirection), groups of records
+// sharing an origin with offset frames.
 #pragma once
 
 #include <algorithm>
@@ -116,22 +116,18 @@ struct IdentityFrame {
     static const Ray<T>& local(const Ray<T>& ray, const Vec3<T>&) {
         return ray;
     }
-    /// The ray data for a group at `origin`: the query's own.
-    template <class P, class T>
-    [[gnu::always_inline]] static const RayDataOf<P>& prepare(const Ray<T>&, const Vec3<T>&, T,
-                                                              const RayDataOf<P>& world) {
-        return world;
-    }
     /// The leaf reference of a padded block: its records, padding included.
     template <class Store>
     static std::pair<std::uint32_t, std::uint32_t> leaf(const Store& s, typename Store::BlockRef ref) {
         const auto& g = s.group(ref.group_begin);  // one group in the world frame
         return {g.begin, detail::padded(g.end - g.begin)};
     }
-    /// Calls fn(begin, end, origin) for the record runs of leaf (first, count).
-    template <bool Any, class Store, class Fn>
-    [[gnu::always_inline]] static bool each_group(const Store&, std::uint32_t first, std::uint32_t count, Fn&& fn) {
-        return fn(first, first + count, Vec3<typename Store::T>(0));
+    /// Tests leaf (first, count) of store `s`, a run of padded records, with `world`, the ray
+    /// data prepared once per query. Left to the compiler to inline or not.
+    template <bool Any, class P, class Store, class Hit>
+    static bool test_leaf(const Store& s, std::uint32_t first, std::uint32_t count, const Ray<typename Store::T>&,
+                          const RayDataOf<P>& world, Hit& hit) {
+        return s.template test_batches<Any>(first, first + count, world, hit);
     }
     template <class Store>
     static std::uint64_t records(const Store&, std::uint32_t, std::uint32_t count) {
@@ -162,24 +158,23 @@ struct OffsetFrames {
         r.origin -= origin;
         return r;
     }
-    /// The ray data for a group at `origin`, with the interval (ray.tmin, min(ray.tmax, limit)).
-    template <class P, class T>
-    [[gnu::always_inline]] static RayDataOf<P> prepare(const Ray<T>& ray, const Vec3<T>& origin, T limit,
-                                                       const RayDataOf<P>&) {
-        Ray<T> r = local(ray, origin);
-        r.tmax = limit < ray.tmax ? limit : ray.tmax;  // keeps a NaN tmax (no hit)
-        return P::prepare(r);
-    }
     template <class Store>
     static std::pair<std::uint32_t, std::uint32_t> leaf(const Store&, typename Store::BlockRef ref) {
         return {ref.group_begin, ref.group_end - ref.group_begin};
     }
-    template <bool Any, class Store, class Fn>
-    [[gnu::always_inline]] static bool each_group(const Store& s, std::uint32_t first, std::uint32_t count, Fn&& fn) {
+    /// Tests leaf (first, count) of store `s`, a run of groups, each with the ray translated
+    /// into the group's frame and prepared with the interval (ray.tmin, min(ray.tmax, hit.t)).
+    /// Always inlined into the tree's traversal: called out of line it was slower on primary
+    /// rays (docs/notes/perf.md).
+    template <bool Any, class P, class Store, class Hit>
+    [[gnu::always_inline]] static bool test_leaf(const Store& s, std::uint32_t first, std::uint32_t count,
+                                                 const Ray<typename Store::T>& ray, const RayDataOf<P>&, Hit& hit) {
         bool found = false;
         for (const std::uint32_t end = first + count; first < end; ++first) {
             const auto& g = s.group(first);
-            if (fn(g.begin, g.end, g.origin)) {
+            Ray<typename Store::T> r = local(ray, g.origin);
+            r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
+            if (s.template test_batches<Any>(g.begin, g.end, P::prepare(r), hit)) {
                 if constexpr (Any) return true;
                 found = true;
             }

@@ -38,7 +38,7 @@ namespace detail {
 /// (+inf for a miss, never NaN). One SIMD compare and a shuffle reduction for 8 floats with
 /// AVX; the portable loop (a chain of dependent scalar compares) otherwise.
 template <class T>
-int nearest_lane(const T* ts, T limit) {
+[[gnu::always_inline]] inline int nearest_lane(const T* ts, T limit) {
 #if defined(__AVX__)
     if constexpr (std::is_same_v<T, float> && batch_width == 8) {
         const __m256 t = _mm256_loadu_ps(ts);
@@ -215,12 +215,9 @@ public:
     /// group's frame and the interval (ray.tmin, min(ray.tmax, hit.t)); `world` is
     /// P::prepare(ray), made once per query (the IdentityFrame uses it as it is).
     template <bool Any>
-    bool test_leaf(std::uint32_t first, std::uint32_t count, const Ray<T>& ray, const RayData& world,
-                   StoreHit<T>& hit) const {
-        auto group = [&](std::uint32_t begin, std::uint32_t end, const Vec3<T>& origin) __attribute__((always_inline)) {
-            return test_batches<Any>(begin, end, Frame::template prepare<P>(ray, origin, hit.t, world), hit);
-        };
-        return Frame::template each_group<Any>(*this, first, count, group);
+    [[gnu::always_inline]] bool test_leaf(std::uint32_t first, std::uint32_t count, const Ray<T>& ray,
+                                          const RayData& world, StoreHit<T>& hit) const {
+        return Frame::template test_leaf<Any, P>(*this, first, count, ray, world, hit);
     }
 
 private:
