@@ -165,7 +165,7 @@ struct OffsetFrames {
     /// Tests leaf (first, count) of store `s`, a run of groups, each with the ray translated
     /// into the group's frame and prepared with the interval (ray.tmin, min(ray.tmax, hit.t)).
     /// Always inlined into the tree's traversal: called out of line it was slower on primary
-    /// rays (docs/notes/perf.md).
+    /// rays (docs/history/trees.md, "Leaf tests after the frames change").
     template <bool Any, class P, class Store, class Hit>
     [[gnu::always_inline]] static bool test_leaf(const Store& s, std::uint32_t first, std::uint32_t count,
                                                  const Ray<typename Store::T>& ray, const RayDataOf<P>&, Hit& hit) {
