@@ -849,8 +849,8 @@ def main():
             f.write(out.getvalue())
         print('results: partial run: wrote %s (README and docs/results.md only from a full run)' % path)
         return 0
-    with open(a.doc, 'w') as f:
-        f.write(out.getvalue())
+    with open(a.doc, 'w') as f:  # README's links are relative to the root, the doc's to docs/
+        f.write(out.getvalue().replace('](docs/', ']('))
     text = open(a.readme).read()
     if BEGIN in text and END in text:
         head, rest = text.split(BEGIN, 1)
