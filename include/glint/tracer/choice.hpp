@@ -38,14 +38,6 @@ const Choice<Make>& find_choice(std::span<const Choice<Make>> table, std::string
     throw Error("unknown " + std::string(what) + " '" + std::string(name) + "' (" + choice_names(table) + ")");
 }
 
-/// Whether the table has an entry called `name`.
-template <class Make>
-bool has_choice(std::span<const Choice<Make>> table, std::string_view name) {
-    for (const auto& c : table)
-        if (c.name == name) return true;
-    return false;
-}
-
 /// The table as usage lines: each name and its help, indented by `indent`.
 template <class Make>
 std::string choice_usage(std::span<const Choice<Make>> table, std::size_t indent = 22) {

@@ -21,11 +21,11 @@
 #include <mutex>
 #include <span>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <glint/core/image.hpp>
 #include <glint/core/math.hpp>
+#include <glint/core/parallel.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -207,10 +207,10 @@ public:
         const int tiles = tx * ((h + tile - 1) / tile);
         film.resize(w, h);
         std::vector<typename I::pixel_state> states(std::size_t(w) * std::size_t(h));
-        std::atomic<int> next{0}, done{0};
+        std::atomic<int> done{0};
         std::atomic<std::uint64_t> rays{0}, capped{0};
         const auto start = std::chrono::steady_clock::now();
-        auto worker = [&] {
+        detail::parallel_blocks(tiles, settings_.threads, [&](std::atomic<int>& next) {
             S sampler = prototype;
             auto thread = detail::make_thread_state(integrator);
             Tally tally;
@@ -224,12 +224,7 @@ public:
             }
             rays += tally.rays;
             capped += tally.capped;
-        };
-        const int threads = std::clamp(settings_.threads > 0 ? settings_.threads : int(std::thread::hardware_concurrency()), 1, tiles);
-        std::vector<std::thread> pool;
-        for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
-        worker();
-        for (auto& th : pool) th.join();
+        });
         integrator.finish(film, std::span<const typename I::pixel_state>(states));
         RenderStats out;
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -22,11 +22,11 @@
 #include <cstdint>
 #include <span>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/core/parallel.hpp>
 #include <glint/occluders/visibility.hpp>
 #include <glint/tracer/brdf.hpp>
 #include <glint/tracer/scene.hpp>
@@ -160,23 +160,6 @@ Rgb<T> gather_point(const Scene<T>& s, const PixelPoint<T>& p, std::span<const V
     vis.set_point(p.x, p.n);
     return vpl_sum(p.x, p.n, vpls, vis, d2min, [&](const Vec3<T>& wi) { return brdf.f(frame.to_local(wi)); });
 }
-
-namespace detail {
-
-/// Runs worker(next) on `threads` threads (0: hardware concurrency); workers take block
-/// indices from the shared counter until none of the `blocks` is left.
-template <class Worker>
-void parallel_blocks(int blocks, int threads, const Worker& worker) {
-    std::atomic<int> next{0};
-    int n = threads > 0 ? threads : int(std::thread::hardware_concurrency());
-    n = std::clamp(n, 1, std::max(blocks, 1));
-    std::vector<std::thread> pool;
-    for (int i = 1; i < n; ++i) pool.emplace_back([&] { worker(next); });
-    worker(next);
-    for (auto& t : pool) t.join();
-}
-
-}  // namespace detail
 
 /// The VPLs' illumination at fixed points (weighted by each point's camera path): the same
 /// VPL sums at the same points many times over (one image per shooting path in light

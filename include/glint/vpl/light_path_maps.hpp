@@ -44,6 +44,7 @@
 
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/core/parallel.hpp>
 #include <glint/core/random.hpp>
 #include <glint/vpl/gather.hpp>
 #include <glint/vpl/shooting.hpp>
