@@ -226,9 +226,11 @@ private:
         for (const auto& pl : scene_.point_lights) {
             const Vec3<T> d = pl.position - sp.x;
             const T r2 = glm::dot(d, d);
-            const Vec3<T> wl = sp.frame.to_local(d / std::sqrt(r2));
-            if (wl.z <= T(0)) continue;  // behind the shading plane: culled before any ray
-            if (queries.visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0)))) L += pl.intensity * sp.brdf->f(wl) * (wl.z / r2);
+            const Vec3<T> wi = d / std::sqrt(r2);
+            const Vec3<T> wl = sp.frame.to_local(wi);
+            const Rgb<T> I = pl.intensity_towards(-wi);
+            if (wl.z <= T(0) || I.max() <= T(0)) continue;  // behind the shading plane or the light: no ray
+            if (queries.visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0)))) L += I * sp.brdf->f(wl) * (wl.z / r2);
         }
         return L;
     }

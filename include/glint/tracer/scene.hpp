@@ -1,5 +1,5 @@
 // glint/tracer/scene.hpp: what the reference path tracer renders: triangle meshes with
-// per-face materials, polygon area lights, point lights, an optional environment map and a
+// per-face materials, polygon area lights, point lights (isotropic, spot, oriented: lights/light.hpp), an optional environment map and a
 // pinhole camera; plus the scene's features, checked once, before rendering.
 //
 // Materials (Szécsi 2009, §1.3, and §2.1 for the combined BRDF):
@@ -27,6 +27,7 @@
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/lights/light.hpp>
 #include <glint/tracer/environment.hpp>
 
 namespace glint {
@@ -67,12 +68,6 @@ struct AreaLight {
     Rgb<T> emission{T(0)};
     Vec3<T> normal{0, 0, 1};
     T area = 0;
-};
-
-template <Scalar T>
-struct PointLight {
-    Vec3<T> position{0};
-    Rgb<T> intensity{T(0)};  // W/sr per band: irradiance I cos / r^2
 };
 
 /// Pinhole camera: `fov_y` is the full vertical field of view in radians.
@@ -161,6 +156,7 @@ public:
             throw Error("scene '" + name + "': per-triangle arrays disagree in size");
         for (std::uint32_t m : material_of)
             if (m >= materials.size()) throw Error("scene '" + name + "': a triangle has no material");
+        for (std::size_t i = 0; i < point_lights.size(); ++i) point_lights[i].validate(i);
     }
 
     SceneFeatures features() const {

@@ -125,7 +125,7 @@ Rgb<T> direct_light(const Scene<T>& s, RayQueries<A>& rays, const EmitterSet<T>&
         const Ray<T> r0 = detail::vpl_spawn(p.x, p.n, wi);
         const Vec3<T> y = point ? ls.position : detail::vpl_spawn(ls.position, ls.normal, -wi).origin;
         if (!rays.unoccluded(Ray<T>{r0.origin, y - r0.origin, T(0), T(1) - T(1e-4)})) continue;
-        sum += ls.power * f * (wl.z * cos_l / (r2 * pdf));
+        sum += ls.towards(-wi) * f * (wl.z * cos_l / (r2 * pdf));
     }
     return sum * (p.weight / T(samples));
 }

@@ -63,6 +63,10 @@ struct LightSample {
     Vec3<T> normal{0};  // zero for a point light
     Vec3<T> direction{0, 0, 1};
     Rgb<T> power{};
+    const PointLight<T>* light = nullptr;  // the point light sampled (its profile), else null
+
+    /// What leaves towards unit direction w: `power`, through a point light's profile.
+    Rgb<T> towards(const Vec3<T>& w) const { return light ? light->intensity_towards(w) : power; }
 };
 
 /// The scene's emitters (area-light triangles and point lights), chosen by luminance power.
@@ -78,11 +82,8 @@ public:
             const T area = triangle_area(t[0], t[1], t[2]);
             if (area > T(0)) add({t[0], t[1], t[2]}, s.normal(i), m.emission, area, pi<T> * area);
         }
-        for (const auto& p : s.point_lights) {
-            if (!all_finite(p.position) || !p.intensity.is_finite() || p.intensity.min() < T(0))
-                throw Error("glint::EmitterSet: point light with non-finite position or negative intensity");
-            if (p.intensity.max() > T(0)) add({p.position, p.position, p.position}, Vec3<T>(0), p.intensity, T(0), T(4) * pi<T>);
-        }
+        for (const auto& p : s.point_lights)
+            if (p.intensity.max() > T(0)) add({p.position, p.position, p.position}, Vec3<T>(0), p.intensity, T(0), p.measure(), &p);
         if (!(total_ > T(0))) throw Error("glint::EmitterSet: scene '" + s.name + "' has no light that emits");
     }
 
@@ -99,8 +100,10 @@ public:
         } else {
             out.position = e.v[0];
             out.direction = square_to_uniform_sphere(u_dir);
+            out.light = e.point;
         }
-        out.power = e.radiance * (e.measure / prob);
+        // A point light's direction is uniform on the sphere (density 1 / 4 pi), whatever its profile.
+        out.power = e.area > T(0) ? e.radiance * (e.measure / prob) : e.point->intensity_towards(out.direction) * (T(4) * pi<T> / prob);
         return out;
     }
 
@@ -114,11 +117,12 @@ public:
         out.position = e.area > T(0) ? sample_triangle(e.v[0], e.v[1], e.v[2], u_pos) : e.v[0];
         out.normal = e.area > T(0) ? e.normal : Vec3<T>(0);
         out.power = e.radiance;
+        out.light = e.point;
         pdf = e.area > T(0) ? probability(k) / e.area : probability(k);
         return out;
     }
 
-    /// Total luminance power of the emitters (pi Le A for area, 4 pi I for point lights).
+    /// Total luminance power of the emitters (pi Le A for area lights, PointLight::power()).
     T total_power() const { return total_; }
 
 private:
@@ -127,10 +131,12 @@ private:
         Vec3<T> normal;
         Rgb<T> radiance;  // Le, or I for a point light
         T area;           // 0: point light
-        T measure;        // pi A or 4 pi: power = radiance * measure
+        T measure;        // pi A, or a point light's measure(): power = radiance * measure
+        const PointLight<T>* point;  // the scene's point light, else null
     };
-    void add(const std::array<Vec3<T>, 3>& v, const Vec3<T>& n, const Rgb<T>& le, T area, T measure) {
-        emitters_.push_back({v, n, le, area, measure});
+    void add(const std::array<Vec3<T>, 3>& v, const Vec3<T>& n, const Rgb<T>& le, T area, T measure,
+             const PointLight<T>* point = nullptr) {
+        emitters_.push_back({v, n, le, area, measure, point});
         total_ += le.luminance() * measure;
         cdf_.push_back(total_);
     }
