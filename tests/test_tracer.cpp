@@ -985,6 +985,7 @@ TEST_CASE("io: scene JSON export writes every triangle, material and the camera 
     const std::array<Vec3f, 3> odd{Vec3f(1.0f / 3.0f, 2.0f / 7.0f, -5.0f / 11.0f), Vec3f(std::nextafter(1.0f, 2.0f), 0.1f, 1e-8f),
                                    Vec3f(-1.0f / 9.0f, 3.0f / 13.0f, 7.0f / 17.0f)};
     s.add_polygon(odd, 0);
+    s.point_lights.push_back(PointLight<float>::spot(Vec3f(0, 1.9f, 0), Vec3f(0, -1, 0), Rgb<float>(3, 2, 1), 0.5f, 0.25f));
     std::ostringstream out;
     write_scene_json(out, s, SceneJsonView{64, 32, 17});
     const std::string text = out.str();
@@ -1005,6 +1006,9 @@ TEST_CASE("io: scene JSON export writes every triangle, material and the camera 
     CHECK(text.find("\"fov_y\": 0.680000007") != std::string::npos);
     CHECK(text.find("\"width\": 64,\n  \"height\": 32,\n  \"aspect\": 2,\n  \"max_depth\": 17") != std::string::npos);
     CHECK(json_array_numbers(text, "area_lights").size() == 4 * 3 + 3 + 3 + 1);  // quad, emission, normal, area
+    CHECK(text.find("\"kind\": \"spot\", \"position\": [0, 1.89999998, 0], \"intensity\": [3, 2, 1]") != std::string::npos);
+    // position, intensity, axis, cos_outer, cos_inner
+    CHECK(json_array_numbers(text, "point_lights").size() == 3 + 3 + 3 + 1 + 1);
     CHECK_THROWS_AS(write_scene_json(out, builtin_scene<float>("envmap"), SceneJsonView{}), Error);
     s.triangles[3][1].x = std::numeric_limits<float>::quiet_NaN();
     CHECK_THROWS_AS(write_scene_json(out, s, SceneJsonView{}), Error);

@@ -76,12 +76,17 @@ try:
 except ImportError:  # numpy is checked in main(), so that the message is clear
     np = None
 
-REGIONS = ['floor', 'ceiling', 'back', 'left', 'right', 'light', 'bunny']
+REGIONS = ['floor', 'ceiling', 'back', 'left', 'right', 'light', 'bunny', 'image']
 SCENES = {
     'cornell': ['--scene', 'cornell'],
     'cornell-glossy': ['--scene', 'cornell-glossy'],
     'cornell-bunny': ['--scene', 'cornell', '--insert-mesh', '{bunny}'],
+    'hall': ['--scene', 'hall'],
+    'kitchen': ['--scene', 'kitchen'],
 }
+# Scenes that are not Cornell boxes have one region, 'image': every pixel whose 4 neighbours
+# hit geometry too.
+CORNELL = ('cornell', 'cornell-glossy', 'cornell-bunny')
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
@@ -155,6 +160,32 @@ def blender_material(bpy, name, m):
     return mat
 
 
+def blender_point_light(bpy, sc, i, l):
+    """A glint PointLight (lights/light.hpp) as a Blender light of radius 0. Cycles 3.4's point
+    light of power P has intensity P / (4 pi) in every direction, and its spot light the same
+    times cos(theta) times a smoothstep over the blend region, which is glint's spot profile
+    (both measured with a Blender render of a plane under the light, to 0.2%). Cycles has no
+    cosine (oriented) point light."""
+    from mathutils import Vector
+    if l['kind'] == 'cosine':
+        sys.exit('peer_cycles: point light %d is a cosine (oriented) light, which Cycles 3.4 has no light for' % i)
+    peak = max(l['intensity'])
+    data = bpy.data.lights.new('light%d' % i, type='SPOT' if l['kind'] == 'spot' else 'POINT')
+    data.energy = 4 * math.pi * peak
+    data.color = [c / peak if peak > 0 else 0.0 for c in l['intensity']]
+    data.shadow_soft_size = 0.0
+    if l['kind'] == 'spot':
+        co, ci = l['cos_outer'], l['cos_inner']
+        data.spot_size = 2 * math.acos(co)
+        data.spot_blend = (ci - co) / (1 - co) if co < 1 else 0.0
+    obj = bpy.data.objects.new('light%d' % i, data)
+    obj.location = l['position']
+    # Blender's spot shines along its local -Z.
+    obj.rotation_mode = 'QUATERNION'
+    obj.rotation_quaternion = Vector([-c for c in l['axis']]).to_track_quat('Z', 'Y')
+    sc.collection.objects.link(obj)
+
+
 def blender_build(bpy, scene_json):
     from mathutils import Matrix
     sc = bpy.context.scene
@@ -183,6 +214,8 @@ def blender_build(bpy, scene_json):
     co.matrix_world = m
     sc.collection.objects.link(co)
     sc.camera = co
+    for i, l in enumerate(scene_json.get('point_lights', [])):
+        blender_point_light(bpy, sc, i, l)
     world = bpy.data.worlds.new('black')
     world.use_nodes = True
     world.node_tree.nodes['Background'].inputs['Strength'].default_value = 0.0
@@ -298,8 +331,10 @@ class Runner:
         return read_rgb(out), {'cpu': t['cpu_seconds'], 'wall': t['seconds']}
 
 
-def classify(scene_json, ids, inserted):
+def classify(scene_json, ids, inserted, cornell=True):
     """Region label per pixel (index into REGIONS, -1 none) from the hit triangle indices."""
+    if not cornell:
+        return neighbours_agree(np.where(ids >= 0, REGIONS.index('image'), -1))
     tris = np.array(scene_json['triangles'], float).reshape(-1, 3, 3)
     mats = scene_json['materials']
     mat_of = np.array(scene_json['material_of'])
@@ -317,8 +352,12 @@ def classify(scene_json, ids, inserted):
     label[emissive] = REGIONS.index('light')
     if inserted:
         label[mat_of == len(mats) - 1] = REGIONS.index('bunny')
-    px = np.where(ids >= 0, label[np.maximum(ids, 0)], -1)
-    keep = px.copy()  # a pixel counts if its 4 neighbours are in its region
+    return neighbours_agree(np.where(ids >= 0, label[np.maximum(ids, 0)], -1))
+
+
+def neighbours_agree(px):
+    """The labels `px` where a pixel's 4 neighbours carry its label, else -1."""
+    keep = px.copy()
     keep[1:-1, 1:-1] = np.where((px[1:-1, 1:-1] == px[:-2, 1:-1]) & (px[1:-1, 1:-1] == px[2:, 1:-1]) &
                                 (px[1:-1, 1:-1] == px[1:-1, :-2]) & (px[1:-1, 1:-1] == px[1:-1, 2:]), px[1:-1, 1:-1], -1)
     keep[0, :] = keep[-1, :] = keep[:, 0] = keep[:, -1] = -1
@@ -421,7 +460,7 @@ def comparison(rn, a, scene):
         job = os.path.join(work, 'mask.job.json')
         json.dump({'scene': sj, 'spp': 1, 'seed': 0, 'mask': mask}, open(job, 'w'))
         rn.blender(job)
-    labels = classify(scene_json, np.load(mask), 'insert-mesh' in ' '.join(SCENES[scene]))
+    labels = classify(scene_json, np.load(mask), 'insert-mesh' in ' '.join(SCENES[scene]), scene in CORNELL)
     refs = references(rn, a, scene, sj, work)
     regions = region_table(labels, refs, scene == 'cornell-bunny')
     walls = (labels >= 0) & (labels != REGIONS.index('light'))

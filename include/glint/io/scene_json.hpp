@@ -4,10 +4,11 @@
 // Written: the triangles (three vertices each, in the tracer's order, whose vertex order
 // gives the geometric normal and so an emitter's front face), the material of each triangle,
 // the materials (kind, kd, ks, Phong exponent, emission, ior: the model of
-// glint/tracer/scene.hpp), the area lights (polygon, emission, unit normal, area), the
-// pinhole camera (eye, target, up, full vertical field of view fov_y in radians) with the
-// image size and aspect, and the tracer's path-length cap max_depth. Numbers are written with
-// 9 significant digits, which round-trips every float.
+// glint/tracer/scene.hpp), the area lights (polygon, emission, unit normal, area), the point
+// lights (kind isotropic | spot | cosine, position, intensity, axis, cos_outer, cos_inner:
+// glint/lights/light.hpp), the pinhole camera (eye, target, up, full vertical field of view
+// fov_y in radians) with the image size and aspect, and the tracer's path-length cap
+// max_depth. Numbers are written with 9 significant digits, which round-trips every float.
 #pragma once
 
 #include <cmath>
@@ -105,6 +106,14 @@ void json_objects(std::ostream& out, const char* key, const Items& items, WriteI
     out << "  ],\n";
 }
 
+inline const char* point_light_kind_name(PointLightKind k) {
+    switch (k) {
+        case PointLightKind::isotropic: return "isotropic";
+        case PointLightKind::spot: return "spot";
+        default: return "cosine";
+    }
+}
+
 template <Scalar T>
 void json_materials(std::ostream& out, const Scene<T>& s) {
     json_objects(out, "materials", s.materials, [&](const Material<T>& m) {
@@ -130,6 +139,14 @@ void json_lights(std::ostream& out, const Scene<T>& s) {
         json_field(out, "normal", l.normal);
         json_field(out, "area", l.area);
     });
+    json_objects(out, "point_lights", s.point_lights, [&](const PointLight<T>& l) {
+        out << "\"kind\": \"" << point_light_kind_name(l.kind) << '"';
+        json_field(out, "position", l.position);
+        json_field(out, "intensity", l.intensity);
+        json_field(out, "axis", l.axis);
+        json_field(out, "cos_outer", l.cos_outer);
+        json_field(out, "cos_inner", l.cos_inner);
+    });
 }
 
 template <Scalar T>
@@ -150,12 +167,11 @@ void json_triangles(std::ostream& out, const Scene<T>& s) {
 }  // namespace detail
 
 /// Writes `s` as JSON (see the file comment). Throws glint::Error for an inconsistent scene,
-/// an environment map or point lights (not exported), or a non-finite number.
+/// an environment map (not exported), or a non-finite number.
 template <Scalar T>
 void write_scene_json(std::ostream& out, const Scene<T>& s, const SceneJsonView& view) {
     s.validate();
-    if (s.environment || !s.point_lights.empty())
-        throw Error("write_scene_json: scene '" + s.name + "' has an environment map or point lights, which are not exported");
+    if (s.environment) throw Error("write_scene_json: scene '" + s.name + "' has an environment map, which is not exported");
     if (view.width <= 0 || view.height <= 0 || view.max_depth <= 0)
         throw Error("write_scene_json: image " + std::to_string(view.width) + "x" + std::to_string(view.height) +
                     " or max_depth " + std::to_string(view.max_depth) + " is not positive");
