@@ -1,6 +1,6 @@
 // glint/tracer/correlated_direct.hpp: CorrelatedDirect, Szécsi 2009, §3.2's multiple
 // correlated sampling of polygon lights as a direct-lighting policy (tracer/lighting.hpp), with
-// the per-pixel statistics of §3.1.1's lambda pooling.
+// the per-pixel statistics of §3.1.1's lambda pooling; point lights get one shadow ray each.
 //
 // Per area light and vertex, K points uniform on the polygon: f = Le fr G V, main part
 // g = Le fr~ G (V dropped, fr~ = kd / pi) with J from the point-to-polygon form factor
@@ -76,7 +76,7 @@ public:
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record* rec) const {
-        Rgb<T> L(T(0));
+        Rgb<T> L = all_point_lights(std::span<const PointLight<T>>(lights_.point_lights()), sp, queries);
         if (lights_.empty()) return L;
         std::array<Vec2<T>, 64> u;
         T lambda_sum = 0;

@@ -29,6 +29,8 @@
 
 #include <glint/core/error.hpp>
 #include <glint/core/spectrum.hpp>
+#include <glint/lights/light_bounds.hpp>
+#include <glint/lights/light_tree.hpp>
 #include <glint/sampling/correlated.hpp>
 #include <glint/sampling/sampler.hpp>
 #include <glint/tracer/environment.hpp>
@@ -86,64 +88,144 @@ T balance_weight(T a, T b) {
     return a + b > T(0) ? a / (a + b) : T(0);
 }
 
-/// The scene's area lights as polygon lights, chosen in proportion to their power.
+/// The scene's emitters: its area lights as polygon lights and its point lights, numbered in
+/// that order (as scene_light_bounds numbers them); pick() chooses one in proportion to its
+/// power (Le A for an area light, I measure / pi for a point light: both power / pi).
 template <Scalar T>
 class SceneLights {
 public:
-    struct Pick {
-        std::size_t index;
-        T probability;
-    };
+    using Pick = LightPick<T>;
 
-    explicit SceneLights(const Scene<T>& scene) {
+    explicit SceneLights(const Scene<T>& scene) : points_(scene.point_lights) {
         for (const auto& l : scene.area_lights) {
             lights_.emplace_back(std::span<const Vec3<T>>(l.vertices), l.emission);
             power_ += l.emission.luminance() * l.area;
             cdf_.push_back(power_);
         }
+        for (const auto& l : points_) {
+            power_ += l.power().luminance() / pi<T>;
+            cdf_.push_back(power_);
+        }
     }
+    /// The area lights (emitters 0 .. lights().size() - 1).
     const std::vector<PolygonLight<T, 3>>& lights() const { return lights_; }
+    /// The point lights (emitters lights().size() ..).
+    const std::vector<PointLight<T>>& point_lights() const { return points_; }
+    /// No area lights (point lights are not sampled by every policy).
     bool empty() const { return lights_.empty(); }
+    std::size_t emitters() const { return cdf_.size(); }
 
-    /// The light chosen by u (proportional to power) and its probability.
+    /// The emitter chosen by u (proportional to power) and its probability.
     Pick pick(T u) const {
+        if (!(power_ > T(0))) return {};
         std::size_t i = std::size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u * power_) - cdf_.begin());
-        i = std::min(i, lights_.size() - 1);
-        return {i, (cdf_[i] - (i ? cdf_[i - 1] : T(0))) / power_};
+        i = std::min(i, cdf_.size() - 1);
+        return {i, probability(i)};
     }
+    T probability(std::size_t i) const { return (cdf_[i] - (i ? cdf_[i - 1] : T(0))) / power_; }
     /// Light-sampling density (solid angle, light chosen by power) of the direction towards a
     /// point of area light `l` at squared distance r2, seen under cosine cos_l there.
     T pdf(const AreaLight<T>& l, T r2, T cos_l) const { return l.emission.luminance() / power_ * r2 / cos_l; }
 
 private:
     std::vector<PolygonLight<T, 3>> lights_;
+    std::vector<PointLight<T>> points_;
     std::vector<T> cdf_;
     T power_ = 0;
 };
 
+/// Point light pl's direct light at sp, by one shadow ray: f I cos / r^2 (no ray behind the
+/// shading plane or outside the light's cone).
+template <Scalar T, class Q>
+    requires ShadowQueries<Q, T>
+Rgb<T> point_light_direct(const PointLight<T>& pl, const ShadingPoint<T>& sp, Q& queries) {
+    const Vec3<T> d = pl.position - sp.x;
+    const T r2 = glm::dot(d, d);
+    const Vec3<T> wi = d / std::sqrt(r2);
+    const Vec3<T> wl = sp.frame.to_local(wi);
+    const Rgb<T> I = pl.intensity_towards(-wi);
+    if (wl.z <= T(0) || I.max() <= T(0)) return Rgb<T>(T(0));
+    if (!queries.visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0)))) return Rgb<T>(T(0));
+    return I * sp.brdf->f(wl) * (wl.z / r2);
+}
+
+/// Every point light at sp, one shadow ray each (the standard ray tracer's loop): the point
+/// lights' share of direct light for the policies that cannot sample them.
+template <Scalar T, class Q>
+    requires ShadowQueries<Q, T>
+Rgb<T> all_point_lights(std::span<const PointLight<T>> lights, const ShadingPoint<T>& sp, Q& queries) {
+    Rgb<T> L(T(0));
+    for (const auto& pl : lights) L += point_light_direct(pl, sp, queries);
+    return L;
+}
+
+/// How MisDirect chooses the emitter of a light sample.
+enum class LightSelection : std::uint8_t { power, tree };
+
+/// The emitter of a light sample, chosen by power (SceneLights) or by the stochastic light
+/// tree (lights/light_tree.hpp) at the shading point: a run-time choice.
+template <Scalar T>
+class LightSelector {
+public:
+    LightSelector(const Scene<T>& scene, LightSelection how)
+        : lights_(scene), how_(how),
+          tree_(how == LightSelection::tree ? LightTree<T>(scene_light_bounds(scene)) : LightTree<T>()) {}
+
+    const SceneLights<T>& lights() const { return lights_; }
+    LightSelection selection() const { return how_; }
+    const LightTree<T>& tree() const { return tree_; }
+
+    /// An emitter for point x with normal n, by u; probability 0: none.
+    LightPick<T> pick(const Vec3<T>& x, const Vec3<T>& n, T u) const {
+        return how_ == LightSelection::tree ? tree_.pick(x, n, u) : lights_.pick(u);
+    }
+    T probability(const Vec3<T>& x, const Vec3<T>& n, std::size_t i) const {
+        return how_ == LightSelection::tree ? tree_.probability(x, n, i) : lights_.probability(i);
+    }
+    /// Light-sampling density (solid angle) from x of a point of area light i at squared
+    /// distance r2 seen under cosine cos_l there.
+    T area_pdf(const Vec3<T>& x, const Vec3<T>& n, std::size_t i, const AreaLight<T>& l, T r2, T cos_l) const {
+        if (how_ == LightSelection::power) return lights_.pdf(l, r2, cos_l);
+        return tree_.probability(x, n, i) / l.area * r2 / cos_l;
+    }
+
+private:
+    SceneLights<T> lights_;
+    LightSelection how_;
+    LightTree<T> tree_;
+};
+
 /// No next-event estimation of the area lights: the walk collects their emission wherever it
-/// hits it, whole.
+/// hits it, whole. Point lights, which no walk can hit, get one shadow ray each.
 template <Scalar T = float>
 struct BrdfOnlyDirect : NoPixelStatistics<T> {
     BrdfOnlyDirect() = default;
-    BrdfOnlyDirect(const Scene<T>&, const PathTracerSettings<T>&) {}
+    BrdfOnlyDirect(const Scene<T>& scene, const PathTracerSettings<T>&) : points_(scene.point_lights) {}
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
-    Rgb<T> estimate(const ShadingPoint<T>&, S&, Q&, typename NoPixelStatistics<T>::vertex_record*) const {
-        return Rgb<T>(T(0));
+    Rgb<T> estimate(const ShadingPoint<T>& sp, S&, Q& queries, typename NoPixelStatistics<T>::vertex_record*) const {
+        return all_point_lights(std::span<const PointLight<T>>(points_), sp, queries);
     }
     T emission_weight(const Arrival<T>&, const Ray<T>&, const StoreHit<T>&) const { return T(1); }
+
+private:
+    std::vector<PointLight<T>> points_;
 };
 
 /// Light sampling and the BRDF sample combined by the balance heuristic (with sample counts:
-/// k light samples and the one continuation ray, Veach and Guibas 1995).
+/// k light samples and the one continuation ray, Veach and Guibas 1995). A light sample
+/// chooses one emitter of the scene (area or point light) by the selector, by power or by the
+/// light tree at the vertex; a point light's sample is its one shadow ray (weight 1: no BRDF
+/// sample can hit it).
 template <Scalar T = float>
 class MisDirect : public NoPixelStatistics<T> {
 public:
     using vertex_record = typename NoPixelStatistics<T>::vertex_record;
 
-    MisDirect(const Scene<T>& scene, const PathTracerSettings<T>& s)
-        : scene_(&scene), lights_(scene), k_(std::max(1, s.light_samples)) {}
+    MisDirect(const Scene<T>& scene, const PathTracerSettings<T>& s, LightSelection how = LightSelection::power)
+        : scene_(&scene), selector_(scene, how), k_(std::max(1, s.light_samples)) {}
+
+    const LightSelector<T>& selector() const { return selector_; }
 
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
@@ -153,7 +235,8 @@ public:
         return L;
     }
 
-    /// The BRDF sample's balance-heuristic weight where its ray meets area-light emission.
+    /// The BRDF sample's balance-heuristic weight where its ray meets area-light emission;
+    /// the light-sampling density is the selector's at the vertex the ray left.
     T emission_weight(const Arrival<T>& from, const Ray<T>& ray, const StoreHit<T>& hit) const {
         if (!from.lights_sampled) return T(1);
         const T brdf_pdf = from.pdf;
@@ -163,20 +246,26 @@ public:
         const T len2 = glm::dot(ray.direction, ray.direction);
         const T cos_l = -glm::dot(ray.direction, al.normal) / std::sqrt(len2);
         if (!(cos_l > T(0))) return T(0);
-        const T pdf_light = lights_.pdf(al, hit.t * hit.t * len2, cos_l);
+        const T pdf_light = selector_.area_pdf(from.x, from.n, std::size_t(li), al, hit.t * hit.t * len2, cos_l);
         return brdf_pdf / (brdf_pdf + T(k_) * pdf_light);
     }
 
 private:
-    /// One light sample (light by power, then uniform on it): f Le cos / (k p_light + p_brdf).
+    /// One light sample: an emitter by the selector, then (area light) a point uniform on it:
+    /// f Le cos / (k p_light + p_brdf); or (point light) f I cos / (r^2 k p_select).
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> light_sample(const ShadingPoint<T>& sp, S& sampler, Q& queries) const {
         const T u_light = sampler.get_1d();
         const Vec2<T> u_point = sampler.get_2d();
-        if (lights_.empty()) return Rgb<T>(T(0));
-        const auto pick = lights_.pick(u_light);
-        const auto& light = lights_.lights()[pick.index];
+        const auto pick = selector_.pick(sp.x, sp.n, u_light);
+        if (!(pick.probability > T(0))) return Rgb<T>(T(0));
+        const auto& areas = selector_.lights().lights();
+        if (pick.index >= areas.size()) {
+            const auto& pl = selector_.lights().point_lights()[pick.index - areas.size()];
+            return point_light_direct(pl, sp, queries) * (T(1) / (T(k_) * pick.probability));
+        }
+        const auto& light = areas[pick.index];
         const Vec3<T> y = light.sampler().sample(u_point);
         const Vec3<T> d = y - sp.x;
         const T r2 = glm::dot(d, d);
@@ -189,9 +278,8 @@ private:
         if (f.max() <= T(0) || !queries.visible(sp, light, y)) return Rgb<T>(T(0));
         return light.radiance() * f * (wl.z / (T(k_) * pdf_light + sp.brdf->sampling_pdf(wl)));
     }
-
     const Scene<T>* scene_;
-    SceneLights<T> lights_;
+    LightSelector<T> selector_;
     int k_;
 };
 

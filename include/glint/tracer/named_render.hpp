@@ -97,7 +97,9 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
     using Sc = const Scene<T>&;
     using St = const PathTracerSettings<T>&;
     static constexpr Choice<D (*)(Sc, St)> table[] = {
-        {"mis", "light and BRDF samples by the balance heuristic", [](Sc s, St t) { return D(MisDirect<T>(s, t)); }},
+        {"mis", "light and BRDF samples by the balance heuristic; lights by power", [](Sc s, St t) { return D(MisDirect<T>(s, t)); }},
+        {"tree", "the same, lights by the stochastic light tree (Conty Estevez and Kulla 2018)",
+         [](Sc s, St t) { return D(MisDirect<T>(s, t, LightSelection::tree)); }},
         {"brdf", "no light sampling: emission counts where the walk meets it",
          [](Sc s, St t) { return D(BrdfOnlyDirect<T>(s, t)); }},
         {"importance", "Szecsi 2009 3.2's light samples, lambda = 0",

@@ -3,8 +3,8 @@
 //
 // Szécsi 2009, §1.3: the rendering equation L = Le + T L is estimated by random walks; at
 // every diffuse or glossy vertex the direct illumination is estimated by a direct-lighting
-// policy (next-event estimation), the environment by an environment-lighting policy and the
-// point lights by shadow rays, and the walk continues or stops by the Russian roulette and
+// policy (next-event estimation: area and point lights, as the policy chooses), the
+// environment by an environment-lighting policy, and the walk continues or stops by the Russian roulette and
 // BRDF selection of PathTracerSettings (§2.1-2.3 through glint::scatter). Types, where they
 // pay in the hot loop:
 //   Accel    a RayAccelerator (trees/tree.hpp): closest_hit(ray, StoreHit&) and any_hit(ray)
@@ -15,7 +15,7 @@
 //   E        EnvironmentLighting (MisEnvironment, the default, which does nothing in a scene
 //            without a map; CorrelatedEnvironment in tracer/correlated_environment.hpp).
 // Values, a predictable branch per vertex: the roulette rule, the BRDF selection, the scene's
-// features (point lights, environment: checked once, when the tracer is built). Specular (mirror, dielectric) vertices are followed
+// features (the environment: checked once, when the tracer is built). Specular (mirror, dielectric) vertices are followed
 // deterministically (Fresnel choice for dielectrics) and count emission on the next hit, as
 // camera rays do.
 //
@@ -138,7 +138,7 @@ private:
             const T pdf = brdf.sampling_pdf(wi);
             Rgb<T> X(T(0));
             if (pdf > T(0) && wi.z > T(0))
-                X = brdf.f(wi) * (wi.z / pdf) * walk(spawn(sp, frame.to_world(wi)), sampler, queries, Arrival<T>{true, pdf}, nullptr).L;
+                X = brdf.f(wi) * (wi.z / pdf) * walk(spawn(sp, frame.to_world(wi)), sampler, queries, Arrival<T>{true, pdf, sp.x, sp.n}, nullptr).L;
             out.push_back({m.kd + m.ks, X});
         }
     }
@@ -176,7 +176,7 @@ private:
         return out;
     }
 
-    /// A diffuse or glossy vertex: lighting policies, point lights, then the roulette, lobe
+    /// A diffuse or glossy vertex: lighting policies, then the roulette, lobe
     /// choice and direction (Szécsi 2009, §2.1). Updates ray, F, L and from; false when the
     /// walk stops.
     bool surface_step(const Material<T>& m, ShadingPoint<T> sp, int depth, S& sampler, Queries& queries,
@@ -185,7 +185,6 @@ private:
         sp.brdf = &brdf;
         L += F * direct_.estimate(sp, sampler, queries, rec);
         if (features_.environment) L += F * env_.estimate(sp, sampler, queries);
-        if (features_.point_lights) L += F * point_lights(sp, queries);
         return scatter_step(brdf, sp, depth, sampler, ray, F, L, from);
     }
 
@@ -201,7 +200,7 @@ private:
         F *= s.weight;
         if (F.max() <= T(0) || !F.is_finite()) return false;  // nothing more can contribute
         ray = spawn(sp, sp.frame.to_world(s.direction));
-        from = Arrival<T>{true, brdf.sampling_pdf(s.direction)};
+        from = Arrival<T>{true, brdf.sampling_pdf(s.direction), sp.x, sp.n};
         return true;
     }
 
@@ -221,26 +220,12 @@ private:
         return true;
     }
 
-    Rgb<T> point_lights(const ShadingPoint<T>& sp, Queries& queries) const {
-        Rgb<T> L(T(0));
-        for (const auto& pl : scene_.point_lights) {
-            const Vec3<T> d = pl.position - sp.x;
-            const T r2 = glm::dot(d, d);
-            const Vec3<T> wi = d / std::sqrt(r2);
-            const Vec3<T> wl = sp.frame.to_local(wi);
-            const Rgb<T> I = pl.intensity_towards(-wi);
-            if (wl.z <= T(0) || I.max() <= T(0)) continue;  // behind the shading plane or the light: no ray
-            if (queries.visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0)))) L += I * sp.brdf->f(wl) * (wl.z / r2);
-        }
-        return L;
-    }
-
     const Scene<T>& scene_;
     const Accel& accel_;
     D direct_;
     E env_;
     Settings settings_;
-    SceneFeatures features_;  // checked once: a scene without a map or point lights skips their code
+    SceneFeatures features_;  // checked once: a scene without a map skips its code
 };
 
 }  // namespace glint

@@ -14,7 +14,8 @@
 //   arealight       a room lit by one large area light covering a wall, with occluding
 //                   columns (Szécsi 2009, §3.2, Fig. 3.4);
 //   envmap          a sphere and a box on a ground plane under a procedural sky with a sun
-//                   (Szécsi 2009, §3.3, Fig. 3.7), or under a given lat-long EXR.
+//                   (Szécsi 2009, §3.3, Fig. 3.7), or under a given lat-long EXR;
+//   hall, kitchen, lie-hall  many-light scenes (lights/scenes.hpp).
 //
 // insert_mesh() adds a mesh (an OBJ's triangles) to a scene, scaled to a footprint and standing
 // on a floor point: glint-render --insert-mesh puts one on the Cornell box's free floor
@@ -31,6 +32,7 @@
 #include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/lights/scenes.hpp>
 #include <glint/tracer/choice.hpp>
 #include <glint/tracer/environment.hpp>
 #include <glint/tracer/scene.hpp>
@@ -249,6 +251,9 @@ std::span<const Choice<Scene<T> (*)()>> scene_choices() {
         {"furnace", "a closed room of saturated albedos whose radiance is 1 everywhere", [] { return detail::furnace<T>(); }},
         {"arealight", "a room lit by a large area light, with occluding columns", [] { return detail::arealight<T>(); }},
         {"envmap", "a sphere and a box under a sky with a sun (or an EXR map)", [] { return detail::envmap<T>(); }},
+        {"hall", "a hall of columns with 800 point and spot lights", [] { return hall_scene<T>(); }},
+        {"kitchen", "a kitchen lit by 72 disk area lights", [] { return kitchen_scene<T>(); }},
+        {"lie-hall", "a hall with 100 point lights and many occluders", [] { return lie_hall_scene<T>(); }},
     };
     return table;
 }

@@ -37,11 +37,13 @@ struct ShadingPoint {
 
 /// How emission found at the end of a ray is weighted, given the vertex the ray left: whole
 /// (camera rays, specular bounces, no light sampling), or, where lights were also sampled
-/// there, by the lighting policies' weight for a BRDF sample of density `pdf`.
+/// there, by the lighting policies' weight for a BRDF sample of density `pdf`; x and n are
+/// that vertex's position and normal (a light selector's probabilities depend on them).
 template <Scalar T>
 struct Arrival {
     bool lights_sampled = false;
     T pdf = T(0);
+    Vec3<T> x{0}, n{0};
 };
 
 /// A hit point and the bound on its rounding error, per axis.
@@ -102,11 +104,13 @@ Ray<T> spawn(const ShadingPoint<T>& sp, const Vec3<T>& dir) {
 }
 
 /// What a lighting policy asks of a sample's ray queries: shadow rays to a point of a polygon
-/// light and along a ray of infinite length.
+/// light, to a point (rounding error, surface normal; 0 for a point light) and along a ray of
+/// infinite length.
 template <class Q, class T>
 concept ShadowQueries = requires(Q& q, const ShadingPoint<T>& sp, const PolygonLight<T, 3>& light, const Vec3<T>& y,
                                  const Ray<T>& ray) {
     { q.visible(sp, light, y) } -> std::convertible_to<bool>;
+    { q.visible(sp, y, y, y) } -> std::convertible_to<bool>;
     { q.unoccluded(ray) } -> std::convertible_to<bool>;
 };
 

@@ -1,0 +1,157 @@
+// bench_lights: many-light direct lighting in the path tracer, error against time. Per scene
+// (hall, kitchen), a high-spp reference (the light tree, all threads), then each method at
+// equal spp on one thread, methods alternating per repetition (ABBA); one CSV row per method
+// and repetition:
+//   scene,method,lights,lights_per_pixel,shadow_rays_per_pixel,seconds,error_E,rmse
+// lights: the scene's emitters; lights_per_pixel: light samples per pixel at the primary
+// vertices (spp x light samples); shadow_rays_per_pixel: every ray the render traced per pixel
+// (closest-hit and shadow rays: the tracer counts them together); error_E: Fernandez 2004's
+// eq. 4.3, the mean over pixels of min(|L - L_ref| / L_ref, 1) (luminance); rmse over pixels
+// and bands. The summary prints each method's MSE x time against power selection's.
+// Each method is a small function (a row of `methods`), so that other methods join the table.
+//
+//   taskset -c 1 bench_lights [--quick] [--csv FILE] [--scene hall|kitchen|all] [--size N]
+//                             [--spp N] [--ref-spp N] [--reps N]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <glint/tracer/accelerator_choices.hpp>
+#include <glint/tracer/named_render.hpp>
+#include <glint/tracer/scenes.hpp>
+
+using namespace glint;
+
+namespace {
+
+struct Options {
+    std::string csv, scene = "all";
+    int size = 64, spp = 16, ref_spp = 256, reps = 3;
+};
+
+struct Row {
+    std::string scene, method;
+    std::size_t lights = 0;
+    double lights_per_pixel = 0, rays_per_pixel = 0, seconds = 0, error_e = 0, rmse = 0;
+};
+
+/// Error E (eq. 4.3) and RMSE of `img` against `ref`.
+void errors(const Image<Rgb<float>>& img, const Image<Rgb<float>>& ref, double& e, double& rmse) {
+    double se = 0, sq = 0;
+    for (std::size_t i = 0; i < img.size(); ++i) {
+        const double l = img.pixels[i].luminance(), lr = ref.pixels[i].luminance();
+        se += lr > 0 ? std::min(std::abs(l - lr) / lr, 1.0) : (l > 0 ? 1.0 : 0.0);
+        for (std::size_t c = 0; c < 3; ++c) sq += std::pow(double(img.pixels[i][c]) - double(ref.pixels[i][c]), 2);
+    }
+    e = se / double(img.size());
+    rmse = std::sqrt(sq / (3.0 * double(img.size())));
+}
+
+/// The path tracer with a named direct-lighting policy on one thread.
+RenderResult path_traced(const Scene<float>& s, const DefaultAccel& accel, const Options& o, const char* direct, int spp,
+                         int threads) {
+    NamedRender<float> r;
+    r.image.width = r.image.height = o.size;
+    r.image.spp = spp;
+    r.image.threads = threads;
+    r.direct = direct;
+    r.seed = 1;
+    return render_named(s, accel, r);
+}
+
+/// A method: its row from one render of scene s against the reference.
+using Method = Row (*)(const Scene<float>&, const DefaultAccel&, const Options&, const Image<Rgb<float>>&);
+
+Row measured(const char* name, const RenderResult& r, const Scene<float>& s, const Options& o, const Image<Rgb<float>>& ref) {
+    Row row{s.name, name, s.area_lights.size() + s.point_lights.size()};
+    const double pixels = double(o.size) * double(o.size);
+    row.lights_per_pixel = double(o.spp);
+    row.rays_per_pixel = double(r.rays) / pixels;
+    row.seconds = r.seconds;
+    errors(r.image, ref, row.error_e, row.rmse);
+    return row;
+}
+
+Row power(const Scene<float>& s, const DefaultAccel& a, const Options& o, const Image<Rgb<float>>& ref) {
+    return measured("power", path_traced(s, a, o, "mis", o.spp, 1), s, o, ref);
+}
+Row tree(const Scene<float>& s, const DefaultAccel& a, const Options& o, const Image<Rgb<float>>& ref) {
+    return measured("tree", path_traced(s, a, o, "tree", o.spp, 1), s, o, ref);
+}
+
+const std::pair<const char*, Method> methods[] = {{"power", power}, {"tree", tree}};
+
+Options parse(int argc, char** argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) throw Error(a + " needs a value");
+            return argv[++i];
+        };
+        if (a == "--quick") o.size = 24, o.spp = 4, o.ref_spp = 64, o.reps = 1;
+        else if (a == "--csv") o.csv = next();
+        else if (a == "--scene") o.scene = next();
+        else if (a == "--size") o.size = std::stoi(next());
+        else if (a == "--spp") o.spp = std::stoi(next());
+        else if (a == "--ref-spp") o.ref_spp = std::stoi(next());
+        else if (a == "--reps") o.reps = std::stoi(next());
+        else throw Error("unknown option '" + a + "'");
+    }
+    if (o.size < 1 || o.spp < 1 || o.ref_spp < 1 || o.reps < 1) throw Error("--size, --spp, --ref-spp and --reps must be >= 1");
+    if (o.scene != "all" && o.scene != "hall" && o.scene != "kitchen") throw Error("unknown scene '" + o.scene + "' (hall, kitchen, all)");
+    return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+    const Options o = parse(argc, argv);
+    std::vector<Row> rows;
+    for (const char* name : {"hall", "kitchen"}) {
+        if (o.scene != "all" && o.scene != name) continue;
+        const Scene<float> s = builtin_scene<float>(name);
+        const DefaultAccel accel(s.triangles);
+        const RenderResult ref = path_traced(s, accel, o, "tree", o.ref_spp, 0);
+        std::fprintf(stderr, "%s: reference %d spp in %.1f s\n", name, o.ref_spp, ref.seconds);
+        const int m = int(std::size(methods));
+        for (int rep = 0; rep < o.reps; ++rep)
+            for (int k = 0; k < m; ++k) {
+                const int j = rep % 2 ? m - 1 - k : k;  // ABBA
+                rows.push_back(methods[j].second(s, accel, o, ref.image));
+            }
+    }
+    std::FILE* out = o.csv.empty() ? stdout : std::fopen(o.csv.c_str(), "w");
+    if (!out) throw Error("cannot write '" + o.csv + "'");
+    std::fprintf(out, "scene,method,lights,lights_per_pixel,shadow_rays_per_pixel,seconds,error_E,rmse\n");
+    for (const Row& r : rows)
+        std::fprintf(out, "%s,%s,%zu,%.1f,%.1f,%.4f,%.5f,%.6g\n", r.scene.c_str(), r.method.c_str(), r.lights,
+                     r.lights_per_pixel, r.rays_per_pixel, r.seconds, r.error_e, r.rmse);
+    if (out != stdout) std::fclose(out);
+    // Summary: per scene and method, median seconds and mean MSE, MSE x time against power's.
+    std::map<std::pair<std::string, std::string>, std::vector<Row>> by;
+    for (const Row& r : rows) by[{r.scene, r.method}].push_back(r);
+    for (const auto& [key, rs] : by) {
+        std::vector<double> t;
+        double mse = 0;
+        for (const Row& r : rs) t.push_back(r.seconds), mse += r.rmse * r.rmse / double(rs.size());
+        std::sort(t.begin(), t.end());
+        const auto& base = by[{key.first, "power"}];
+        std::vector<double> tb;
+        double mse_b = 0;
+        for (const Row& r : base) tb.push_back(r.seconds), mse_b += r.rmse * r.rmse / double(base.size());
+        std::sort(tb.begin(), tb.end());
+        const double med = t[t.size() / 2], med_b = tb[tb.size() / 2];
+        std::fprintf(stderr, "%-8s %-6s time %.3f s  MSE %.4g  E %.4f  MSE*time vs power %.3f\n", key.first.c_str(),
+                     key.second.c_str(), med, mse, rs[0].error_e, mse * med / (mse_b * med_b));
+    }
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_lights: %s\n", e.what());
+    return 1;
+}
