@@ -33,10 +33,11 @@
 
 namespace glint {
 
-/// What shading one vertex cost: rays through the accelerator (fallback, three-state partial
-/// lights), rays tested against blocker lists, and the ray-triangle tests those took.
+/// What shading one vertex cost: lights evaluated (f I cos / r^2), rays through the accelerator
+/// (fallback, three-state partial lights), rays tested against blocker lists, and the
+/// ray-triangle tests those took.
 struct LieShadeCost {
-    std::uint32_t accel_rays = 0, blocker_rays = 0, blocker_tests = 0;
+    std::uint32_t lights = 0, accel_rays = 0, blocker_rays = 0, blocker_tests = 0;
 };
 
 template <Scalar T = float>
@@ -85,6 +86,7 @@ public:
             const LieLight<T>& l = lie_->lights()[e.light];
             Rgb<T> f;
             if (!lie_unshadowed(sp, l, f)) continue;
+            ++out.cost.lights;
             if (e.state == LieState::partial && !(lists ? through_blockers(sp, l, e, out.cost) : through_accel(sp, l, queries, out.cost)))
                 continue;
             out.L += f;
@@ -100,13 +102,21 @@ public:
         Shaded out;
         for (const LieLight<T>& l : lie_->lights()) {
             Rgb<T> f;
-            if (lie_unshadowed(sp, l, f) && through_accel(sp, l, queries, out.cost)) out.L += f;
+            if (!lie_unshadowed(sp, l, f)) continue;
+            ++out.cost.lights;
+            if (through_accel(sp, l, queries, out.cost)) out.L += f;
         }
         return out;
     }
 
     const Lie<T>& lie() const { return *lie_; }
     bool masking() const { return masking_; }
+    /// The same LIEs (shared, not rebuilt) with masking on or off.
+    LieDirect with_masking(bool on) const {
+        LieDirect d = *this;
+        d.masking_ = on;
+        return d;
+    }
 
 private:
     bool through_blockers(const ShadingPoint<T>& sp, const LieLight<T>& l, const LieEntry& e, LieShadeCost& cost) const {
