@@ -20,6 +20,7 @@
 #include <variant>
 
 #include <glint/core/error.hpp>
+#include <glint/lights/lie_direct.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -87,9 +88,18 @@ inline std::span<const Choice<BrdfSelection>> selection_choices() {
     return table;
 }
 
+namespace detail {
+/// The LIEs of a named render: 2^15 construction samples of a square view.
+inline LieSettings factory_lie_settings() {
+    LieSettings s;
+    s.samples = 1 << 15;
+    return s;
+}
+}  // namespace detail
+
 /// The direct-lighting policies a name can choose.
 template <Scalar T>
-using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>>;
+using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, LieDirect<T>>;
 
 template <Scalar T>
 std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&)>> direct_choices() {
@@ -108,6 +118,10 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
          [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::correlated)); }},
         {"combined", "Szecsi 2009 3.2's combined estimator, lambda pooled",
          [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
+        {"lie", "Fernandez 2004 ch. 3's local illumination environments (biased where unsampled)",
+         [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), false)); }},
+        {"lie-mask", "the same with Weber masking (drops up to 2% per cell)",
+         [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), true)); }},
     };
     return table;
 }
