@@ -314,7 +314,7 @@ class Runner:
         cmd = self.pin + [self.a.glint] + [s.format(bunny=self.a.bunny) for s in SCENES[scene]] + [
             '--size', str(self.a.size), '--spp', str(spp), '--seed', str(seed), '--threads', '1', '--out', out] + extra
         text, cpu = run(cmd, rusage=True)
-        m = re.search(r'rendered .* in ([0-9.]+) s \(build ([0-9.]+) s\)', text)
+        m = re.search(r'rendered .* in ([0-9.]+) s \(build (?:\S+ )?([0-9.]+) s\)', text)
         if not m:
             sys.exit('peer_cycles: cannot read the time from glint-render:\n' + text)
         return read_rgb(out), {'cpu': cpu, 'wall': float(m.group(1)) + float(m.group(2))}

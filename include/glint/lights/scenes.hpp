@@ -133,7 +133,9 @@ Scene<T> kitchen_scene(int light_sides = 16) {
     using V = Vec3<T>;
     const auto floor = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.45), T(0.35), T(0.25))));
     const auto wall = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.8), T(0.78), T(0.72))));
-    const auto wood = s.add_material(Material<T>::glossy(Rgb<T>(T(0.4), T(0.25), T(0.12)), Rgb<T>(T(0.15)), T(30)));
+    // Lambertian throughout, so that Cycles renders exactly this scene (tools/peer_cycles.py:
+    // its Phong lobe is not glint's).
+    const auto wood = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.4), T(0.25), T(0.12))));
     const auto white = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.85))));
     const auto light = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.8)), Rgb<T>(T(14), T(12.5), T(10))));
     detail::add_room(s, V(-4, 0, -3), V(4, 3, 3), floor, wall, wall);
