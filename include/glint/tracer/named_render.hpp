@@ -20,6 +20,7 @@
 #include <variant>
 
 #include <glint/core/error.hpp>
+#include <glint/lights/cut_direct.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -89,7 +90,7 @@ inline std::span<const Choice<BrdfSelection>> selection_choices() {
 
 /// The direct-lighting policies a name can choose.
 template <Scalar T>
-using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>>;
+using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, CutDirect<T>>;
 
 template <Scalar T>
 std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&)>> direct_choices() {
@@ -106,6 +107,8 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
          [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::correlated)); }},
         {"combined", "Szecsi 2009 3.2's combined estimator, lambda pooled",
          [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
+        {"cuts", "Fernandez 2004 5.2's dense light cuts over the area lights as points (biased)",
+         [](Sc s, St t) { return D(CutDirect<T>(s, t)); }},
     };
     return table;
 }
