@@ -123,6 +123,31 @@ struct CutFixture {
     }
 };
 
+/// Pixel-centre camera rays of a size x size image.
+RenderSettings pixel_centres(int size) {
+    RenderSettings image;
+    image.width = image.height = size;
+    image.spp = 1;
+    image.pixel_jitter = false;
+    return image;
+}
+
+/// Calls visit(receiver, visible) at the first diffuse or glossy point of every pixel centre of
+/// a size x size image of f's scene; visible(light) traces the light's shadow ray.
+template <class Visit>
+void for_each_receiver(const CutFixture& f, int size, Visit&& visit) {
+    const auto points = primary_points(f.scene, f.accel, pixel_centres(size), VplSettings{});
+    ShadowRayVisibility<CutAccel> vis(f.accel, 1e-4f);
+    const auto visible = [&](const PointLight<float>& l) { return vis.visible(l.position); };
+    for (const auto& p : points) {
+        if (!p.hit) continue;
+        const Frame<float> frame = Frame<float>::from_normal(p.n);
+        const SurfaceBrdf<float> brdf(f.scene.materials[p.material], frame.to_local(p.wo));
+        vis.set_point(p.x, p.n);
+        visit(CutReceiver<float>{p.x, p.n, frame, &brdf, 0.0f}, visible);
+    }
+}
+
 /// The lights below node k.
 void subtree_lights(const LightClusterTree<float>& t, std::uint32_t k, std::vector<std::uint32_t>& out) {
     const auto& n = t.node(k);
@@ -206,23 +231,12 @@ TEST_CASE("cluster tree: building 10^4 lights costs far less than 100x building 
 TEST_CASE("cuts: on every pixel each accepted node's true error is within its bound, and within twice the threshold") {
     const CutFixture f;
     const LightClusterTree<float> tree(f.lights);
-    RenderSettings image;
-    image.width = image.height = 16;
-    image.spp = 1;
-    image.pixel_jitter = false;
-    const auto points = primary_points(f.scene, f.accel, image, VplSettings{});
-    ShadowRayVisibility<CutAccel> vis(f.accel, 1e-4f);
     std::vector<CutRecord<float>> trace;
     std::vector<std::uint32_t> below;
     int checked = 0, clustered = 0;
-    for (const auto& p : points) {
-        if (!p.hit) continue;
-        const Frame<float> frame = Frame<float>::from_normal(p.n);
-        const SurfaceBrdf<float> brdf(f.scene.materials[p.material], frame.to_local(p.wo));
-        const CutReceiver<float> r{p.x, p.n, frame, &brdf, 0.0f};
-        vis.set_point(p.x, p.n);
+    for_each_receiver(f, 16, [&](const CutReceiver<float>& r, const auto& visible) {
         trace.clear();
-        const auto res = evaluate_cut(tree, r, CutSettings{}, [&](const PointLight<float>& l) { return vis.visible(l.position); }, &trace);
+        const auto res = evaluate_cut(tree, r, CutSettings{}, visible, &trace);
         CHECK(res.shadow_rays <= res.nodes);
         CHECK(res.nodes <= 300);
         for (const auto& rec : trace) {
@@ -232,7 +246,7 @@ TEST_CASE("cuts: on every pixel each accepted node's true error is within its bo
             for (std::uint32_t i : below) {
                 const auto& l = tree.lights()[i];
                 const Rgb<float> c = light_factor(l, r) * l.intensity;
-                if (c.max() > 0 && vis.visible(l.position)) exact += c;
+                if (c.max() > 0 && visible(l)) exact += c;
                 if (rec.visible) exact_rep_v += c;
             }
             for (std::size_t c = 0; c < 3; ++c) {
@@ -248,7 +262,7 @@ TEST_CASE("cuts: on every pixel each accepted node's true error is within its bo
             }
             ++checked;
         }
-    }
+    });
     MESSAGE(checked << " accepted nodes checked, " << clustered << " of them clusters accepted by the threshold");
     CHECK(clustered > 1000);  // the check is about clusters, not leaves
 }
@@ -256,19 +270,7 @@ TEST_CASE("cuts: on every pixel each accepted node's true error is within its bo
 TEST_CASE("cuts: with threshold 0 and no size limit the cut is the exact sum over the lights") {
     const CutFixture f;
     const LightClusterTree<float> tree(f.lights);
-    RenderSettings image;
-    image.width = image.height = 8;
-    image.spp = 1;
-    image.pixel_jitter = false;
-    const auto points = primary_points(f.scene, f.accel, image, VplSettings{});
-    ShadowRayVisibility<CutAccel> vis(f.accel, 1e-4f);
-    for (const auto& p : points) {
-        if (!p.hit) continue;
-        const Frame<float> frame = Frame<float>::from_normal(p.n);
-        const SurfaceBrdf<float> brdf(f.scene.materials[p.material], frame.to_local(p.wo));
-        const CutReceiver<float> r{p.x, p.n, frame, &brdf, 0.0f};
-        vis.set_point(p.x, p.n);
-        const auto visible = [&](const PointLight<float>& l) { return vis.visible(l.position); };
+    for_each_receiver(f, 8, [&](const CutReceiver<float>& r, const auto& visible) {
         const auto cut = evaluate_cut(tree, r, CutSettings{.threshold = 0, .max_nodes = 0}, visible);
         Rgb<float> exact(0);
         for (const auto& l : tree.lights()) {
@@ -276,16 +278,12 @@ TEST_CASE("cuts: with threshold 0 and no size limit the cut is the exact sum ove
             if (c.max() > 0 && visible(l)) exact += c;
         }
         for (std::size_t c = 0; c < 3; ++c) CHECK(cut.L[c] == doctest::Approx(exact[c]).epsilon(1e-4));
-    }
+    });
 }
 
 TEST_CASE("VPL gather through a cut: threshold 0 equals gathering every VPL; the default cut traces far fewer rays") {
     const CutFixture f;
-    RenderSettings image;
-    image.width = image.height = 12;
-    image.spp = 1;
-    image.pixel_jitter = false;
-    const auto points = primary_points(f.scene, f.accel, image, VplSettings{});
+    const auto points = primary_points(f.scene, f.accel, pixel_centres(12), VplSettings{});
     const std::span<const PixelPoint<float>> pts(points);
     const auto vpls = shoot_scene_vpls(f.scene, f.accel, Roulette<float, 3>::classic(), 1024, 6);
     const std::span<const Vpl<float>> vs(vpls);
