@@ -17,7 +17,8 @@
 // pair whose nodes are both live is the globally closest (the distance never decreases when a
 // node grows, so a stale entry is never too small), one whose neighbour was merged meanwhile
 // is searched again. O(n log n) in practice; single thread, ties broken by node index, so the
-// tree depends on the lights alone.
+// tree depends on the lights alone. The finished tree is laid out depth first (node 0 is the
+// root), its copy of the lights in the order of the leaves.
 #pragma once
 
 #include <algorithm>
@@ -61,7 +62,7 @@ DirectionCone<T> merge_cones(DirectionCone<T> a, DirectionCone<T> b) {
     return {safe_normalize(a.axis * std::cos(rot) + ortho * (std::sin(rot) / len)), theta_o};
 }
 
-/// One node of the cluster tree. Leaves are nodes 0..n-1 (node i is light i).
+/// One node of the cluster tree; a leaf's representative is its light.
 template <Scalar T>
 struct LightNode {
     static constexpr std::uint32_t none = 0xffffffffu;
@@ -70,6 +71,7 @@ struct LightNode {
     Vec3<T> axis{0, 0, 1};      // orientation cone
     T theta_o = pi<T>;          // axes within theta_o of axis
     T theta_e = pi<T>;          // no light emits beyond theta_e from its own axis
+    T cos_o = T(-1), sin_o = T(0), cos_e = T(-1);  // of theta_o and theta_e, for the cuts' bounds
     std::uint32_t rep = 0;      // representative light
     std::uint32_t left = none;  // children (none: a leaf)
     std::uint32_t right = none;
@@ -98,7 +100,7 @@ public:
     std::span<const Node> nodes() const { return nodes_; }
     const Node& node(std::uint32_t i) const { return nodes_[i]; }
     bool empty() const { return nodes_.empty(); }
-    std::uint32_t root() const { return std::uint32_t(nodes_.size() - 1); }
+    std::uint32_t root() const { return 0; }
     double build_seconds() const { return build_seconds_; }
     /// The tree's memory: its nodes and its copy of the lights.
     std::size_t bytes() const { return nodes_.capacity() * sizeof(Node) + lights_.capacity() * sizeof(PointLight<T>); }
@@ -113,7 +115,7 @@ private:
         n.cosine = l.kind == PointLightKind::cosine;
         n.theta_o = l.kind == PointLightKind::isotropic ? pi<T> : T(0);
         n.theta_e = l.kind == PointLightKind::isotropic ? pi<T> : std::acos(std::clamp(l.cos_emission(), T(-1), T(1)));
-        return n;
+        return with_cosines(n);
     }
 
     /// Node c as the union of nodes a and b.
@@ -135,6 +137,13 @@ private:
         const Vec3<T> centroid = w > T(0) ? (moment_[a] + moment_[b]) / w : n.box.center();
         const Vec3<T> pa = lights_[na.rep].position, pb = lights_[nb.rep].position;
         n.rep = glm::dot(pb - centroid, pb - centroid) < glm::dot(pa - centroid, pa - centroid) ? nb.rep : na.rep;
+        return with_cosines(n);
+    }
+
+    static Node with_cosines(Node n) {
+        n.cos_o = std::cos(n.theta_o);
+        n.sin_o = std::sin(n.theta_o);
+        n.cos_e = std::cos(n.theta_e);
         return n;
     }
 
@@ -181,6 +190,38 @@ private:
         std::vector<BoundingSphere<T>>().swap(spheres_);
         std::vector<T>().swap(weight_);
         std::vector<Vec3<T>>().swap(moment_);
+        depth_first_layout();
+    }
+
+    /// Nodes in depth-first order (the root first, a left child right after its parent) and the
+    /// lights in the order of their leaves, so that a subtree's nodes and lights are contiguous
+    /// in memory: a cut reads nearby nodes and representatives.
+    void depth_first_layout() {
+        std::vector<Node> nodes;
+        std::vector<PointLight<T>> lights;
+        std::vector<std::uint32_t> node_at(nodes_.size()), light_at(lights_.size());
+        nodes.reserve(nodes_.size());
+        lights.reserve(lights_.size());
+        std::vector<std::uint32_t> stack{std::uint32_t(nodes_.size() - 1)};
+        while (!stack.empty()) {
+            const std::uint32_t k = stack.back();
+            stack.pop_back();
+            node_at[k] = std::uint32_t(nodes.size());
+            nodes.push_back(nodes_[k]);
+            if (nodes_[k].leaf()) {
+                light_at[nodes_[k].rep] = std::uint32_t(lights.size());
+                lights.push_back(lights_[nodes_[k].rep]);
+                continue;
+            }
+            stack.push_back(nodes_[k].right);
+            stack.push_back(nodes_[k].left);
+        }
+        for (Node& n : nodes) {
+            n.rep = light_at[n.rep];
+            if (!n.leaf()) n.left = node_at[n.left], n.right = node_at[n.right];
+        }
+        nodes_ = std::move(nodes);
+        lights_ = std::move(lights);
     }
 
     void merge(std::uint32_t a, std::uint32_t b, SphereNeighbours<T>& nn, std::vector<char>& merged_away) {

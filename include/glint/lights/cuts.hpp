@@ -34,6 +34,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glint/core/aabb.hpp>
@@ -66,6 +67,10 @@ struct CutReceiver {
     Frame<T> frame;
     const SurfaceBrdf<T>* brdf;
     T d2min = T(0);
+    Frame<T> mirror;  // about the Phong lobe's mirror direction (glossy BRDFs)
+
+    CutReceiver(const Vec3<T>& x_, const Vec3<T>& n_, const Frame<T>& f, const SurfaceBrdf<T>* b, T d2min_)
+        : x(x_), n(n_), frame(f), brdf(b), d2min(d2min_), mirror(Frame<T>::from_normal(f.to_world(b->mirror()))) {}
 };
 
 namespace detail {
@@ -81,18 +86,28 @@ T box_cos_bound(const Vec3<T>& c, const Vec3<T>& h, const Vec3<T>& a, const Vec3
     return std::min(T(1), w_max / std::sqrt(a_min * a_min + b_min * b_min + w_max * w_max));
 }
 
-/// The light-side bound e_max of a node seen from x (1 for a node with non-cosine lights).
+/// The light-side bound e_max of a node seen from x (1 for a node with non-cosine lights):
+/// cos(max(0, theta - theta_o - theta_b)) by the angle-difference identities (no inverse
+/// trigonometry), raised by 1e-4 against rounding.
 template <Scalar T>
 T emission_bound(const LightNode<T>& node, const Vec3<T>& x) {
+    if (node.theta_o >= pi<T>) return T(1);
     const Vec3<T> d = x - node.box.center();
-    const T dist = glm::length(d);
-    const T radius = glm::length(node.box.extent()) * T(0.5);
-    if (node.theta_o >= pi<T> || dist <= radius) return T(1);
-    const T theta = std::acos(std::clamp(glm::dot(node.axis, d) / dist, T(-1), T(1)));
-    const T theta_b = std::asin(std::min(T(1), radius / dist));
-    const T t = std::max(T(0), theta - node.theta_o - theta_b - T(1e-4));
-    if (t >= node.theta_e) return T(0);
-    return node.cosine ? std::cos(t) : T(1);
+    const T dist2 = glm::dot(d, d);
+    const Vec3<T> e = node.box.extent();
+    const T radius2 = glm::dot(e, e) * T(0.25);
+    if (dist2 <= radius2) return T(1);
+    const T inv = T(1) / std::sqrt(dist2);
+    const T cos_t = glm::dot(node.axis, d) * inv;
+    if (cos_t >= node.cos_o) return T(1);  // theta <= theta_o
+    const T sin_t = std::sqrt(std::max(T(0), T(1) - cos_t * cos_t));
+    const T cos_a = cos_t * node.cos_o + sin_t * node.sin_o;  // theta - theta_o, in (0, pi]
+    const T sin_a = std::max(T(0), sin_t * node.cos_o - cos_t * node.sin_o);
+    const T sin_b = std::sqrt(radius2) * inv, cos_b = std::sqrt(std::max(T(0), T(1) - sin_b * sin_b));
+    if (cos_a >= cos_b) return T(1);  // theta - theta_o <= theta_b
+    const T c = std::min(T(1), cos_a * cos_b + sin_a * sin_b + T(1e-4));
+    if (c <= node.cos_e) return T(0);
+    return node.cosine ? c : T(1);
 }
 
 }  // namespace detail
@@ -110,10 +125,7 @@ Rgb<T> node_bound(const LightNode<T>& node, const CutReceiver<T>& r) {
     if (!(d2 > T(0))) return Rgb<T>(infinity<T>);
     Rgb<T> f = r.brdf->kd() / pi<T>;
     if (r.brdf->lobe_count() > 1) {
-        const Vec3<T> m = r.frame.to_world(r.brdf->mirror());
-        Vec3<T> a, b;
-        orthonormal_basis(m, a, b);
-        const T cos_m = detail::box_cos_bound(c, h, a, b, m);
+        const T cos_m = detail::box_cos_bound(c, h, r.mirror.s, r.mirror.t, r.mirror.n);
         const T n = r.brdf->exponent();
         if (cos_m > T(0)) f += r.brdf->ks() * ((n + T(2)) / (T(2) * pi<T>) * std::pow(cos_m, n));
     }
@@ -159,54 +171,65 @@ struct CutRecord {
 template <Scalar T, class Visible>
 CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>& r, const CutSettings& s, Visible&& visible,
                           std::vector<CutRecord<T>>* trace = nullptr) {
-    struct Entry {
+    struct Entry {  // a node of the cut and its evaluation's slot
         T error;
-        std::uint32_t node;
-        Rgb<T> factor;  // the representative's f G V
-        bool visible;
+        std::uint32_t node, slot;
         bool operator<(const Entry& o) const { return error != o.error ? error < o.error : node > o.node; }
+    };
+    struct Evaluation {  // the representative's f G V, and V
+        Rgb<T> factor;
+        bool visible;
     };
     CutResult<T> out;
     if (tree.empty()) return out;
-    const auto entry = [&](std::uint32_t k, const Entry* parent) {
+    thread_local std::vector<Entry> heap;
+    thread_local std::vector<Evaluation> evals;
+    heap.clear();
+    evals.clear();
+    // Node k's entry; its representative's evaluation is the parent's (slot) when they share it.
+    const auto entry = [&](std::uint32_t k, const std::uint32_t* parent_slot, std::uint32_t parent_rep) {
         const LightNode<T>& n = tree.node(k);
-        Entry e{T(0), k, Rgb<T>(T(0)), false};
-        if (parent && tree.node(parent->node).rep == n.rep) {
-            e.factor = parent->factor, e.visible = parent->visible;
+        std::uint32_t slot;
+        if (parent_slot && parent_rep == n.rep) {
+            slot = *parent_slot;
         } else {
             const PointLight<T>& l = tree.lights()[n.rep];
-            e.factor = light_factor(l, r);
+            Evaluation e{light_factor(l, r), false};
             if (e.factor.max() > T(0)) {
                 ++out.shadow_rays;
                 e.visible = visible(l);
             }
             if (!e.visible) e.factor = Rgb<T>(T(0));
+            slot = std::uint32_t(evals.size());
+            evals.push_back(e);
         }
-        if (!n.leaf()) e.error = std::max(T(0.5) * node_bound(n, r).luminance(), (e.factor * n.intensity).luminance());
-        return e;
+        const T est = (evals[slot].factor * n.intensity).luminance();
+        const T error = n.leaf() ? T(0) : std::max(T(0.5) * node_bound(n, r).luminance(), est);
+        return std::pair<Entry, T>{Entry{error, k, slot}, est};
     };
-    thread_local std::vector<Entry> heap;
-    heap.clear();
-    heap.push_back(entry(tree.root(), nullptr));
-    T total = (heap[0].factor * tree.node(tree.root()).intensity).luminance();
+    const auto root = entry(tree.root(), nullptr, 0);
+    heap.push_back(root.first);
+    T total = root.second;
     const std::size_t cap = s.max_nodes > 0 ? std::size_t(s.max_nodes) : ~std::size_t(0);
     while (!heap.empty()) {
         std::pop_heap(heap.begin(), heap.end());
         const Entry e = heap.back();
         heap.pop_back();
         const LightNode<T>& n = tree.node(e.node);
+        const Evaluation ev = evals[e.slot];
         const T allowed = T(s.threshold) * total;
         const bool by_threshold = e.error <= allowed;
         if (n.leaf() || by_threshold || std::size_t(out.nodes) + heap.size() + 1 >= cap) {
-            out.L += e.factor * n.intensity;
+            out.L += ev.factor * n.intensity;
             ++out.nodes;
-            if (trace) trace->push_back({e.node, e.factor * n.intensity, node_bound(n, r), e.factor, e.visible, by_threshold, allowed});
+            if (trace) trace->push_back({e.node, ev.factor * n.intensity, node_bound(n, r), ev.factor, ev.visible, by_threshold, allowed});
             continue;
         }
-        total -= (e.factor * n.intensity).luminance();
+        total -= (ev.factor * n.intensity).luminance();
         for (const std::uint32_t c : {n.left, n.right}) {
-            heap.push_back(entry(c, &e));
-            total += (heap.back().factor * tree.node(c).intensity).luminance();
+            const auto child = entry(c, &e.slot, n.rep);
+            heap.push_back(child.first);
+            total += child.second;
             std::push_heap(heap.begin(), heap.end());
         }
     }

@@ -5,9 +5,10 @@
 // queries in a kd-tree), removes the two clusters it merges and inserts their union.
 //
 // A kd-tree over the initial centres (median splits, leaves of up to 8); an insertion goes to
-// the leaf its centre falls in and grows the boxes on its way down; a removal leaves the boxes
-// as they are (still bounds). A subtree is skipped when it holds no live sphere or when
-// distance(query centre, box) + r_query exceeds the best distance found (radii are >= 0).
+// the leaf its centre falls in; after an insertion or a removal the leaf's box of centres and
+// smallest radius are recomputed and its ancestors' refitted (O(depth)). A subtree is skipped
+// when it holds no live sphere or when distance(query centre, box) + r_query + its smallest
+// radius exceeds the best distance found.
 // Ties are broken by the smaller id, so the answer depends on nothing but the set.
 #pragma once
 
@@ -66,22 +67,18 @@ public:
 
     void remove(std::uint32_t id) {
         Node& leaf = nodes_[where_[id]];
-        leaf.items.erase(std::find(leaf.items.begin(), leaf.items.end(), id));
-        for (std::uint32_t k = where_[id]; k != none; k = nodes_[k].parent) --nodes_[k].live;
+        leaf.items.erase(std::find_if(leaf.items.begin(), leaf.items.end(), [&](const Item& it) { return it.id == id; }));
+        refit(where_[id]);
     }
 
     void insert(std::uint32_t id) {
         const Vec3<T>& c = (*spheres_)[id].centre;
         std::uint32_t k = 0;
-        for (;;) {
-            nodes_[k].box.extend(c);
-            ++nodes_[k].live;
-            if (nodes_[k].left == none) break;
-            k = c[nodes_[k].axis] < nodes_[k].split ? nodes_[k].left : nodes_[k].left + 1;
-        }
-        nodes_[k].items.push_back(id);
+        while (nodes_[k].left != none) k = c[nodes_[k].axis] < nodes_[k].split ? nodes_[k].left : nodes_[k].left + 1;
+        nodes_[k].items.push_back({(*spheres_)[id], id});
         if (where_.size() <= id) where_.resize(std::size_t(id) + 1, none);
         where_[id] = k;
+        refit(k);
     }
 
     /// The live sphere nearest to sphere `id` (not itself), smallest id among equals.
@@ -93,9 +90,9 @@ public:
         stack[top++] = 0;
         while (top > 0) {
             const Node& node = nodes_[stack[--top]];
-            if (node.live == 0 || box_distance(node.box, q.centre) + q.radius > best.distance) continue;
+            if (node.live == 0 || box_distance(node.box, q.centre) + q.radius + node.min_radius > best.distance) continue;
             if (node.left == none) {
-                for (std::uint32_t j : node.items) consider(q, id, j, best);
+                for (const Item& it : node.items) consider(q, id, it, best);
                 continue;
             }
             const bool near_left = q.centre[node.axis] < node.split;
@@ -107,30 +104,56 @@ public:
 
     std::size_t bytes() const {
         std::size_t b = nodes_.capacity() * sizeof(Node) + where_.capacity() * sizeof(std::uint32_t);
-        for (const Node& n : nodes_) b += n.items.capacity() * sizeof(std::uint32_t);
+        for (const Node& n : nodes_) b += n.items.capacity() * sizeof(Item);
         return b;
     }
 
 private:
+    struct Item {  // a sphere and its id, kept in its leaf (no lookup while searching)
+        BoundingSphere<T> sphere;
+        std::uint32_t id;
+    };
     struct Node {
         AABB<T> box;
         std::uint32_t left = none;  // children left, left + 1; none for a leaf
         std::uint32_t parent = none;
         std::uint32_t live = 0;
+        T min_radius = T(0);  // of the live spheres below
         int axis = 0;
         T split = T(0);
-        std::vector<std::uint32_t> items;
+        std::vector<Item> items;
     };
+
+    /// Leaf k's box, live count and smallest radius from its spheres, then its ancestors' from
+    /// their children: the bounds stay tight as spheres come and go.
+    void refit(std::uint32_t k) {
+        Node& leaf = nodes_[k];
+        leaf.box = AABB<T>{};
+        leaf.min_radius = infinity<T>;
+        leaf.live = std::uint32_t(leaf.items.size());
+        for (const Item& it : leaf.items) {
+            leaf.box.extend(it.sphere.centre);
+            leaf.min_radius = std::min(leaf.min_radius, it.sphere.radius);
+        }
+        for (k = leaf.parent; k != none; k = nodes_[k].parent) {
+            Node& n = nodes_[k];
+            const Node &a = nodes_[n.left], &b = nodes_[n.left + 1];
+            n.box = a.box;
+            n.box.extend(b.box);
+            n.min_radius = std::min(a.min_radius, b.min_radius);
+            n.live = a.live + b.live;
+        }
+    }
 
     static T box_distance(const AABB<T>& b, const Vec3<T>& p) {
         const Vec3<T> d = glm::max(glm::max(b.lo - p, p - b.hi), Vec3<T>(0));
         return glm::length(d);
     }
 
-    void consider(const BoundingSphere<T>& q, std::uint32_t id, std::uint32_t j, Nearest& best) const {
-        if (j == id) return;
-        const T d = cluster_distance(q, (*spheres_)[j]);
-        if (d < best.distance || (d == best.distance && j < best.id)) best = {d, j};
+    static void consider(const BoundingSphere<T>& q, std::uint32_t id, const Item& it, Nearest& best) {
+        if (it.id == id) return;
+        const T d = cluster_distance(q, it.sphere);
+        if (d < best.distance || (d == best.distance && it.id < best.id)) best = {d, it.id};
     }
 
     /// Builds the tree over ids[lo, hi) from node 0, depth first with an explicit stack.
@@ -148,8 +171,10 @@ private:
             node.live = b - a;
             for (std::uint32_t i = a; i < b; ++i) node.box.extend((*spheres_)[ids[i]].centre);
             if (b - a <= 8) {
-                node.items.assign(ids.begin() + a, ids.begin() + b);
-                for (std::uint32_t i : node.items) where_[i] = k;
+                for (std::uint32_t i = a; i < b; ++i) {
+                    node.items.push_back({(*spheres_)[ids[i]], ids[i]});
+                    where_[ids[i]] = k;
+                }
                 continue;
             }
             split_node(ids, a, b, k, todo, slots, parents);
