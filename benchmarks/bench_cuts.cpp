@@ -33,6 +33,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
+#include "counted_visibility.hpp"
 #include "support/args.hpp"
 
 using namespace glint;
@@ -49,16 +50,7 @@ struct Config {
     std::string mesh = "../shared/scenes/bunny.obj", csv, tree_csv;
 };
 
-/// Shadow rays counted (the benchmark is single-threaded: one counter).
-struct CountedRays {
-    ShadowRayVisibility<Accel> vis;
-    std::uint64_t* count;
-    void set_point(const Vec3<float>& x, const Vec3<float>& n) { vis.set_point(x, n); }
-    bool visible(const Vec3<float>& y) {
-        ++*count;
-        return vis.visible(y);
-    }
-};
+using CountedRays = CountedVisibility<ShadowRayVisibility<Accel>>;
 
 struct Run {
     Img image;

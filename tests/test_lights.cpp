@@ -84,6 +84,7 @@ TEST_CASE("invalid point lights are rejected, naming the light") {
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
+#include "counted_visibility.hpp"
 
 namespace {
 
@@ -155,17 +156,6 @@ void subtree_lights(const LightClusterTree<float>& t, std::uint32_t k, std::vect
     subtree_lights(t, n.left, out);
     subtree_lights(t, n.right, out);
 }
-
-/// Shadow rays counted (single-threaded use).
-struct CountedVisibility {
-    ShadowRayVisibility<CutAccel> vis;
-    std::size_t* count;
-    void set_point(const Vec3<float>& x, const Vec3<float>& n) { vis.set_point(x, n); }
-    bool visible(const Vec3<float>& y) {
-        ++*count;
-        return vis.visible(y);
-    }
-};
 
 bool same_tree(const LightClusterTree<float>& a, const LightClusterTree<float>& b) {
     if (a.nodes().size() != b.nodes().size()) return false;
@@ -292,10 +282,10 @@ TEST_CASE("VPL gather through a cut: threshold 0 equals gathering every VPL; the
     const std::span<const PixelPoint<float>> pts(points);
     const auto vpls = shoot_scene_vpls(f.scene, f.accel, Roulette<float, 3>::classic(), 1024, 6);
     const std::span<const Vpl<float>> vs(vpls);
-    std::size_t rays = 0;
-    const CountedVisibility vis{ShadowRayVisibility<CutAccel>(f.accel, 1e-4f), &rays};
+    std::uint64_t rays = 0;
+    const CountedVisibility<ShadowRayVisibility<CutAccel>> vis{ShadowRayVisibility<CutAccel>(f.accel, 1e-4f), &rays};
     const auto all = gather_image(f.scene, pts, VplLights<float>(vs), vis, 0.05, 1);
-    const std::size_t rays_all = std::exchange(rays, 0);
+    const std::uint64_t rays_all = std::exchange(rays, 0);
     const auto exact = gather_image(f.scene, pts, VplLights<float>(vs, VplGather::cuts, {.threshold = 0, .max_nodes = 0}), vis, 0.05, 1);
     rays = 0;
     const auto cut = gather_image(f.scene, pts, VplLights<float>(vs, VplGather::cuts), vis, 0.05, 1);
