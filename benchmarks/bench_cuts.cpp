@@ -12,8 +12,9 @@
 // RGB (relative RMSE). lights_per_pixel is the VPL count (every VPL) or the mean cut size;
 // shadow_rays_per_pixel counts the visibility tests. Pin it: taskset -c 1 build/benchmarks/bench_cuts.
 //
-//   bench_cuts [--quick] [--size N] [--vpls 10000,100000] [--thresholds 0.02,0.01] [--reps R]
-//              [--mesh FILE.obj] [--csv FILE] [--tree-csv FILE]
+//   bench_cuts [--quick] [--size N] [--vpls 10000,100000] [--thresholds 0.02,0.01,0.005]
+//              [--max-nodes 300] [--reps R] [--mesh FILE.obj] [--csv FILE] [--tree-csv FILE]
+// The method column names the cut as cuts-THRESHOLD-MAXNODES.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -44,9 +45,9 @@ using Accel = MeshBvh<MollerTrumbore<float>, 8>;
 using Img = std::vector<Rgb<float>>;
 
 struct Config {
-    int size = 32, reps = 1;
+    int size = 48, reps = 1, max_nodes = 300;
     std::vector<std::size_t> vpls{10000, 100000}, tree_sizes{1000, 10000, 100000};
-    std::vector<double> thresholds{0.02, 0.01};
+    std::vector<double> thresholds{0.02, 0.01, 0.005};
     std::string mesh = "../shared/scenes/bunny.obj", csv, tree_csv;
 };
 
@@ -77,14 +78,15 @@ Config parse(int argc, char** argv) {
         if (f == "--quick") c.size = 12, c.vpls = {2000}, c.tree_sizes = {1000, 10000}, c.thresholds = {0.02};
         else if (f == "--size") c.size = a.number<int>(1, 4096);
         else if (f == "--reps") c.reps = a.number<int>(1, 100);
+        else if (f == "--max-nodes") c.max_nodes = a.number<int>(0, 1 << 30);
         else if (f == "--vpls") c.vpls = list<std::size_t>(a.value());
         else if (f == "--tree-sizes") c.tree_sizes = list<std::size_t>(a.value());
         else if (f == "--thresholds") c.thresholds = list<double>(a.value());
         else if (f == "--mesh") c.mesh = a.value();
         else if (f == "--csv") c.csv = a.value();
         else if (f == "--tree-csv") c.tree_csv = a.value();
-        else a.unknown("bench_cuts [--quick] [--size N] [--vpls N,N] [--thresholds T,T] [--reps R] [--tree-sizes N,N] "
-                       "[--mesh FILE] [--csv FILE] [--tree-csv FILE]");
+        else a.unknown("bench_cuts [--quick] [--size N] [--vpls N,N] [--thresholds T,T] [--max-nodes N] [--reps R] "
+                       "[--tree-sizes N,N] [--mesh FILE] [--csv FILE] [--tree-csv FILE]");
     }
     for (double t : c.thresholds)
         if (!(t >= 0)) throw Error("bench_cuts: --thresholds needs values >= 0");
@@ -190,6 +192,10 @@ Scene<float> bench_scene(const std::string& name, const std::string& mesh) {
     return s;
 }
 
+VplSettings cut_settings(const Config& c, std::size_t k) {
+    return VplSettings{.gather = VplGather::cuts, .cut = {.threshold = c.thresholds[k], .max_nodes = c.max_nodes}};
+}
+
 /// The rows of one scene and VPL count: every VPL, then the cut at each threshold, alternating.
 void scene_rows(const Config& c, const std::string& name, const Scene<float>& s, const Accel& accel, std::size_t target,
                 std::ostringstream& csv) {
@@ -201,17 +207,18 @@ void scene_rows(const Config& c, const std::string& name, const Scene<float>& s,
     std::vector<Run> cuts(c.thresholds.size());
     for (int rep = 0; rep < c.reps; ++rep) {
         render(s, accel, vs, image, VplSettings{}, all);
-        for (std::size_t k = 0; k < cuts.size(); ++k)
-            render(s, accel, vs, image, VplSettings{.gather = VplGather::cuts, .cut = {.threshold = c.thresholds[k]}}, cuts[k]);
+        for (std::size_t k = 0; k < cuts.size(); ++k) render(s, accel, vs, image, cut_settings(c, k), cuts[k]);
     }
     csv << name << ",all," << vpls.size() << ',' << vpls.size() << ',' << double(all.rays) / px << ',' << all.seconds << ",0,0\n";
-    std::printf("%-8s %7zu VPLs  all          %8.3f s  %8.1f rays/px\n", name.c_str(), vpls.size(), all.seconds, double(all.rays) / px);
+    const double build = VplLights<float>(vs, cut_settings(c, 0)).tree()->build_seconds();
+    std::printf("%-8s %7zu VPLs  all          %8.3f s  %8.1f rays/px  (the cuts' times include %.3f s of tree build)\n",
+                name.c_str(), vpls.size(), all.seconds, double(all.rays) / px, build);
     for (std::size_t k = 0; k < cuts.size(); ++k) {
         double E, rmse;
         errors(cuts[k].image, all.image, E, rmse);
-        const VplSettings st{.gather = VplGather::cuts, .cut = {.threshold = c.thresholds[k]}};
+        const VplSettings st = cut_settings(c, k);
         const double nodes = mean_cut_size(s, accel, vs, image, st);
-        csv << name << ",cuts-" << c.thresholds[k] << ',' << vpls.size() << ',' << nodes << ',' << double(cuts[k].rays) / px << ','
+ csv << name << ",cuts-" << c.thresholds[k] << '-' << c.max_nodes << ',' << vpls.size() << ',' << nodes << ',' << double(cuts[k].rays) / px << ','
             << cuts[k].seconds << ',' << E << ',' << rmse << '\n';
         std::printf("%-8s %7zu VPLs  cuts %-6g  %8.3f s  %8.1f rays/px  %6.1f nodes/px  E %.4f  rel. RMSE %.4f  speedup %.1fx\n",
                     name.c_str(), vpls.size(), c.thresholds[k], cuts[k].seconds, double(cuts[k].rays) / px, nodes, E, rmse,
