@@ -34,6 +34,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -166,32 +167,34 @@ struct CutRecord {
     T allowed;
 };
 
-/// The cut of `tree` at r (`visible(light)`: its shadow ray), its radiance sum_C L_C.
-/// `trace`, when given, receives every accepted node.
+namespace detail {
+
+/// The nodes a cut has evaluated: each node's error and its slot in `evals`, the evaluations
+/// of representatives (f G V, and V), shared by a child with its parent's representative.
 template <Scalar T, class Visible>
-CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>& r, const CutSettings& s, Visible&& visible,
-                          std::vector<CutRecord<T>>* trace = nullptr) {
-    struct Entry {  // a node of the cut and its evaluation's slot
+struct CutSearch {
+    struct Entry {
         T error;
         std::uint32_t node, slot;
         bool operator<(const Entry& o) const { return error != o.error ? error < o.error : node > o.node; }
     };
-    struct Evaluation {  // the representative's f G V, and V
+    struct Evaluation {
         Rgb<T> factor;
         bool visible;
     };
-    CutResult<T> out;
-    if (tree.empty()) return out;
-    thread_local std::vector<Entry> heap;
-    thread_local std::vector<Evaluation> evals;
-    heap.clear();
-    evals.clear();
-    // Node k's entry; its representative's evaluation is the parent's (slot) when they share it.
-    const auto entry = [&](std::uint32_t k, const std::uint32_t* parent_slot, std::uint32_t parent_rep) {
+
+    const LightClusterTree<T>& tree;
+    const CutReceiver<T>& r;
+    Visible& visible;
+    CutResult<T>& out;
+    std::vector<Evaluation>& evals;
+
+    /// Node k's entry and its approximation's luminance; `parent`: the entry it refines.
+    std::pair<Entry, T> entry(std::uint32_t k, const Entry* parent) {
         const LightNode<T>& n = tree.node(k);
         std::uint32_t slot;
-        if (parent_slot && parent_rep == n.rep) {
-            slot = *parent_slot;
+        if (parent && tree.node(parent->node).rep == n.rep) {
+            slot = parent->slot;
         } else {
             const PointLight<T>& l = tree.lights()[n.rep];
             Evaluation e{light_factor(l, r), false};
@@ -205,18 +208,36 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
         }
         const T est = (evals[slot].factor * n.intensity).luminance();
         const T error = n.leaf() ? T(0) : std::max(T(0.5) * node_bound(n, r).luminance(), est);
-        return std::pair<Entry, T>{Entry{error, k, slot}, est};
-    };
-    const auto root = entry(tree.root(), nullptr, 0);
+        return {Entry{error, k, slot}, est};
+    }
+};
+
+}  // namespace detail
+
+/// The cut of `tree` at r (`visible(light)`: its shadow ray), its radiance sum_C L_C.
+/// `trace`, when given, receives every accepted node.
+template <Scalar T, class Visible>
+CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>& r, const CutSettings& s, Visible&& visible,
+                          std::vector<CutRecord<T>>* trace = nullptr) {
+    using Search = detail::CutSearch<T, std::remove_reference_t<Visible>>;
+    using Entry = typename Search::Entry;
+    CutResult<T> out;
+    if (tree.empty()) return out;
+    thread_local std::vector<Entry> heap;
+    thread_local std::vector<typename Search::Evaluation> evals;
+    heap.clear();
+    evals.clear();
+    Search search{tree, r, visible, out, evals};
+    const auto root = search.entry(tree.root(), nullptr);
     heap.push_back(root.first);
-    T total = root.second;
+    T total = root.second;  // the running total: the sum of the cut's approximations
     const std::size_t cap = s.max_nodes > 0 ? std::size_t(s.max_nodes) : ~std::size_t(0);
     while (!heap.empty()) {
         std::pop_heap(heap.begin(), heap.end());
         const Entry e = heap.back();
         heap.pop_back();
         const LightNode<T>& n = tree.node(e.node);
-        const Evaluation ev = evals[e.slot];
+        const auto ev = evals[e.slot];
         const T allowed = T(s.threshold) * total;
         const bool by_threshold = e.error <= allowed;
         if (n.leaf() || by_threshold || std::size_t(out.nodes) + heap.size() + 1 >= cap) {
@@ -227,7 +248,7 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
         }
         total -= (ev.factor * n.intensity).luminance();
         for (const std::uint32_t c : {n.left, n.right}) {
-            const auto child = entry(c, &e.slot, n.rep);
+            const auto child = search.entry(c, &e);
             heap.push_back(child.first);
             total += child.second;
             std::push_heap(heap.begin(), heap.end());
