@@ -176,7 +176,7 @@ struct CutSearch {
     struct Entry {
         T error;
         std::uint32_t node, slot;
-        bool operator<(const Entry& o) const { return error != o.error ? error < o.error : node > o.node; }
+        bool operator<(const Entry& o) const { return error < o.error; }
     };
     struct Evaluation {
         Rgb<T> factor;
@@ -210,6 +210,15 @@ struct CutSearch {
         const T error = n.leaf() ? T(0) : std::max(T(0.5) * node_bound(n, r).luminance(), est);
         return {Entry{error, k, slot}, est};
     }
+
+    /// Adds node e to the cut (and to `trace`).
+    void accept(const Entry& e, T allowed, bool by_threshold, std::vector<CutRecord<T>>* trace) {
+        const LightNode<T>& n = tree.node(e.node);
+        const Evaluation& ev = evals[e.slot];
+        out.L += ev.factor * n.intensity;
+        ++out.nodes;
+        if (trace) trace->push_back({e.node, ev.factor * n.intensity, node_bound(n, r), ev.factor, ev.visible, by_threshold, allowed});
+    }
 };
 
 }  // namespace detail
@@ -228,31 +237,33 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
     heap.clear();
     evals.clear();
     Search search{tree, r, visible, out, evals};
-    const auto root = search.entry(tree.root(), nullptr);
-    heap.push_back(root.first);
-    T total = root.second;  // the running total: the sum of the cut's approximations
+    T total = 0;  // the running total: the sum of the cut's approximations
+    // A node of error 0 (a leaf, or one that cannot contribute) is accepted as it comes.
+    const auto add = [&](const std::pair<Entry, T>& en) {
+        total += en.second;
+        if (en.first.error > T(0)) {
+            heap.push_back(en.first);
+            std::push_heap(heap.begin(), heap.end());
+            return;
+        }
+        search.accept(en.first, T(s.threshold) * total, true, trace);
+    };
+    add(search.entry(tree.root(), nullptr));
     const std::size_t cap = s.max_nodes > 0 ? std::size_t(s.max_nodes) : ~std::size_t(0);
     while (!heap.empty()) {
         std::pop_heap(heap.begin(), heap.end());
         const Entry e = heap.back();
         heap.pop_back();
         const LightNode<T>& n = tree.node(e.node);
-        const auto ev = evals[e.slot];
         const T allowed = T(s.threshold) * total;
         const bool by_threshold = e.error <= allowed;
-        if (n.leaf() || by_threshold || std::size_t(out.nodes) + heap.size() + 1 >= cap) {
-            out.L += ev.factor * n.intensity;
-            ++out.nodes;
-            if (trace) trace->push_back({e.node, ev.factor * n.intensity, node_bound(n, r), ev.factor, ev.visible, by_threshold, allowed});
+        if (by_threshold || std::size_t(out.nodes) + heap.size() + 1 >= cap) {
+            search.accept(e, allowed, by_threshold, trace);
             continue;
         }
-        total -= (ev.factor * n.intensity).luminance();
-        for (const std::uint32_t c : {n.left, n.right}) {
-            const auto child = search.entry(c, &e);
-            heap.push_back(child.first);
-            total += child.second;
-            std::push_heap(heap.begin(), heap.end());
-        }
+        total -= (evals[e.slot].factor * n.intensity).luminance();
+        add(search.entry(n.left, &e));
+        add(search.entry(n.right, &e));
     }
     return out;
 }
