@@ -277,7 +277,7 @@ TEST_CASE("cuts: with threshold 0 and no size limit the cut is the exact sum ove
     });
 }
 
-TEST_CASE("VPL gather through a cut: threshold 0 equals gathering every VPL; the default cut traces far fewer rays") {
+TEST_CASE("VPL gather through a cut: threshold 0 equals gathering every VPL; the default cut traces far fewer rays, alike on any thread count") {
     const CutFixture f;
     const auto points = primary_points(f.scene, f.accel, pixel_centres(12), VplSettings{});
     const std::span<const PixelPoint<float>> pts(points);
@@ -290,6 +290,9 @@ TEST_CASE("VPL gather through a cut: threshold 0 equals gathering every VPL; the
     const auto exact = gather_image(f.scene, pts, VplLights<float>(vs, VplGather::cuts, {.threshold = 0, .max_nodes = 0}), vis, 0.05, 1);
     rays = 0;
     const auto cut = gather_image(f.scene, pts, VplLights<float>(vs, VplGather::cuts), vis, 0.05, 1);
+    const VplLights<float> cuts(vs, VplGather::cuts);  // one tree, gathered on 1 and on 3 threads
+    const ShadowRayVisibility<CutAccel> plain(f.accel, 1e-4f);
+    CHECK(gather_image(f.scene, pts, cuts, plain, 0.05, 1) == gather_image(f.scene, pts, cuts, plain, 0.05, 3));
     MESSAGE("shadow rays: every VPL " << rays_all << ", the default cut " << rays);
     CHECK(rays * 4 < rays_all);
     double e = 0;
