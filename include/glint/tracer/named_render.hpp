@@ -5,7 +5,7 @@
 //
 // Types are chosen only where they pay in the hot loop: the direct-lighting policy and the
 // sampler become a std::variant here and one std::visit picks the PathTracer instantiation
-// (3 x 2 per accelerator type); the roulette rule, the BRDF selection and the scene's features
+// (4 x 2 per accelerator type); the roulette rule, the BRDF selection and the scene's features
 // are values. check_names() checks every name at once, so that a command line can reject an
 // unknown one before it reads a file or builds a tree.
 #pragma once
