@@ -8,6 +8,7 @@
 //                       --mesh mesh; the linear scan below 800 spheres, the kd-tree above)
 //   --spheres K         occluder spheres (default 100)
 //   --clamp D           clamp the VPL geometry term at distance D (default 0: unbiased)
+//   --gather NAME       all (every VPL) or cuts (a light cut of the VPLs, lights/cuts.hpp)
 // The shooting walks use the classic (albedo) roulette of Szécsi 2009, §2.1.
 #pragma once
 
@@ -27,7 +28,7 @@
 namespace glint {
 
 struct VplCliOptions {
-    std::string visibility = "rays";
+    std::string visibility = "rays", gather = "all";
     std::size_t vpls = 1024, spheres = 100;
     double clamp = 0;
 };

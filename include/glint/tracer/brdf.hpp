@@ -94,6 +94,10 @@ public:
     }
     bool diffuse_only() const { return lobes_ == 1; }
     const Rgb<T>& kd() const { return kd_; }
+    /// The Phong lobe's ks, exponent and mirror direction (local): what a bound on f needs.
+    const Rgb<T>& ks() const { return ks_; }
+    T exponent() const { return n_; }
+    const Vec3<T>& mirror() const { return r_; }
 
 private:
     Rgb<T> kd_, ks_;

@@ -5,7 +5,7 @@
 //
 // Types are chosen only where they pay in the hot loop: the direct-lighting policy and the
 // sampler become a std::variant here and one std::visit picks the PathTracer instantiation
-// (3 x 2 per accelerator type); the roulette rule, the BRDF selection and the scene's features
+// (4 x 2 per accelerator type); the roulette rule, the BRDF selection and the scene's features
 // are values. check_names() checks every name at once, so that a command line can reject an
 // unknown one before it reads a file or builds a tree.
 #pragma once
@@ -20,6 +20,7 @@
 #include <variant>
 
 #include <glint/core/error.hpp>
+#include <glint/lights/cut_direct.hpp>
 #include <glint/lights/lie_direct.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/roulette.hpp>
@@ -99,7 +100,7 @@ inline LieSettings factory_lie_settings() {
 
 /// The direct-lighting policies a name can choose.
 template <Scalar T>
-using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, LieDirect<T>>;
+using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, CutDirect<T>, LieDirect<T>>;
 
 template <Scalar T>
 std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&)>> direct_choices() {
@@ -122,6 +123,8 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
          [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), false)); }},
         {"lie-mask", "the same with Weber masking (drops up to 2% per cell)",
          [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), true)); }},
+        {"cuts", "Fernandez 2004 5.2's dense light cuts over every light, area lights as points (biased)",
+         [](Sc s, St t) { return D(CutDirect<T>(s, t)); }},
     };
     return table;
 }

@@ -13,6 +13,10 @@
 // (approximate). The VPL geometry term diverges as |x - y| -> 0; the usual clamp replaces
 // |x - y|^2 by max(|x - y|^2, d_min^2) (VplSettings::min_distance; 0 = off; Kollig and Keller
 // 2004 analyse the bias it leaves). Clamping only removes energy, so its bias is negative.
+// The VPL sum is over every VPL (VplGather::all) or through a light cut (VplGather::cuts:
+// lightcuts over the VPLs as cosine points, lights/cuts.hpp; deterministic and biased, each
+// node's error bounded as that header says): VplLights holds the VPLs and, for cuts, their
+// cluster tree, built once.
 #pragma once
 
 #include <algorithm>
@@ -20,6 +24,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -27,6 +32,9 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/parallel.hpp>
+#include <glint/lights/cluster_tree.hpp>
+#include <glint/lights/cuts.hpp>
+#include <glint/lights/light_points.hpp>
 #include <glint/occluders/visibility.hpp>
 #include <glint/tracer/brdf.hpp>
 #include <glint/tracer/scene.hpp>
@@ -34,6 +42,9 @@
 #include <glint/vpl/shooting.hpp>
 
 namespace glint {
+
+/// How the VPLs' illumination is summed: every VPL, or through a light cut.
+enum class VplGather : std::uint8_t { all, cuts };
 
 /// The VPL method's own settings; the image's (size, samples, threads) are the renderer's
 /// RenderSettings.
@@ -46,8 +57,11 @@ struct VplSettings {
     std::uint64_t seed = 1;      // shooting and the pixels' sampler streams
     ShootingOptions shooting{};
     int max_specular = 16;       // mirror/dielectric vertices followed from the camera
+    VplGather gather = VplGather::all;
+    CutSettings cut{};           // gather = cuts: the cut's threshold and largest size
 
     void validate() const {
+        cut.validate();
         if (!(min_distance >= 0) || !std::isfinite(min_distance))
             throw Error("glint::VplSettings: min_distance " + std::to_string(min_distance) + " must be finite and >= 0");
         if (light_samples < 1) throw Error("glint::VplSettings: light_samples " + std::to_string(light_samples) + " < 1");
@@ -161,6 +175,41 @@ Rgb<T> gather_point(const Scene<T>& s, const PixelPoint<T>& p, std::span<const V
     return vpl_sum(p.x, p.n, vpls, vis, d2min, [&](const Vec3<T>& wi) { return brdf.f(frame.to_local(wi)); });
 }
 
+/// The VPLs a gather sums over: every one (VplGather::all), or through a cut of their cluster
+/// tree (VplGather::cuts; the tree is built here, once). `vpls` must outlive it.
+template <Scalar T>
+class VplLights {
+public:
+    VplLights(std::span<const Vpl<T>> vpls, VplGather mode = VplGather::all, const CutSettings& cut = {})
+        : vpls_(vpls), cut_(cut), cuts_(mode == VplGather::cuts) {
+        cut.validate();
+        if (cuts_) tree_ = std::make_shared<const LightClusterTree<T>>(vpl_light_points<T>(vpls));
+    }
+    VplLights(std::span<const Vpl<T>> vpls, const VplSettings& st) : VplLights(vpls, st.gather, st.cut) {}
+
+    /// The VPLs' illumination reflected at p towards the viewer (without p.weight).
+    template <class V>
+        requires VisibilityPolicy<V, T>
+    Rgb<T> gather(const Scene<T>& s, const PixelPoint<T>& p, V& vis, T d2min) const {
+        if (!cuts_) return gather_point(s, p, vpls_, vis, d2min);
+        const Frame<T> frame = Frame<T>::from_normal(p.n);
+        const SurfaceBrdf<T> brdf(s.materials[p.material], frame.to_local(p.wo));
+        vis.set_point(p.x, p.n);
+        const CutReceiver<T> r{p.x, p.n, frame, &brdf, d2min};
+        return evaluate_cut(*tree_, r, cut_, [&](const PointLight<T>& l) { return vis.visible(l.position); }).L;
+    }
+
+    std::span<const Vpl<T>> vpls() const { return vpls_; }
+    /// The cluster tree (null for VplGather::all).
+    const LightClusterTree<T>* tree() const { return tree_.get(); }
+
+private:
+    std::span<const Vpl<T>> vpls_;
+    CutSettings cut_;
+    bool cuts_;
+    std::shared_ptr<const LightClusterTree<T>> tree_;
+};
+
 /// The VPLs' illumination at fixed points (weighted by each point's camera path): the same
 /// VPL sums at the same points many times over (one image per shooting path in light
 /// animation, one per frame or walk count in light path maps' comparisons) with no camera ray
@@ -170,6 +219,14 @@ template <Scalar T, class V>
     requires VisibilityPolicy<V, T>
 std::vector<Rgb<T>> gather_image(const Scene<T>& s, std::span<const PixelPoint<T>> points, std::span<const Vpl<T>> vpls,
                                  const V& visibility, double min_distance, int threads) {
+    return gather_image(s, points, VplLights<T>(vpls), visibility, min_distance, threads);
+}
+
+/// The same through VplLights (every VPL, or a cut per point).
+template <Scalar T, class V>
+    requires VisibilityPolicy<V, T>
+std::vector<Rgb<T>> gather_image(const Scene<T>& s, std::span<const PixelPoint<T>> points, const VplLights<T>& vpls,
+                                 const V& visibility, double min_distance, int threads) {
     std::vector<Rgb<T>> out(points.size(), Rgb<T>(T(0)));
     const T d2min = T(min_distance * min_distance);
     const int blocks = int((points.size() + 63) / 64);
@@ -177,7 +234,7 @@ std::vector<Rgb<T>> gather_image(const Scene<T>& s, std::span<const PixelPoint<T
         V vis = visibility;
         for (int b = next++; b < blocks; b = next++)
             for (std::size_t i = std::size_t(b) * 64; i < std::min(points.size(), std::size_t(b + 1) * 64); ++i)
-                if (points[i].hit) out[i] = gather_point(s, points[i], vpls, vis, d2min) * points[i].weight;
+                if (points[i].hit) out[i] = vpls.gather(s, points[i], vis, d2min) * points[i].weight;
     });
     return out;
 }

@@ -55,7 +55,7 @@ public:
     /// `vpls` must outlive the integrator.
     VplIntegrator(const Scene<T>& s, const A& accel, std::span<const Vpl<T>> vpls, const V& visibility,
                   const VplSettings& st)
-        : scene_(s), accel_(accel), lights_(s), vpls_(vpls), visibility_(visibility), st_(st),
+        : scene_(s), accel_(accel), lights_(s), vpls_(vpls, st), visibility_(visibility), st_(st),
           d2min_(T(st.min_distance * st.min_distance)) {
         st.validate();
     }
@@ -74,7 +74,7 @@ public:
             if (p.hit) out.L += direct_light(scene_, rays, lights_, p, st_.light_samples, uniform);
         }
         if (st_.indirect && p.hit) {
-            const Rgb<T> indirect = gather_point(scene_, p, vpls_, vis, d2min_) * p.weight;
+            const Rgb<T> indirect = vpls_.gather(scene_, p, vis, d2min_) * p.weight;
             if (indirect.is_finite()) state.indirect += indirect;
             out.L += indirect;
         }
@@ -95,7 +95,7 @@ private:
     const Scene<T>& scene_;
     const A& accel_;
     EmitterSet<T> lights_;
-    std::span<const Vpl<T>> vpls_;
+    VplLights<T> vpls_;  // every VPL, or their cluster tree for st.gather = cuts
     V visibility_;
     VplSettings st_;
     T d2min_;

@@ -1,0 +1,227 @@
+// glint/lights/cluster_tree.hpp: the light cluster tree of Fernandez 2004, §5.1.2 over point
+// lights (lights/light.hpp; area lights and VPLs become points in lights/light_points.hpp).
+//
+// Built bottom up: every light is a leaf; the two parentless nodes closest to each other are
+// merged into a new node until one is left, the root. The distance between two nodes is the
+// largest distance between points of their bounding spheres (|c_a - c_b| + r_a + r_b; for two
+// leaves the distance of the lights), and a node's sphere is the smallest one holding its
+// children's. Each node keeps its lights' total intensity, the box of their positions, the
+// cone of their axes (Conty Estevez and Kulla 2018's (axis, theta_o, theta_e): every axis
+// within theta_o of `axis`, no light emitting beyond theta_e from its own axis; isotropic
+// lights make theta_o = pi) and a representative light: the representative of the child
+// closer to the parent's power-weighted centroid (§5.1.2), so that a parent's evaluation is
+// reused by one child when a cut is refined (lights/cuts.hpp).
+//
+// The greedy merge order is found with Walter et al. 2008's heap of nearest neighbours: each
+// live node's nearest neighbour (lights/sphere_neighbours.hpp) is kept in a min-heap; a popped
+// pair whose nodes are both live is the globally closest (the distance never decreases when a
+// node grows, so a stale entry is never too small), one whose neighbour was merged meanwhile
+// is searched again. O(n log n) in practice; single thread, ties broken by node index, so the
+// tree depends on the lights alone. The finished tree is laid out depth first (node 0 is the
+// root), its copy of the lights in the order of the leaves.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <queue>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/lights/light.hpp>
+#include <glint/lights/light_bounds.hpp>
+#include <glint/lights/sphere_neighbours.hpp>
+
+namespace glint {
+
+/// One node of the cluster tree; a leaf's representative is its light.
+template <Scalar T>
+struct LightNode {
+    static constexpr std::uint32_t none = 0xffffffffu;
+    AABB<T> box;                // of the lights' positions
+    Rgb<T> intensity{T(0)};     // sum of the lights' intensities (along their axes)
+    Vec3<T> axis{0, 0, 1};      // orientation cone
+    T theta_o = pi<T>;          // axes within theta_o of axis
+    T theta_e = pi<T>;          // no light emits beyond theta_e from its own axis
+    T cos_o = T(-1), sin_o = T(0), cos_e = T(-1);  // of theta_o and theta_e, for the cuts' bounds
+    std::uint32_t rep = 0;      // representative light
+    std::uint32_t left = none;  // children (none: a leaf)
+    std::uint32_t right = none;
+    bool cosine = false;        // every light has the cosine profile
+
+    bool leaf() const { return left == none; }
+};
+
+template <Scalar T>
+class LightClusterTree {
+public:
+    using Node = LightNode<T>;
+
+    LightClusterTree() = default;
+    /// Builds the tree over `lights` (validated first); an empty set gives an empty tree.
+    explicit LightClusterTree(std::vector<PointLight<T>> lights) : lights_(std::move(lights)) {
+        for (std::size_t i = 0; i < lights_.size(); ++i) lights_[i].validate(i);
+        if (lights_.size() >= std::size_t(LightNode<T>::none / 2))
+            throw Error("glint::LightClusterTree: " + std::to_string(lights_.size()) + " lights are too many");
+        const auto start = std::chrono::steady_clock::now();
+        build();
+        build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+
+    std::span<const PointLight<T>> lights() const { return lights_; }
+    std::span<const Node> nodes() const { return nodes_; }
+    const Node& node(std::uint32_t i) const { return nodes_[i]; }
+    bool empty() const { return nodes_.empty(); }
+    std::uint32_t root() const { return 0; }
+    double build_seconds() const { return build_seconds_; }
+    /// The tree's memory: its nodes and its copy of the lights.
+    std::size_t bytes() const { return nodes_.capacity() * sizeof(Node) + lights_.capacity() * sizeof(PointLight<T>); }
+
+private:
+    static Node leaf_node(const PointLight<T>& l, std::uint32_t i) {
+        Node n;
+        n.box.extend(l.position);
+        n.intensity = l.intensity;
+        n.rep = i;
+        n.axis = l.axis;
+        n.cosine = l.kind == PointLightKind::cosine;
+        n.theta_o = l.kind == PointLightKind::isotropic ? pi<T> : T(0);
+        n.theta_e = l.kind == PointLightKind::isotropic ? pi<T> : std::acos(std::clamp(l.cos_emission(), T(-1), T(1)));
+        return with_cosines(n);
+    }
+
+    /// Node c as the union of nodes a and b.
+    Node merged(std::uint32_t a, std::uint32_t b) const {
+        const Node &na = nodes_[a], &nb = nodes_[b];
+        Node n;
+        n.box = na.box;
+        n.box.extend(nb.box);
+        n.intensity = na.intensity + nb.intensity;
+        const DirectionCone<T> cone =
+            cone_union(DirectionCone<T>{na.axis, std::cos(na.theta_o)}, DirectionCone<T>{nb.axis, std::cos(nb.theta_o)});
+        n.axis = cone.w;
+        // Widened by a few ulps, so that it bounds its inputs under rounding.
+        n.theta_o = cone.cos_theta <= T(-1) ? pi<T> : std::min(pi<T>, std::acos(cone.cos_theta) + T(1e-5));
+        n.theta_e = std::max(na.theta_e, nb.theta_e);
+        n.cosine = na.cosine && nb.cosine;
+        n.left = a;
+        n.right = b;
+        // The representative closer to the power-weighted centroid (the box's centre if dark).
+        const T w = weight_[a] + weight_[b];
+        const Vec3<T> centroid = w > T(0) ? (moment_[a] + moment_[b]) / w : n.box.center();
+        const Vec3<T> pa = lights_[na.rep].position, pb = lights_[nb.rep].position;
+        n.rep = glm::dot(pb - centroid, pb - centroid) < glm::dot(pa - centroid, pa - centroid) ? nb.rep : na.rep;
+        return with_cosines(n);
+    }
+
+    static Node with_cosines(Node n) {
+        n.cos_o = std::cos(n.theta_o);
+        n.sin_o = std::sin(n.theta_o);
+        n.cos_e = std::cos(n.theta_e);
+        return n;
+    }
+
+    struct Pair {
+        T distance;
+        std::uint32_t a, b;
+        bool operator>(const Pair& o) const {
+            if (distance != o.distance) return distance > o.distance;
+            return a != o.a ? a > o.a : b > o.b;
+        }
+    };
+
+    void build() {
+        const std::uint32_t n = std::uint32_t(lights_.size());
+        if (n == 0) return;
+        nodes_.reserve(2 * std::size_t(n) - 1);
+        spheres_.reserve(2 * std::size_t(n) - 1);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            nodes_.push_back(leaf_node(lights_[i], i));
+            spheres_.push_back({lights_[i].position, T(0)});
+            weight_.push_back(lights_[i].power().luminance());
+            moment_.push_back(lights_[i].position * weight_.back());
+        }
+        SphereNeighbours<T> nn(spheres_, n);
+        std::priority_queue<Pair, std::vector<Pair>, std::greater<Pair>> heap;
+        std::vector<char> merged_away(2 * std::size_t(n) - 1, 0);
+        const auto push_nearest = [&](std::uint32_t i) {
+            const auto near = nn.nearest(i);
+            heap.push({near.distance, i, near.id});
+        };
+        if (n > 1)
+            for (std::uint32_t i = 0; i < n; ++i) push_nearest(i);
+        for (std::uint32_t live = n; live > 1;) {
+            const Pair p = heap.top();
+            heap.pop();
+            if (merged_away[p.a]) continue;
+            if (merged_away[p.b]) {
+                push_nearest(p.a);
+                continue;
+            }
+            merge(p.a, p.b, nn, merged_away);
+            if (--live > 1) push_nearest(std::uint32_t(nodes_.size() - 1));
+        }
+        std::vector<BoundingSphere<T>>().swap(spheres_);
+        std::vector<T>().swap(weight_);
+        std::vector<Vec3<T>>().swap(moment_);
+        depth_first_layout();
+    }
+
+    /// Nodes in depth-first order (the root first, a left child right after its parent) and the
+    /// lights in the order of their leaves, so that a subtree's nodes and lights are contiguous
+    /// in memory: a cut reads nearby nodes and representatives.
+    void depth_first_layout() {
+        std::vector<Node> nodes;
+        std::vector<PointLight<T>> lights;
+        std::vector<std::uint32_t> node_at(nodes_.size()), light_at(lights_.size());
+        nodes.reserve(nodes_.size());
+        lights.reserve(lights_.size());
+        std::vector<std::uint32_t> stack{std::uint32_t(nodes_.size() - 1)};
+        while (!stack.empty()) {
+            const std::uint32_t k = stack.back();
+            stack.pop_back();
+            node_at[k] = std::uint32_t(nodes.size());
+            nodes.push_back(nodes_[k]);
+            if (nodes_[k].leaf()) {
+                light_at[nodes_[k].rep] = std::uint32_t(lights.size());
+                lights.push_back(lights_[nodes_[k].rep]);
+                continue;
+            }
+            stack.push_back(nodes_[k].right);
+            stack.push_back(nodes_[k].left);
+        }
+        for (Node& n : nodes) {
+            n.rep = light_at[n.rep];
+            if (!n.leaf()) n.left = node_at[n.left], n.right = node_at[n.right];
+        }
+        nodes_ = std::move(nodes);
+        lights_ = std::move(lights);
+    }
+
+    void merge(std::uint32_t a, std::uint32_t b, SphereNeighbours<T>& nn, std::vector<char>& merged_away) {
+        nodes_.push_back(merged(a, b));
+        spheres_.push_back(enclosing_sphere(spheres_[a], spheres_[b]));
+        weight_.push_back(weight_[a] + weight_[b]);
+        moment_.push_back(moment_[a] + moment_[b]);
+        merged_away[a] = merged_away[b] = 1;
+        nn.remove(a);
+        nn.remove(b);
+        nn.insert(std::uint32_t(nodes_.size() - 1));
+    }
+
+    std::vector<PointLight<T>> lights_;
+    std::vector<Node> nodes_;
+    double build_seconds_ = 0;
+    // Build scratch, released after the build.
+    std::vector<BoundingSphere<T>> spheres_;
+    std::vector<T> weight_;
+    std::vector<Vec3<T>> moment_;
+};
+
+}  // namespace glint
