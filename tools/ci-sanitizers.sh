@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # CI sanitizer step. (1) The doctest suites built with clang, ASan and UBSan at -O1 (any
 # report is fatal) and run; the heavy agreement and statistics cases run in their quick
-# form (their default sizes, not GLINT_LONG_TESTS). (2) glint-render built with TSan, a
-# short multithreaded render. Build folders: build-asan, build-tsan.
+# form (their default sizes, not GLINT_LONG_TESTS). (2) glint-render built with TSan, short
+# multithreaded renders (the path tracer; the LIE, whose construction is threaded). Build
+# folders: build-asan, build-tsan.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${CI_JOBS:-$(nproc)}
-suites=(core intersection sampling occluders cones trees tracer vpl)
+suites=(core intersection sampling occluders cones trees tracer vpl lights)
 
 t0=$SECONDS
 mkdir -p build-asan build-tsan
@@ -33,4 +34,7 @@ cmake --build build-tsan -j"$jobs" --target glint-render >> build-tsan/ci.log
 export TSAN_OPTIONS=halt_on_error=1
 ./build-tsan/examples/glint-render --scene cornell --size 32 --spp 4 --threads 4 --direct combined \
     --out build-tsan/tsan_cornell.exr > build-tsan/render.log 2>&1 || { cat build-tsan/render.log; echo "ci-sanitizers: FAILED TSan render"; exit 1; }
-echo "ci-sanitizers: 4-thread render under TSan passed (built and run in $((SECONDS - t0)) s)"
+# The LIE's construction traces its sample rays on every hardware thread.
+./build-tsan/examples/glint-render --scene lie-hall --size 16 --spp 1 --threads 4 --direct lie \
+    --out build-tsan/tsan_lie.exr > build-tsan/render_lie.log 2>&1 || { cat build-tsan/render_lie.log; echo "ci-sanitizers: FAILED TSan LIE render"; exit 1; }
+echo "ci-sanitizers: 4-thread renders under TSan passed (built and run in $((SECONDS - t0)) s)"
