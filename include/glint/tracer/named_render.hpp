@@ -109,6 +109,7 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
     using St = const PathTracerSettings<T>&;
     static constexpr Choice<D (*)(Sc, St)> table[] = {
         {"mis", "light and BRDF samples by the balance heuristic; lights by power", [](Sc s, St t) { return D(MisDirect<T>(s, t)); }},
+        {"power", "the same as mis (Cycles 3.4's light selection)", [](Sc s, St t) { return D(MisDirect<T>(s, t)); }},
         {"tree", "the same, lights by the stochastic light tree (Conty Estevez and Kulla 2018)",
          [](Sc s, St t) { return D(MisDirect<T>(s, t, LightSelection::tree)); }},
         {"brdf", "no light sampling: emission counts where the walk meets it",
