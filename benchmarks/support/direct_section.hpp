@@ -22,8 +22,8 @@ namespace glint::bench {
 
 struct DirectOptions {
     int size = 128, reps = 3;
-    int hall_sides = 64, hall_rings = 64, pillar_sides = 64, pillar_rings = 64;
-    std::size_t kitchen_points = 4096;
+    int hall_sides = 128, hall_rings = 256, pillar_sides = 128, pillar_rings = 128;
+    std::size_t kitchen_points = 4608;
     std::vector<double> thresholds{0.02, 0.01};
     int max_nodes = 300;
     LieSettings lie = [] {
