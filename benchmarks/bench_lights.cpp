@@ -1,14 +1,16 @@
 // bench_lights: many-light direct lighting, two sections (--mode direct|path|all, default all).
 //
-// direct (support/direct_section.hpp): on hall, kitchen (disk lights as oriented points) and
-// lie-hall, direct illumination at the primary hits (one camera ray per pixel, single thread,
-// methods alternating) by the standard ray tracer (a shadow ray per light through the 8-wide
-// BVH), no shadows (the floor), LIE with and without masking and dense cuts; error_E against
-// the standard ray tracer's image; the summary prints each speedup beside Fernandez 2004's and
-// the standard ray tracer's cost per shadow ray and floor. Options: --direct-size N (128),
-// --direct-reps N (3), --hall-sides/--hall-rings/--pillar-sides/--pillar-rings N (64),
-// --kitchen-points N (4096), --thresholds a,b (0.02,0.01), --max-nodes N (300),
-// --lie-samples N (32768), --depth N | --adaptive T (adaptive, 8), --three-state.
+// direct (support/direct_section.hpp): on hall (1.3M triangles), kitchen (its 72 disk lights as
+// 4608 oriented points) and lie-hall (820k triangles), direct illumination at the primary hits
+// (one camera ray per pixel, single thread, methods alternating, best of --direct-reps) by the
+// standard ray tracer (a shadow ray per light through the 8-wide BVH), camera rays alone, no
+// shadows (the floor), LIE with and without masking and dense cuts at each threshold; error_E
+// against the standard ray tracer's image; the summary prints each speedup beside Fernandez
+// 2004's, where the time goes (per shadow ray, per light shaded, per cut node) and each
+// method's fastest row at E <= 2%. Options: --direct-size N (128), --direct-reps N (3),
+// --hall-sides N (128), --hall-rings N (256), --pillar-sides N (128), --pillar-rings N (128),
+// --kitchen-points N (4608), --thresholds a,b (0.02,0.01), --max-nodes N (300),
+// --lie-samples N (32768), --depth N | --adaptive T (default adaptive, 8), --three-state.
 //
 // path: the path tracer, error against time. Per scene
 // (hall, kitchen), a high-spp reference (the light tree, all threads), then each method at

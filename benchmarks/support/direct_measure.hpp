@@ -8,8 +8,9 @@
 // computes the same sum over the same points with shadow rays built the same way
 // (lie_shadow_ray). A method is a DirectMethod: a name and a function shading one hit and
 // counting its cost; the factories below make them (the standard ray tracer: every light with a
-// non-zero unoccluded contribution gets a shadow ray through glint's 8-wide BVH; "no-shadows":
-// every light evaluated, no ray, the floor of any method that evaluates every light; LIE with
+// non-zero unoccluded contribution gets a shadow ray through glint's 8-wide BVH; "camera": the
+// camera rays alone; "no-shadows": every light evaluated, no ray, the floor of any method that
+// evaluates every light; LIE with
 // and without masking; dense cuts at a threshold). A method's precomputation (LIE construction,
 // the cluster tree) is timed as its own row, "<name>-build", not in the rendering time.
 // measure_direct runs the methods alternately (rep r in rotated order; the best time of each
@@ -97,6 +98,11 @@ inline DirectMethod standard_method(const DirectScene& d) {
                 }
                 return L;
             }};
+}
+
+/// Camera rays and their hits only, no light: what every method's time includes.
+inline DirectMethod camera_method() {
+    return {"camera", [](const ShadingPoint<float>&, DirectQueries&, DirectCost&) { return Rgb<float>(0.0f); }};
 }
 
 /// Every light evaluated without a visibility test: the floor of any method that evaluates every light.
