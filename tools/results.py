@@ -648,16 +648,16 @@ def lights_tree_vs_power(scene):
 
 row('lights', 'many lights (Fernandez 2004): direct light at primary hits; path tracer on the hall and the kitchen',
     'the standard ray tracer (a shadow ray per light, 8-wide BVH); power light selection',
-    'LIE **5.2× / 6.3×** (masking) the standard ray tracer at E ≤ 2% on the LIE hall (Fernandez 2004: 24.1× / 29.2×); '
-    'dense cuts **5.9×** on the kitchen (4608 oriented lights; 11.5×), **0.9×** on the hall (800 point and spot '
-    'lights; 2.8–3.86×); light tree **0.08× / 1.3×** power\'s MSE·time on the hall / kitchen '
+    'LIE **5.4× / 6.4×** (masking) the standard ray tracer at E ≤ 2% on the LIE hall (Fernandez 2004: 24.1× / 29.2×); '
+    'dense cuts **6.4×** on the kitchen (4608 oriented lights; 11.5×), **0.9×** on the hall (800 point and spot '
+    'lights; 2.8–3.86×); light tree **0.07× / 1.2×** power\'s MSE·time on the hall / kitchen '
     '([lights.md](docs/lights.md))', 3,
-    [Check('lie-hall, LIE x standard at E<=2%', '5.2', lights_speedup('lie-hall', 'lie'), '%.1f', '×'),
-     Check('lie-hall, LIE with masking x standard', '6.3', lights_speedup('lie-hall', 'lie-mask'), '%.1f', '×'),
-     Check('kitchen, cuts x standard at E<=2%', '5.9', lights_speedup('kitchen', 'cuts'), '%.1f', '×'),
+    [Check('lie-hall, LIE x standard at E<=2%', '5.4', lights_speedup('lie-hall', 'lie'), '%.1f', '×'),
+     Check('lie-hall, LIE with masking x standard', '6.4', lights_speedup('lie-hall', 'lie-mask'), '%.1f', '×'),
+     Check('kitchen, cuts x standard at E<=2%', '6.4', lights_speedup('kitchen', 'cuts'), '%.1f', '×'),
      Check('hall, cuts x standard at E<=2%', '0.9', lights_speedup('hall', 'cuts'), '%.1f', '×'),
-     Check('hall, tree / power MSE·time', '0.08', lights_tree_vs_power('hall'), '%.2f', '×'),
-     Check('kitchen, tree / power MSE·time', '1.3', lights_tree_vs_power('kitchen'), '%.1f', '×')],
+     Check('hall, tree / power MSE·time', '0.07', lights_tree_vs_power('hall'), '%.2f', '×'),
+     Check('kitchen, tree / power MSE·time', '1.2', lights_tree_vs_power('kitchen'), '%.1f', '×')],
     lambda m: 'LIE **%s× / %s×** (masking) the standard ray tracer at E ≤ 2%% on the LIE hall (Fernandez 2004: '
               '24.1× / 29.2×); dense cuts **%s×** on the kitchen (4608 oriented lights; 11.5×), **%s×** on the hall '
               '(800 point and spot lights; 2.8–3.86×); light tree **%s× / %s×** power\'s MSE·time on the hall / kitchen '
