@@ -1,4 +1,18 @@
-// bench_lights: many-light direct lighting in the path tracer, error against time. Per scene
+// bench_lights: many-light direct lighting, two sections (--mode direct|path|all, default all).
+//
+// direct (support/direct_section.hpp): on hall (1.3M triangles), kitchen (its 72 disk lights as
+// 4608 oriented points) and lie-hall (820k triangles), direct illumination at the primary hits
+// (one camera ray per pixel, single thread, methods alternating, best of --direct-reps) by the
+// standard ray tracer (a shadow ray per light through the 8-wide BVH), camera rays alone, no
+// shadows (the floor), LIE with and without masking and dense cuts at each threshold; error_E
+// against the standard ray tracer's image; the summary prints each speedup beside Fernandez
+// 2004's, where the time goes (per shadow ray, per light shaded, per cut node) and each
+// method's fastest row at E <= 2%. Options: --direct-size N (128), --direct-reps N (3),
+// --hall-sides N (128), --hall-rings N (256), --pillar-sides N (128), --pillar-rings N (128),
+// --kitchen-points N (4608), --thresholds a,b (0.02,0.01), --max-nodes N (300),
+// --lie-samples N (32768), --depth N | --adaptive T (default adaptive, 8), --three-state.
+//
+// path: the path tracer, error against time. Per scene
 // (hall, kitchen), a high-spp reference (the light tree, all threads), then each method at
 // equal spp on one thread, methods alternating per repetition (ABBA); one CSV row per method
 // and repetition:
@@ -10,8 +24,9 @@
 // and bands. The summary prints each method's MSE x time against power selection's.
 // Each method is a small function (a row of `methods`), so that other methods join the table.
 //
-//   taskset -c 1 bench_lights [--quick] [--csv FILE] [--scene hall|kitchen|all] [--size N]
-//                             [--spp N] [--ref-spp N] [--reps N]
+//   taskset -c 1 bench_lights [--quick] [--csv FILE] [--mode direct|path|all]
+//                             [--scene hall|kitchen|lie-hall|all] [--size N]
+//                             [--spp N] [--ref-spp N] [--reps N] [direct options]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,13 +40,16 @@
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 
+#include "support/direct_section.hpp"
+
 using namespace glint;
 
 namespace {
 
 struct Options {
-    std::string csv, scene = "all";
+    std::string csv, scene = "all", mode = "all";
     int size = 64, spp = 16, ref_spp = 256, reps = 3;
+    bench::DirectOptions direct;
 };
 
 struct Row {
@@ -94,7 +112,9 @@ Options parse(int argc, char** argv) {
             if (i + 1 >= argc) throw Error(a + " needs a value");
             return argv[++i];
         };
-        if (a == "--quick") o.size = 24, o.spp = 4, o.ref_spp = 64, o.reps = 1;
+        if (a == "--quick") o.size = 24, o.spp = 4, o.ref_spp = 64, o.reps = 1, o.direct.quick();
+        else if (a == "--mode") o.mode = next();
+        else if (o.direct.parse(a, next)) continue;
         else if (a == "--csv") o.csv = next();
         else if (a == "--scene") o.scene = next();
         else if (a == "--size") o.size = std::stoi(next());
@@ -104,16 +124,34 @@ Options parse(int argc, char** argv) {
         else throw Error("unknown option '" + a + "'");
     }
     if (o.size < 1 || o.spp < 1 || o.ref_spp < 1 || o.reps < 1) throw Error("--size, --spp, --ref-spp and --reps must be >= 1");
-    if (o.scene != "all" && o.scene != "hall" && o.scene != "kitchen") throw Error("unknown scene '" + o.scene + "' (hall, kitchen, all)");
+    if (o.scene != "all" && o.scene != "hall" && o.scene != "kitchen" && o.scene != "lie-hall")
+        throw Error("unknown scene '" + o.scene + "' (hall, kitchen, lie-hall, all)");
+    if (o.mode != "all" && o.mode != "direct" && o.mode != "path") throw Error("unknown mode '" + o.mode + "' (direct, path, all)");
+    o.direct.validate();
     return o;
+}
+
+/// The direct section's rows (support/direct_section.hpp) as this program's rows; its summary on stderr.
+std::vector<Row> direct_rows(const Options& o) {
+    std::vector<std::string> scenes;
+    for (const char* name : {"hall", "kitchen", "lie-hall"})
+        if (o.scene == "all" || o.scene == name) scenes.push_back(name);
+    const auto rows = bench::direct_section(o.direct, scenes);
+    bench::print_direct_summary(stderr, rows, double(o.direct.size) * double(o.direct.size));
+    std::vector<Row> out;
+    for (const auto& r : rows)
+        out.push_back({r.scene, r.method, r.lights, r.lights_per_pixel, r.shadow_rays_per_pixel, r.seconds, r.error_E, r.rmse});
+    return out;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) try {
     const Options o = parse(argc, argv);
-    std::vector<Row> rows;
+    std::vector<Row> rows, direct;
+    if (o.mode != "path") direct = direct_rows(o);
     for (const char* name : {"hall", "kitchen"}) {
+        if (o.mode == "direct") break;
         if (o.scene != "all" && o.scene != name) continue;
         const Scene<float> s = builtin_scene<float>(name);
         const DefaultAccel accel(s.triangles);
@@ -129,6 +167,8 @@ int main(int argc, char** argv) try {
     std::FILE* out = o.csv.empty() ? stdout : std::fopen(o.csv.c_str(), "w");
     if (!out) throw Error("cannot write '" + o.csv + "'");
     std::fprintf(out, "scene,method,lights,lights_per_pixel,shadow_rays_per_pixel,seconds,error_E,rmse\n");
+    for (const Row& r : direct) std::fprintf(out, "%s,%s,%zu,%.2f,%.2f,%.4f,%.5f,%.6g\n", r.scene.c_str(), r.method.c_str(),
+                                              r.lights, r.lights_per_pixel, r.rays_per_pixel, r.seconds, r.error_e, r.rmse);
     for (const Row& r : rows)
         std::fprintf(out, "%s,%s,%zu,%.1f,%.1f,%.4f,%.5f,%.6g\n", r.scene.c_str(), r.method.c_str(), r.lights,
                      r.lights_per_pixel, r.rays_per_pixel, r.seconds, r.error_e, r.rmse);

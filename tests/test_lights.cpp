@@ -264,15 +264,15 @@ TEST_CASE("MisDirect with the light tree: the image mean agrees with power selec
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
-#include "lie_hall.hpp"
+#include <glint/lights/scenes.hpp>
 
 namespace {
 
 using LieAccel = MeshBvh<MollerTrumbore<float>, 8>;
 
-/// The small hall: 30 point lights, 3 x 4 columns of 8 sides, 12 rows of 1 ring.
+/// The LIE hall (lights/scenes.hpp) small: 6 x 6 point lights, 25 pillars of 8 sides, 1 ring.
 struct LieFixture {
-    Scene<float> scene = lie_hall(30, 3, 8, 1);
+    Scene<float> scene = lie_hall_scene<float>(8, 1, 6);
     LieAccel accel{std::span<const TriangleVertices<float>>(scene.triangles)};
 };
 

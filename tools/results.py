@@ -132,6 +132,16 @@ def parse_bench_cones(text):
     return need(out, 'per-count ratio lines')
 
 
+def parse_bench_lights(csv_path):
+    """bench_lights --csv: {scene: {method: [row dict of floats, one per repetition]}}."""
+    out = {}
+    with open(csv_path) as f:
+        for r in csv.DictReader(f):
+            vals = {k: float(v) for k, v in r.items() if k not in ('scene', 'method')}
+            out.setdefault(r['scene'], {}).setdefault(r['method'], []).append(vals)
+    return need(out, 'rows in ' + csv_path)
+
+
 def parse_peer_cycles(json_path):
     """tools/peer_cycles.py --json: {(scene, spp): equal-error time ratio glint / Cycles (image)}."""
     with open(json_path) as f:
@@ -299,6 +309,13 @@ def job_occluders(c, rep):
 def job_cones(c, rep):
     argv = [c.exe('bench_cones')] + (['--quick', '--size', '32', '--counts', '100,5000'] if c.a.quick else [])
     return parse_bench_cones(c.run('bench_cones', argv, rep))
+
+
+def job_lights(c, rep):
+    out = os.path.join(c.logs, 'bench_lights.%d.csv' % rep)
+    argv = [c.exe('bench_lights'), '--csv', out] + (['--quick'] if c.a.quick else [])
+    c.run('bench_lights', argv, rep)
+    return parse_bench_lights(out)
 
 
 def job_cycles(c, rep):
@@ -599,6 +616,55 @@ row('cones', 'ray-tile hierarchy over refracted rays (Szécsi 2009, ch. 6)', 'br
               '([cones.md](docs/cones.md))' % (
                   m('100 triangles, fixed tiles vs brute'), m('5k triangles, fixed tiles vs brute'),
                   m('5k triangles, adaptive tiles vs brute'), m('wide BVH vs fixed tiles, 100-50k triangles')), 4)
+
+
+def lights_speedup(scene, family):
+    """The standard ray tracer's time over the fastest `family` row (cuts: any threshold) at
+    E <= 2% (--quick: at any E, the sizes are too small to converge)."""
+    def get(c, r):
+        d = job_lights(c, r).get(scene) or {}
+        if 'standard' not in d:
+            raise ParseError('no standard row for %s' % scene)
+        limit = 1.0 if c.a.quick else 0.02
+        ok = [v[0]['seconds'] for m, v in d.items() if (m == family or m.startswith(family + '-')) and
+              not m.endswith('-build') and v[0]['error_E'] <= limit]
+        if not ok:
+            raise ParseError('no %s row at E <= %g on %s' % (family, limit, scene))
+        return d['standard'][0]['seconds'] / min(ok)
+    return get
+
+
+def lights_tree_vs_power(scene):
+    """The path tracer's MSE x time of the light tree over power selection (medians of time, mean MSE)."""
+    def get(c, r):
+        d = job_lights(c, r).get(scene) or {}
+        if 'tree' not in d or 'power' not in d:
+            raise ParseError('no tree and power rows for %s' % scene)
+        cost = {m: statistics.mean(v['rmse'] ** 2 for v in d[m]) * statistics.median(v['seconds'] for v in d[m])
+                for m in ('tree', 'power')}
+        return cost['tree'] / cost['power']
+    return get
+
+
+row('lights', 'many lights (Fernandez 2004): direct light at primary hits; path tracer on the hall and the kitchen',
+    'the standard ray tracer (a shadow ray per light, 8-wide BVH); power light selection',
+    'LIE **5.4× / 6.4×** (masking) the standard ray tracer at E ≤ 2% on the LIE hall (Fernandez 2004: 24.1× / 29.2×); '
+    'dense cuts **6.4×** on the kitchen (4608 oriented lights; 11.5×), **0.9×** on the hall (800 point and spot '
+    'lights; 2.8–3.86×); light tree **0.07× / 1.2×** power\'s MSE·time on the hall / kitchen '
+    '([lights.md](docs/lights.md))', 3,
+    [Check('lie-hall, LIE x standard at E<=2%', '5.4', lights_speedup('lie-hall', 'lie'), '%.1f', '×'),
+     Check('lie-hall, LIE with masking x standard', '6.4', lights_speedup('lie-hall', 'lie-mask'), '%.1f', '×'),
+     Check('kitchen, cuts x standard at E<=2%', '6.4', lights_speedup('kitchen', 'cuts'), '%.1f', '×'),
+     Check('hall, cuts x standard at E<=2%', '0.9', lights_speedup('hall', 'cuts'), '%.1f', '×'),
+     Check('hall, tree / power MSE·time', '0.07', lights_tree_vs_power('hall'), '%.2f', '×'),
+     Check('kitchen, tree / power MSE·time', '1.2', lights_tree_vs_power('kitchen'), '%.1f', '×')],
+    lambda m: 'LIE **%s× / %s×** (masking) the standard ray tracer at E ≤ 2%% on the LIE hall (Fernandez 2004: '
+              '24.1× / 29.2×); dense cuts **%s×** on the kitchen (4608 oriented lights; 11.5×), **%s×** on the hall '
+              '(800 point and spot lights; 2.8–3.86×); light tree **%s× / %s×** power\'s MSE·time on the hall / kitchen '
+              '([lights.md](docs/lights.md))' % (
+                  m('lie-hall, LIE x standard at E<=2%'), m('lie-hall, LIE with masking x standard'),
+                  m('kitchen, cuts x standard at E<=2%'), m('hall, cuts x standard at E<=2%'),
+                  m('hall, tree / power MSE·time'), m('kitchen, tree / power MSE·time')), 6)
 
 
 # The rows README marked stale run first, the slowest per value (lambda, Cycles) last.

@@ -7,16 +7,19 @@
 //             light-cluster method splits each into oriented points);
 //   lie-hall  a hall with 100 point lights under the ceiling and many occluders (pillars,
 //             screens, low walls): where per-cell visibility of LIE pays.
-// column_sides etc. set the triangle counts: the defaults keep every scene under a few
-// thousand triangles, so that tests stay fast; benchmarks may pass larger values.
+// column_sides, column_rings, pillar_sides, pillar_rings set the triangle counts: the defaults
+// keep every scene under a few thousand triangles, so that tests stay fast; benchmarks pass
+// larger values (bench_lights: up to about a million triangles).
 // tracer/scenes.hpp's scene table lists them.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
+#include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/lights/light.hpp>
@@ -27,16 +30,20 @@ namespace glint {
 namespace detail {
 
 /// The prism over `base` (a convex polygon in the plane y = y0, counter-clockwise seen from
-/// above) up to y0 + h: its sides, its top and, off the floor (y0 > 0), its bottom.
+/// above) up to y0 + h: its sides (each `rings` quads high), its top and, off the floor
+/// (y0 > 0), its bottom.
 template <Scalar T>
-void add_extrusion(Scene<T>& s, std::span<const Vec3<T>> base, T h, std::uint32_t m) {
+void add_extrusion(Scene<T>& s, std::span<const Vec3<T>> base, T h, std::uint32_t m, int rings = 1) {
+    if (rings < 1) throw Error("add_extrusion: rings must be >= 1, got " + std::to_string(rings));
     const Vec3<T> up(0, h, 0);
     const std::size_t n = base.size();
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3<T>& a = base[i];
-        const Vec3<T>& b = base[(i + 1) % n];
-        s.add_quad(a, b, b + up, a + up, m);  // outward for a counter-clockwise base seen from above
-    }
+    for (std::size_t i = 0; i < n; ++i)
+        for (int k = 0; k < rings; ++k) {
+            const Vec3<T> lo = up * (T(k) / T(rings)), hi = up * (T(k + 1) / T(rings));
+            const Vec3<T>& a = base[i];
+            const Vec3<T>& b = base[(i + 1) % n];
+            s.add_quad(a + lo, b + lo, b + hi, a + hi, m);  // outward for a counter-clockwise base seen from above
+        }
     std::vector<Vec3<T>> top, bottom;
     for (std::size_t i = 0; i < n; ++i) top.push_back(base[i] + up);
     for (std::size_t i = n; i-- > 0;) bottom.push_back(base[i]);
@@ -87,11 +94,11 @@ Rgb<T> tint(int i) {
 
 }  // namespace detail
 
-/// The hall of columns: 2 rows of 10 columns (column_sides-gons), each with a ring of 12
-/// point lights at 3 m and of 12 spots at 5.5 m aiming down and out, and a 10 x 32 grid of
-/// ceiling spots: 800 emitters.
+/// The hall of columns: 2 rows of 10 columns (column_sides-gons, column_rings quads high),
+/// each with a ring of 12 point lights at 3 m and of 12 spots at 5.5 m aiming down and out,
+/// and a 10 x 32 grid of ceiling spots: 800 emitters.
 template <Scalar T>
-Scene<T> hall_scene(int column_sides = 10) {
+Scene<T> hall_scene(int column_sides = 10, int column_rings = 1) {
     Scene<T> s;
     s.name = "hall";
     using V = Vec3<T>;
@@ -103,7 +110,7 @@ Scene<T> hall_scene(int column_sides = 10) {
         for (int k = 0; k < 10; ++k) {
             const V c(row ? T(4) : T(-4), 0, T(-19.8) + T(4.4) * T(k));
             const auto base = detail::ngon(c, T(0.45), column_sides);
-            detail::add_extrusion(s, std::span<const V>(base), T(8), stone);
+            detail::add_extrusion(s, std::span<const V>(base), T(8), stone, column_rings);
             for (int j = 0; j < 12; ++j) {
                 const T a = T(2) * pi<T> * (T(j) + T(0.5) * T(row)) / T(12);
                 const V out(std::cos(a), 0, std::sin(a));
@@ -158,10 +165,11 @@ Scene<T> kitchen_scene(int light_sides = 16) {
     return s;
 }
 
-/// The hall for LIE: a room 20 x 6 x 20, a 10 x 10 grid of point lights at 5.6 m, a 5 x 5
-/// grid of pillars (pillar_sides-gons) and low walls and screens between them.
+/// The hall for LIE: a room 20 x 6 x 20, a light_grid x light_grid grid of point lights at
+/// 5.6 m (10 x 10), a 5 x 5 grid of pillars (pillar_sides-gons, pillar_rings quads high) and
+/// low walls and screens between them.
 template <Scalar T>
-Scene<T> lie_hall_scene(int pillar_sides = 8) {
+Scene<T> lie_hall_scene(int pillar_sides = 8, int pillar_rings = 1, int light_grid = 10) {
     Scene<T> s;
     s.name = "lie-hall";
     using V = Vec3<T>;
@@ -173,15 +181,16 @@ Scene<T> lie_hall_scene(int pillar_sides = 8) {
         for (int j = 0; j < 5; ++j) {
             const V c(T(-8) + T(4) * T(i), 0, T(-8) + T(4) * T(j));
             const auto base = detail::ngon(c, T(0.4), pillar_sides);
-            detail::add_extrusion(s, std::span<const V>(base), T(6), stone);
+            detail::add_extrusion(s, std::span<const V>(base), T(6), stone, pillar_rings);
             const V o = c + V(2, 0, 2);
             if ((i + j) % 2 == 0 && i < 4 && j < 4) detail::add_block(s, o - V(T(1.2), 0, T(0.1)), o + V(T(1.2), T(1.4), T(0.1)), stone);
             else if (i < 4 && j < 4) detail::add_block(s, o - V(T(0.1), 0, T(1.1)), o + V(T(0.1), T(3.2), T(1.1)), wall);
         }
-    for (int i = 0; i < 10; ++i)
-        for (int j = 0; j < 10; ++j)
-            s.point_lights.push_back(
-                PointLight<T>::isotropic(V(T(-9) + T(2) * T(i), T(5.6), T(-9) + T(2) * T(j)), detail::tint<T>(i * 10 + j) * T(0.7)));
+    const T step = T(20) / T(light_grid);
+    for (int i = 0; i < light_grid; ++i)
+        for (int j = 0; j < light_grid; ++j)
+            s.point_lights.push_back(PointLight<T>::isotropic(V(T(-10) + step * (T(i) + T(0.5)), T(5.6), T(-10) + step * (T(j) + T(0.5))),
+                                                              detail::tint<T>(i * light_grid + j) * T(0.7)));
     s.camera = Camera<T>{V(T(9), T(3.5), T(9.5)), V(T(-2), T(1), T(-2)), V(0, 1, 0), T(0.9)};
     return s;
 }
