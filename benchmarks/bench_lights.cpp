@@ -12,6 +12,12 @@
 //
 //   taskset -c 1 bench_lights [--quick] [--csv FILE] [--scene hall|kitchen|all] [--size N]
 //                             [--spp N] [--ref-spp N] [--reps N]
+//   taskset -c 1 bench_lights --tree-scaling [--csv FILE]   the light tree over 10^3, 10^4, 10^5
+//                             random point, spot and oriented lights: build seconds, bytes per
+//                             light, ns per pick (CSV lights,build_seconds,bytes_per_light,pick_ns)
+//   taskset -c 1 bench_lights --pick-timing   ns per pick and per probability() on hall and
+//                             kitchen at points uniform on their surfaces
+// (support/light_tree_measure.hpp)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +31,8 @@
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 
+#include "support/light_tree_measure.hpp"
+
 using namespace glint;
 
 namespace {
@@ -32,6 +40,7 @@ namespace {
 struct Options {
     std::string csv, scene = "all";
     int size = 64, spp = 16, ref_spp = 256, reps = 3;
+    bool tree_scaling = false, pick_timing = false;
 };
 
 struct Row {
@@ -101,6 +110,8 @@ Options parse(int argc, char** argv) {
         else if (a == "--spp") o.spp = std::stoi(next());
         else if (a == "--ref-spp") o.ref_spp = std::stoi(next());
         else if (a == "--reps") o.reps = std::stoi(next());
+        else if (a == "--tree-scaling") o.tree_scaling = true;
+        else if (a == "--pick-timing") o.pick_timing = true;
         else throw Error("unknown option '" + a + "'");
     }
     if (o.size < 1 || o.spp < 1 || o.ref_spp < 1 || o.reps < 1) throw Error("--size, --spp, --ref-spp and --reps must be >= 1");
@@ -108,10 +119,37 @@ Options parse(int argc, char** argv) {
     return o;
 }
 
+/// --tree-scaling: the light tree's build time, bytes per light and pick time at 10^3..10^5 lights.
+void tree_scaling_table(const Options& o) {
+    std::FILE* out = o.csv.empty() ? stdout : std::fopen(o.csv.c_str(), "w");
+    if (!out) throw Error("cannot write '" + o.csv + "'");
+    std::fprintf(out, "lights,build_seconds,bytes_per_light,pick_ns\n");
+    for (std::size_t n : {std::size_t(1000), std::size_t(10000), std::size_t(100000)}) {
+        const bench::TreeScaling r = bench::tree_scaling(n, 7, o.reps);
+        std::fprintf(out, "%zu,%.5f,%.1f,%.1f\n", r.lights, r.build_seconds, r.bytes_per_light, r.pick_ns);
+        std::fflush(out);
+    }
+    if (out != stdout) std::fclose(out);
+}
+
+/// --pick-timing: ns per pick and per probability() on the two scenes.
+void pick_timing_table(const Options& o) {
+    std::printf("scene,lights,nodes,pick_ns,probability_ns\n");
+    for (const char* name : {"hall", "kitchen"}) {
+        if (o.scene != "all" && o.scene != name) continue;
+        const Scene<float> s = builtin_scene<float>(name);
+        const LightTree<float> tree(scene_light_bounds(s));
+        const bench::PickTiming t = bench::pick_timing(tree, bench::surface_points(s, 200000, 3), o.reps);
+        std::printf("%s,%zu,%zu,%.1f,%.1f\n", name, tree.size(), tree.nodes().size(), t.pick_ns, t.probability_ns);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
     const Options o = parse(argc, argv);
+    if (o.tree_scaling) return tree_scaling_table(o), 0;
+    if (o.pick_timing) return pick_timing_table(o), 0;
     std::vector<Row> rows;
     for (const char* name : {"hall", "kitchen"}) {
         if (o.scene != "all" && o.scene != name) continue;
