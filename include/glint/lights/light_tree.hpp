@@ -81,7 +81,9 @@ public:
             const std::size_t c0 = i + 1, c1 = std::size_t(descent_[i].second);
             const T i0 = descent_[c0].bounds.importance(x, n), i1 = descent_[c1].bounds.importance(x, n);
             const T sum = i0 + i1;
-            if (!(sum > T(0))) return {};  // neither child can reach x
+            // Neither child can reach x; or x is on a point light (importance infinite), where
+            // probability() finds 0/0 too.
+            if (!(sum > T(0)) || !(sum <= std::numeric_limits<T>::max())) return {};
             // The choice compares u sum with i0, so that the next node does not wait on a
             // division; the probability and the rescaled u are off that path.
             const T us = u * sum, p0 = i0 / sum;
