@@ -588,7 +588,7 @@ TEST_CASE("LIE with area lights (as points on them) and spot lights: exact where
     CHECK(lie.emission_weight(Arrival<float>{}, Ray<float>{}, light_hit) == 1.0f);
 }
 
-// ---- The light tree's compact bounds (lights/light_bounds.hpp CompactLightBounds) -----------
+// ---- The light tree's compact bounds (CompactLightBounds, lights/importance_pair.hpp) -------
 
 namespace {
 
@@ -612,13 +612,13 @@ double importance_oracle(const LightBounds<float>& b, const Vec3<double>& x, con
 
 }  // namespace
 
-TEST_CASE("light tree: CompactLightBounds' importance is the bound's formula at every node of the hall's and the kitchen's trees") {
+TEST_CASE("light tree: CompactLightBounds' importance and importance_pair are the bound's formula at every node of the hall's and the kitchen's trees") {
     RandomSampler<float> rng(11);
     for (const char* name : {"hall", "kitchen"}) {
         CAPTURE(name);
         const Scene<float> s = builtin_scene<float>(name);
         const LightTree<float> tree(scene_light_bounds(s));
-        double worst = 0;
+        double worst = 0, worst_pair = 0;
         int positive = 0, zero = 0;
         for (int k = 0; k < 200; ++k) {
             // Points in the scene's box (outside and inside clusters' spheres), random normals.
@@ -633,9 +633,26 @@ TEST_CASE("light tree: CompactLightBounds' importance is the bound's formula at 
                 worst = std::max(worst, std::abs(fast - exact) / scale);
                 (exact > 0 ? positive : zero) += 1;
             }
+            // The pairs a descent evaluates together (SSE lanes for float on x86).
+            for (std::size_t i = 0; i < tree.nodes().size(); ++i) {
+                const auto& node = tree.nodes()[i];
+                if (node.second < 0) continue;
+                const auto& b0 = tree.nodes()[i + 1].bounds;
+                const auto& b1 = tree.nodes()[std::size_t(node.second)].bounds;
+                const auto pair = importance_pair(CompactLightBounds<float>(b0), CompactLightBounds<float>(b1), x, n);
+                for (std::size_t side = 0; side < 2; ++side) {
+                    const auto& bk = side ? b1 : b0;
+                    const double exact = importance_oracle(bk, Vec3<double>(x), Vec3<double>(n));
+                    const Vec3<float> dk = x - bk.box.center();
+                    const double scale = double(bk.phi) / std::max(double(glm::dot(dk, dk)), 1e-6);
+                    worst_pair = std::max(worst_pair, std::abs(double(pair[side]) - exact) / scale);
+                }
+            }
         }
         CAPTURE(worst);
+        CAPTURE(worst_pair);
         CHECK(worst < 1e-4);
+        CHECK(worst_pair < 1e-4);
         CHECK(positive > 1000);  // both outcomes occur often: lit and unlit nodes
         CHECK(zero > 1000);
     }

@@ -28,6 +28,7 @@
 
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/lights/importance_pair.hpp>
 #include <glint/lights/light_bounds.hpp>
 
 namespace glint {
@@ -79,7 +80,7 @@ public:
         T p = T(1);
         while (descent_[i].second >= 0) {
             const std::size_t c0 = i + 1, c1 = std::size_t(descent_[i].second);
-            const T i0 = descent_[c0].bounds.importance(x, n), i1 = descent_[c1].bounds.importance(x, n);
+            const auto [i0, i1] = importance_pair(descent_[c0].bounds, descent_[c1].bounds, x, n);
             const T sum = i0 + i1;
             // Neither child can reach x; or x is on a point light (importance infinite), where
             // probability() finds 0/0 too.
@@ -135,7 +136,7 @@ private:
 
     /// The first child's share of the two children's importance at x; -1 if both are 0.
     T first_share(const Vec3<T>& x, const Vec3<T>& n, std::size_t c0, std::size_t c1) const {
-        const T i0 = descent_[c0].bounds.importance(x, n), i1 = descent_[c1].bounds.importance(x, n);
+        const auto [i0, i1] = importance_pair(descent_[c0].bounds, descent_[c1].bounds, x, n);
         if (!(i0 + i1 > T(0))) return T(-1);
         return i0 / (i0 + i1);
     }
