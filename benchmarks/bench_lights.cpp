@@ -21,16 +21,26 @@
 // vertices (spp x light samples); shadow_rays_per_pixel: every ray the render traced per pixel
 // (closest-hit and shadow rays: the tracer counts them together); error_E: Fernandez 2004's
 // eq. 4.3, the mean over pixels of min(|L - L_ref| / L_ref, 1) (luminance); rmse over pixels
-// and bands. The summary prints each method's MSE x time against power selection's.
-// Each method is a small function (a row of `methods`), so that other methods join the table.
+// and bands; seconds: the render's CPU seconds (process time around it, one thread). The
+// summary prints each method's MSE x time against power selection's.
+// Methods: power, tree (glint-render --direct mis | tree) and power-estimate, tree-estimate
+// (the same with --roulette estimate). Each is a small function (a row of `methods`), so that
+// other methods join the table.
 //
 //   taskset -c 1 bench_lights [--quick] [--csv FILE] [--mode direct|path|all]
 //                             [--scene hall|kitchen|lie-hall|all] [--size N]
 //                             [--spp N] [--ref-spp N] [--reps N] [direct options]
+//   taskset -c 1 bench_lights --tree-scaling [--csv FILE]   the light tree over 10^3, 10^4, 10^5
+//                             random point, spot and oriented lights: build seconds, bytes per
+//                             light, ns per pick (CSV lights,build_seconds,bytes_per_light,pick_ns)
+//   taskset -c 1 bench_lights --pick-timing   ns per pick and per probability() on hall and
+//                             kitchen at points uniform on their surfaces
+// (support/light_tree_measure.hpp)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <string>
@@ -41,6 +51,7 @@
 #include <glint/tracer/scenes.hpp>
 
 #include "support/direct_section.hpp"
+#include "support/light_tree_measure.hpp"
 
 using namespace glint;
 
@@ -50,6 +61,7 @@ struct Options {
     std::string csv, scene = "all", mode = "all";
     int size = 64, spp = 16, ref_spp = 256, reps = 3;
     bench::DirectOptions direct;
+    bool tree_scaling = false, pick_timing = false;
 };
 
 struct Row {
@@ -70,16 +82,28 @@ void errors(const Image<Rgb<float>>& img, const Image<Rgb<float>>& ref, double& 
     rmse = std::sqrt(sq / (3.0 * double(img.size())));
 }
 
-/// The path tracer with a named direct-lighting policy on one thread.
+/// CPU seconds of this process (every thread): on a shared machine a one-thread render's CPU
+/// time moves far less with the load than its wall time.
+double cpu_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+/// The path tracer with a named direct-lighting policy; `seconds` is the render's CPU time.
 RenderResult path_traced(const Scene<float>& s, const DefaultAccel& accel, const Options& o, const char* direct, int spp,
-                         int threads) {
+                         int threads, const char* roulette = "throughput") {
     NamedRender<float> r;
     r.image.width = r.image.height = o.size;
     r.image.spp = spp;
     r.image.threads = threads;
     r.direct = direct;
+    r.roulette = roulette;
     r.seed = 1;
-    return render_named(s, accel, r);
+    const double t0 = cpu_seconds();
+    RenderResult out = render_named(s, accel, r);
+    out.seconds = cpu_seconds() - t0;
+    return out;
 }
 
 /// A method: its row from one render of scene s against the reference.
@@ -102,7 +126,17 @@ Row tree(const Scene<float>& s, const DefaultAccel& a, const Options& o, const I
     return measured("tree", path_traced(s, a, o, "tree", o.spp, 1), s, o, ref);
 }
 
-const std::pair<const char*, Method> methods[] = {{"power", power}, {"tree", tree}};
+// The same with Szecsi 2009 2.3's radiance estimate in the roulette (glint-render --roulette
+// estimate): shorter walks at equal or lower noise on these scenes.
+Row power_estimate(const Scene<float>& s, const DefaultAccel& a, const Options& o, const Image<Rgb<float>>& ref) {
+    return measured("power-estimate", path_traced(s, a, o, "mis", o.spp, 1, "estimate"), s, o, ref);
+}
+Row tree_estimate(const Scene<float>& s, const DefaultAccel& a, const Options& o, const Image<Rgb<float>>& ref) {
+    return measured("tree-estimate", path_traced(s, a, o, "tree", o.spp, 1, "estimate"), s, o, ref);
+}
+
+const std::pair<const char*, Method> methods[] = {
+    {"power", power}, {"tree", tree}, {"power-estimate", power_estimate}, {"tree-estimate", tree_estimate}};
 
 Options parse(int argc, char** argv) {
     Options o;
@@ -121,6 +155,8 @@ Options parse(int argc, char** argv) {
         else if (a == "--spp") o.spp = std::stoi(next());
         else if (a == "--ref-spp") o.ref_spp = std::stoi(next());
         else if (a == "--reps") o.reps = std::stoi(next());
+        else if (a == "--tree-scaling") o.tree_scaling = true;
+        else if (a == "--pick-timing") o.pick_timing = true;
         else throw Error("unknown option '" + a + "'");
     }
     if (o.size < 1 || o.spp < 1 || o.ref_spp < 1 || o.reps < 1) throw Error("--size, --spp, --ref-spp and --reps must be >= 1");
@@ -144,10 +180,37 @@ std::vector<Row> direct_rows(const Options& o) {
     return out;
 }
 
+/// --tree-scaling: the light tree's build time, bytes per light and pick time at 10^3..10^5 lights.
+void tree_scaling_table(const Options& o) {
+    std::FILE* out = o.csv.empty() ? stdout : std::fopen(o.csv.c_str(), "w");
+    if (!out) throw Error("cannot write '" + o.csv + "'");
+    std::fprintf(out, "lights,build_seconds,bytes_per_light,pick_ns\n");
+    for (std::size_t n : {std::size_t(1000), std::size_t(10000), std::size_t(100000)}) {
+        const bench::TreeScaling r = bench::tree_scaling(n, 7, o.reps);
+        std::fprintf(out, "%zu,%.5f,%.1f,%.1f\n", r.lights, r.build_seconds, r.bytes_per_light, r.pick_ns);
+        std::fflush(out);
+    }
+    if (out != stdout) std::fclose(out);
+}
+
+/// --pick-timing: ns per pick and per probability() on the two scenes.
+void pick_timing_table(const Options& o) {
+    std::printf("scene,lights,nodes,pick_ns,probability_ns\n");
+    for (const char* name : {"hall", "kitchen"}) {
+        if (o.scene != "all" && o.scene != name) continue;
+        const Scene<float> s = builtin_scene<float>(name);
+        const LightTree<float> tree(scene_light_bounds(s));
+        const bench::PickTiming t = bench::pick_timing(tree, bench::surface_points(s, 200000, 3), o.reps);
+        std::printf("%s,%zu,%zu,%.1f,%.1f\n", name, tree.size(), tree.nodes().size(), t.pick_ns, t.probability_ns);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
     const Options o = parse(argc, argv);
+    if (o.tree_scaling) return tree_scaling_table(o), 0;
+    if (o.pick_timing) return pick_timing_table(o), 0;
     std::vector<Row> rows, direct;
     if (o.mode != "path") direct = direct_rows(o);
     for (const char* name : {"hall", "kitchen"}) {
@@ -156,7 +219,7 @@ int main(int argc, char** argv) try {
         const Scene<float> s = builtin_scene<float>(name);
         const DefaultAccel accel(s.triangles);
         const RenderResult ref = path_traced(s, accel, o, "tree", o.ref_spp, 0);
-        std::fprintf(stderr, "%s: reference %d spp in %.1f s\n", name, o.ref_spp, ref.seconds);
+        std::fprintf(stderr, "%s: reference %d spp in %.1f CPU s\n", name, o.ref_spp, ref.seconds);
         const int m = int(std::size(methods));
         for (int rep = 0; rep < o.reps; ++rep)
             for (int k = 0; k < m; ++k) {
@@ -187,7 +250,7 @@ int main(int argc, char** argv) try {
         for (const Row& r : base) tb.push_back(r.seconds), mse_b += r.rmse * r.rmse / double(base.size());
         std::sort(tb.begin(), tb.end());
         const double med = t[t.size() / 2], med_b = tb[tb.size() / 2];
-        std::fprintf(stderr, "%-8s %-6s time %.3f s  MSE %.4g  E %.4f  MSE*time vs power %.3f\n", key.first.c_str(),
+        std::fprintf(stderr, "%-8s %-14s time %.3f s  MSE %.4g  E %.4f  MSE*time vs power %.3f\n", key.first.c_str(),
                      key.second.c_str(), med, mse, rs[0].error_e, mse * med / (mse_b * med_b));
     }
     return 0;

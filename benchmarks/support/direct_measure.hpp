@@ -37,6 +37,8 @@
 #include <glint/lights/light_points.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
+#include "clock.hpp"
+
 namespace glint::bench {
 
 using DirectAccel = MeshBvh<MollerTrumbore<float>, 8>;
@@ -113,10 +115,6 @@ inline DirectMethod no_shadows_method(const DirectScene& d) {
                     if (lie_unshadowed(sp, l, f)) c.lights += 1, L += f;
                 return L;
             }};
-}
-
-inline double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 /// "lie" and "lie-mask" (the same LIEs, masking on and off), built single-threaded from the

@@ -90,32 +90,64 @@ struct LightBounds {
 
     /// Bounds on the irradiance the emitters can send to x, whose surface's normal is n
     /// (reflecting side; n = 0: no receiver cosine). 0 only where none of them can reach x.
+    /// (CompactLightBounds, below, evaluates it; a light tree keeps that form per node.)
+    T importance(const Vec3<T>& x, const Vec3<T>& n) const;
+};
+
+/// LightBounds in the form importance() reads: the box's bounding sphere (centre c, radius r)
+/// and the sine of the normals' cone, computed once, so that an evaluation costs four square
+/// roots and one division (a light tree's descent evaluates two nodes per level).
+template <Scalar T>
+struct CompactLightBounds {
+    Vec3<T> c{0};
+    T r = T(0), r2 = T(0);  // bounding sphere's radius and its square
+    T phi = T(0);
+    Vec3<T> w{0, 0, 1};
+    T cos_theta_o = T(1), sin_theta_o = T(0), cos_theta_e = T(0);
+
+    CompactLightBounds() = default;
+    explicit CompactLightBounds(const LightBounds<T>& b)
+        : c((b.box.lo + b.box.hi) * T(0.5)), phi(b.phi), w(b.w), cos_theta_o(b.cos_theta_o),
+          sin_theta_o(detail::sin_from_cos(b.cos_theta_o)), cos_theta_e(b.cos_theta_e) {
+        const Vec3<T> diag = b.box.hi - b.box.lo;
+        r2 = glm::dot(diag, diag) * T(0.25);
+        r = std::sqrt(r2);
+    }
+
+    /// LightBounds::importance: phi cos(theta') / d^2 times the receiver's cos(theta_i'), the
+    /// angles reduced by the cone (half angle theta_b, sin theta_b = r / d) the sphere subtends.
+    /// Every sine and cosine is a square root of d^2 minus a square, times 1 / d, so that the
+    /// four square roots do not wait on each other.
     T importance(const Vec3<T>& x, const Vec3<T>& n) const {
         if (!(phi > T(0))) return T(0);
-        const Vec3<T> c = (box.lo + box.hi) * T(0.5);
-        const Vec3<T> diag = box.hi - box.lo;
-        const T r2 = glm::dot(diag, diag) * T(0.25);  // bounding sphere's radius^2
         const Vec3<T> d = x - c;
-        const T d2c = glm::dot(d, d);
-        const T d2 = std::max(d2c, r2);
-        const Vec3<T> wi = d2c > T(0) ? d / std::sqrt(d2c) : Vec3<T>(0, 0, 1);
-        // The cone the box subtends from x: everything when x is inside the sphere.
-        const T cos_b = d2c > r2 ? std::sqrt(std::max(T(0), T(1) - r2 / d2c)) : T(-1);
-        const T sin_b = detail::sin_from_cos(cos_b);
-        const T cos_w = glm::dot(w, wi), sin_w = detail::sin_from_cos(cos_w);
-        const T sin_o = detail::sin_from_cos(cos_theta_o);
-        const T cos_x = detail::cos_sub_clamped(sin_w, cos_w, sin_o, cos_theta_o);
-        const T sin_x = detail::sin_sub_clamped(sin_w, cos_w, sin_o, cos_theta_o);
+        const T d2 = glm::dot(d, d);
+        // Inside the sphere every angle bound is 0 (cosines 1) and d^2 is floored at r^2.
+        if (!(d2 > r2)) return cos_theta_e < T(1) ? phi / r2 : T(0);
+        const T dw = glm::dot(w, d), dn = -glm::dot(d, n);
+        const T root_d = std::sqrt(d2), root_b = std::sqrt(d2 - r2);
+        const T root_w = std::sqrt(std::max(T(0), d2 - dw * dw)), root_i = std::sqrt(std::max(T(0), d2 - dn * dn));
+        const T inv_d = T(1) / root_d;
+        const T sin_b = r * inv_d, cos_b = root_b * inv_d;
+        T cos_x = T(1), sin_x = T(0);  // cos, sin of max(0, theta_w - theta_o)
+        if (cos_theta_o > T(-1)) {
+            const T cos_w = dw * inv_d, sin_w = root_w * inv_d;
+            cos_x = detail::cos_sub_clamped(sin_w, cos_w, sin_theta_o, cos_theta_o);
+            sin_x = detail::sin_sub_clamped(sin_w, cos_w, sin_theta_o, cos_theta_o);
+        }
         const T cos_p = detail::cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
         if (cos_p <= cos_theta_e) return T(0);
-        T imp = phi * std::max(cos_p, T(0)) / d2;
-        if (glm::dot(n, n) > T(0)) {
-            const T cos_i = -glm::dot(wi, n), sin_i = detail::sin_from_cos(cos_i);
-            imp *= std::max(T(0), detail::cos_sub_clamped(sin_i, cos_i, sin_b, cos_b));
-        }
+        T imp = phi * std::max(cos_p, T(0)) * (inv_d * inv_d);
+        if (glm::dot(n, n) > T(0))  // n = 0: dn = 0, root_i = d
+            imp *= std::max(T(0), detail::cos_sub_clamped(root_i * inv_d, dn * inv_d, sin_b, cos_b));
         return imp;
     }
 };
+
+template <Scalar T>
+T LightBounds<T>::importance(const Vec3<T>& x, const Vec3<T>& n) const {
+    return CompactLightBounds<T>(*this).importance(x, n);
+}
 
 /// The bounds of two clusters together.
 template <Scalar T>

@@ -28,6 +28,7 @@
 
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/lights/importance_pair.hpp>
 #include <glint/lights/light_bounds.hpp>
 
 namespace glint {
@@ -60,12 +61,16 @@ public:
         leaf_of_.assign(emitters.size(), -1);
         nodes_.reserve(2 * emitters.size());
         if (!emitters.empty()) build(emitters, order, 0, order.size(), -1);
+        descent_.reserve(nodes_.size());
+        for (const Node& nd : nodes_) descent_.push_back({CompactLightBounds<T>(nd.bounds), nd.second});
     }
 
     bool empty() const { return nodes_.empty(); }
     std::size_t size() const { return leaf_of_.size(); }
     const std::vector<Node>& nodes() const { return nodes_; }
-    std::size_t bytes() const { return nodes_.size() * sizeof(Node) + leaf_of_.size() * sizeof(std::int32_t); }
+    std::size_t bytes() const {
+        return nodes_.size() * (sizeof(Node) + sizeof(DescentNode)) + leaf_of_.size() * sizeof(std::int32_t);
+    }
 
     /// A light for point x with normal n (0: none) by u in [0, 1), and its probability; 0
     /// where no light can reach x.
@@ -73,15 +78,21 @@ public:
         if (nodes_.empty()) return {};
         std::size_t i = 0;
         T p = T(1);
-        while (nodes_[i].second >= 0) {
-            const std::size_t c0 = i + 1, c1 = std::size_t(nodes_[i].second);
-            const T p0 = first_share(x, n, c0, c1);
-            if (!(p0 >= T(0))) return {};  // neither child can reach x
-            if (u < p0) {
-                u = std::min(u / p0, one_minus_epsilon);
+        while (descent_[i].second >= 0) {
+            const std::size_t c0 = i + 1, c1 = std::size_t(descent_[i].second);
+            const auto [i0, i1] = importance_pair(descent_[c0].bounds, descent_[c1].bounds, x, n);
+            const T sum = i0 + i1;
+            // Neither child can reach x; or x is on a point light (importance infinite), where
+            // probability() finds 0/0 too.
+            if (!(sum > T(0)) || !(sum <= std::numeric_limits<T>::max())) return {};
+            // The choice compares u sum with i0, so that the next node does not wait on a
+            // division; the probability and the rescaled u are off that path.
+            const T us = u * sum, p0 = i0 / sum;
+            if (us < i0 || !(i1 > T(0))) {
+                u = std::min(us / i0, one_minus_epsilon);
                 p *= p0, i = c0;
             } else {
-                u = std::min((u - p0) / (T(1) - p0), one_minus_epsilon);
+                u = std::min((us - i0) / i1, one_minus_epsilon);
                 p *= T(1) - p0, i = c1;
             }
         }
@@ -94,7 +105,7 @@ public:
         T p = T(1);
         for (std::int32_t i = leaf_of_[light]; nodes_[std::size_t(i)].parent >= 0;) {
             const std::size_t parent = std::size_t(nodes_[std::size_t(i)].parent);
-            const T p0 = first_share(x, n, parent + 1, std::size_t(nodes_[parent].second));
+            const T p0 = first_share(x, n, parent + 1, std::size_t(descent_[parent].second));
             if (!(p0 >= T(0))) return T(0);
             p *= std::size_t(i) == parent + 1 ? p0 : T(1) - p0;
             i = std::int32_t(parent);
@@ -125,7 +136,7 @@ private:
 
     /// The first child's share of the two children's importance at x; -1 if both are 0.
     T first_share(const Vec3<T>& x, const Vec3<T>& n, std::size_t c0, std::size_t c1) const {
-        const T i0 = nodes_[c0].bounds.importance(x, n), i1 = nodes_[c1].bounds.importance(x, n);
+        const auto [i0, i1] = importance_pair(descent_[c0].bounds, descent_[c1].bounds, x, n);
         if (!(i0 + i1 > T(0))) return T(-1);
         return i0 / (i0 + i1);
     }
@@ -208,7 +219,14 @@ private:
         return self;
     }
 
+    /// What a descent reads of a node: its bounds in importance()'s form and its second child.
+    struct DescentNode {
+        CompactLightBounds<T> bounds;
+        std::int32_t second;
+    };
+
     std::vector<Node> nodes_;
+    std::vector<DescentNode> descent_;  // per node, in the same order
     std::vector<std::int32_t> leaf_of_;  // per emitter: its leaf
 };
 
