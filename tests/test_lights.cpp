@@ -893,3 +893,127 @@ TEST_CASE("CutDirect in the path tracer: exact over its points it agrees with Mi
                                     << ", default cut " << cut[i]);
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Sparse sampling (Fernandez 2004, §5.3-5.4): interpolation and reconstruction cuts.
+
+#include <glint/lights/sparse_direct.hpp>
+
+namespace {
+
+using SparseAccel = MeshBvh<MollerTrumbore<float>, 8>;
+
+/// The small hall (30 point lights, shadows of 12 columns on the floor) and its accelerator.
+struct SparseFixture {
+    Scene<float> scene = lie_hall(30, 3, 8, 1);
+    SparseAccel accel{std::span<const TriangleVertices<float>>(scene.triangles)};
+};
+
+SparseSettings sparse_settings(SparseMode mode, int threads = 1) {
+    SparseSettings s;
+    s.mode = mode;
+    s.samples = 1500;
+    s.threads = threads;
+    return s;
+}
+
+/// A primary hit of a pixel centre, its BRDF kept with it.
+struct SparsePixel {
+    std::optional<SurfaceBrdf<float>> brdf;
+    ShadingPoint<float> sp;
+    int x = 0, y = 0;
+};
+
+/// The diffuse hits of the pixel centres of a size x size view (square, as the samples').
+std::vector<SparsePixel> sparse_pixels(const SparseFixture& f, int size) {
+    std::vector<SparsePixel> out;
+    out.reserve(std::size_t(size * size));
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            out.emplace_back();
+            SparsePixel& p = out.back();
+            p.x = x;
+            p.y = y;
+            const Ray<float> ray = f.scene.camera.ray((float(x) + 0.5f) / float(size), (float(y) + 0.5f) / float(size), 1.0f);
+            if (!lie_camera_point(f.scene, f.accel, ray, p.brdf, p.sp)) out.pop_back();
+        }
+    return out;
+}
+
+/// The exact direct light at p over the tree's lights: every light its own shadow ray.
+Rgb<float> sparse_exact(const SparseDirect<float>& d, const SparsePixel& p, RayQueries<SparseAccel>& q) {
+    const CutReceiver<float> r{p.sp.x, p.sp.n, p.sp.frame, p.sp.brdf, 0.0f};
+    return evaluate_cut(d.tree(), r, CutSettings{0.0, 0}, [&](const PointLight<float>& l) { return CutDirect<float>::visible(p.sp, l, q); }).L;
+}
+
+}  // namespace
+
+TEST_CASE("sparse: reconstruction cuts with agreement 0 are the dense cut at every pixel; at 5% they interpolate nodes and save rays") {
+    const SparseFixture f;
+    const SparseDirect<float> recon(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::reconstruct));
+    const SparseDirect<float> strict = recon.with(SparseMode::reconstruct, 0.0);
+    RayQueries<SparseAccel> q(f.accel);
+    long dense_rays = 0, recon_rays = 0, interpolated = 0, fallbacks = 0;
+    const auto pixels = sparse_pixels(f, 32);
+    REQUIRE(pixels.size() > 800);
+    for (const SparsePixel& p : pixels) {
+        const CutReceiver<float> r{p.sp.x, p.sp.n, p.sp.frame, p.sp.brdf, 0.0f};
+        const CutResult<float> dense =
+            evaluate_cut(recon.tree(), r, recon.settings().cut, [&](const PointLight<float>& l) { return CutDirect<float>::visible(p.sp, l, q); });
+        const auto s = strict.shade(p.sp, q);
+        CHECK(s.interpolated == 0);
+        for (std::size_t c = 0; c < 3; ++c) CHECK(s.L[c] == dense.L[c]);
+        CHECK(s.shadow_rays == dense.shadow_rays);
+        const auto loose = recon.shade(p.sp, q);
+        dense_rays += dense.shadow_rays;
+        recon_rays += loose.shadow_rays;
+        interpolated += loose.interpolated;
+        fallbacks += loose.dense;
+    }
+    MESSAGE("shadow rays per pixel: dense " << double(dense_rays) / double(pixels.size()) << ", reconstruction "
+                                            << double(recon_rays) / double(pixels.size()) << "; interpolated nodes per pixel "
+                                            << double(interpolated) / double(pixels.size()) << "; dense fallbacks " << fallbacks);
+    CHECK(fallbacks < long(pixels.size()) / 10);
+    CHECK(interpolated > long(pixels.size()));
+    CHECK(recon_rays < dense_rays);
+}
+
+TEST_CASE("sparse: interpolation returns a sample's own value there (k = 2), and is a normalized Epanechnikov average") {
+    const SparseFixture f;
+    SparseSettings s2 = sparse_settings(SparseMode::interpolate);
+    s2.neighbours = 2;
+    const SparseDirect<float> two(f.scene, f.accel, LightPointOptions<float>{}, s2);
+    const SparseDirect<float> eight(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::interpolate));
+    const SparseSamples<float>& S = eight.samples();
+    REQUIRE(S.size() > 1000);
+    std::vector<SampleNeighbour<float>> near;
+    int checked = 0;
+    for (std::size_t i = 0; i < S.size(); i += 7) {
+        two.samples().nearest(S.position(i), S.normal(i), 2, near);
+        REQUIRE(near.size() == 2);
+        if (near[0].sample != i) continue;  // another sample at the very same point
+        const Rgb<float> e = two.interpolate(near);
+        for (std::size_t c = 0; c < 3; ++c) CHECK(e[c] == S.irradiance(i)[c]);
+        S.nearest(S.position(i), S.normal(i), 8, near);
+        if (near.size() < 8) continue;
+        double sum = 0, lo = 1e30, hi = -1e30;
+        double w = 0;
+        const double dk2 = double(near.back().distance) * double(near.back().distance);
+        for (std::size_t j = 0; j + 1 < near.size(); ++j) {
+            const double p = (dk2 - double(near[j].distance) * double(near[j].distance)) / dk2;
+            CHECK(p >= 0.0);
+            CHECK(p <= 1.0);
+            const Rgb<float>& E = S.irradiance(near[j].sample);
+            sum += double(E[1]) * p;
+            w += p;
+            lo = std::min(lo, double(E[1]));
+            hi = std::max(hi, double(E[1]));
+        }
+        const Rgb<float> e8 = eight.interpolate(near);
+        CHECK(double(e8[1]) == doctest::Approx(sum / w).epsilon(1e-5));
+        CHECK(double(e8[1]) >= lo * (1 - 1e-6));  // a convex combination: the weights are normalized
+        CHECK(double(e8[1]) <= hi * (1 + 1e-6));
+        ++checked;
+    }
+    CHECK(checked > 100);
+}
