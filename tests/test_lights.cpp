@@ -905,8 +905,15 @@ using SparseAccel = MeshBvh<MollerTrumbore<float>, 8>;
 
 /// The small hall (30 point lights, shadows of 12 columns on the floor) and its accelerator.
 struct SparseFixture {
-    Scene<float> scene = lie_hall(30, 3, 8, 1);
+    Scene<float> scene = lambertian(lie_hall(30, 3, 8, 1));
     SparseAccel accel{std::span<const TriangleVertices<float>>(scene.triangles)};
+
+    /// The sparse methods shade Lambertian points (glossy ones take the dense cut): the glossy floor made diffuse.
+    static Scene<float> lambertian(Scene<float> s) {
+        for (auto& m : s.materials)
+            if (m.kind == MaterialKind::glossy) m = Material<float>::lambertian(m.kd);
+        return s;
+    }
 };
 
 SparseSettings sparse_settings(SparseMode mode, int threads = 1) {
@@ -1016,4 +1023,109 @@ TEST_CASE("sparse: interpolation returns a sample's own value there (k = 2), and
         ++checked;
     }
     CHECK(checked > 100);
+}
+
+namespace {
+
+/// Eq. 4.3's per-pixel error min(|L - L_exact| / L_exact, 1) on luminance.
+double sparse_error(const Rgb<float>& L, const Rgb<float>& exact) {
+    const double e = exact.luminance(), d = std::abs(double(L.luminance()) - e);
+    return e > 0 ? std::min(d / e, 1.0) : (d > 0 ? 1.0 : 0.0);
+}
+
+}  // namespace
+
+TEST_CASE("sparse: interpolation's bias is at shadow edges (stated), where reconstruction cuts keep the error small") {
+    const SparseFixture f;
+    const SparseDirect<float> interp(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::interpolate));
+    const SparseDirect<float> recon = interp.with(SparseMode::reconstruct, 0.05);
+    RayQueries<SparseAccel> q(f.accel);
+    const int size = 48;
+    const auto pixels = sparse_pixels(f, size);
+    // Each pixel's shadowed fraction (exact light / light without shadows); a pixel is at a
+    // shadow edge when it differs from a 4-neighbour's by more than 0.05.
+    std::vector<double> lit(std::size_t(size * size), -1);
+    std::vector<Rgb<float>> exact(std::size_t(size * size));
+    for (const SparsePixel& p : pixels) {
+        const CutReceiver<float> r{p.sp.x, p.sp.n, p.sp.frame, p.sp.brdf, 0.0f};
+        const double open = evaluate_cut(interp.tree(), r, CutSettings{0.0, 0}, [](const PointLight<float>&) { return true; }).L.luminance();
+        const std::size_t i = std::size_t(p.y * size + p.x);
+        exact[i] = sparse_exact(interp, p, q);
+        lit[i] = open > 0 ? exact[i].luminance() / open : 1.0;
+    }
+    double err[2][3] = {}, count[2] = {};
+    const SparseDirect<float> strict = interp.with(SparseMode::reconstruct, 0.0);
+    for (const SparsePixel& p : pixels) {
+        bool edge = false;
+        const std::size_t i = std::size_t(p.y * size + p.x);
+        for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+            const int x = p.x + dx, y = p.y + dy;
+            if (x >= 0 && y >= 0 && x < size && y < size && lit[std::size_t(y * size + x)] >= 0)
+                edge = edge || std::abs(lit[std::size_t(y * size + x)] - lit[i]) > 0.05;
+        }
+        err[edge][0] += sparse_error(interp.shade(p.sp, q).L, exact[i]);
+        err[edge][1] += sparse_error(recon.shade(p.sp, q).L, exact[i]);
+        err[edge][2] += sparse_error(strict.shade(p.sp, q).L, exact[i]);
+        count[edge] += 1;
+    }
+    REQUIRE(count[0] > 300);
+    REQUIRE(count[1] > 300);
+    const double ie = err[1][0] / count[1], io = err[0][0] / count[0], re = err[1][1] / count[1], ro = err[0][1] / count[0];
+    const double de = err[1][2] / count[1], d_o = err[0][2] / count[0];
+    MESSAGE("E at shadow edges / elsewhere (" << count[1] << " / " << count[0] << " pixels): interpolation " << ie << " / " << io
+                                             << ", reconstruction " << re << " / " << ro << ", dense " << de << " / " << d_o);
+    CHECK(ie > io);        // the stated bias: interpolation blurs shadow edges, its error is largest there
+    CHECK(ie > 4 * re);    // reconstruction cuts keep the edges (§5.3.2)
+    CHECK(re < de + 0.01);  // and add under 1% to the dense cut's own error, at edges and elsewhere
+    CHECK(ro < d_o + 0.01);
+}
+
+TEST_CASE("sparse: the samples and every pixel's light are the same for any construction thread count") {
+    const SparseFixture f;
+    const SparseDirect<float> one(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::reconstruct, 1));
+    const SparseDirect<float> three(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::reconstruct, 3));
+    const SparseSamples<float>&a = one.samples(), &b = three.samples();
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        CHECK(a.position(i) == b.position(i));
+        CHECK(a.irradiance(i).luminance() == b.irradiance(i).luminance());
+        CHECK(std::ranges::equal(a.values(i), b.values(i)));
+        CHECK(std::ranges::equal(a.left(i), b.left(i)));
+    }
+    RayQueries<SparseAccel> q(f.accel);
+    for (const SparsePixel& p : sparse_pixels(f, 16))
+        for (const SparseMode m : {SparseMode::interpolate, SparseMode::reconstruct})
+            CHECK(one.with(m, 0.05).shade(p.sp, q).L.luminance() == three.with(m, 0.05).shade(p.sp, q).L.luminance());
+    MESSAGE("bytes per sample (" << a.size() << " samples): " << a.bytes_per_sample());
+}
+
+TEST_CASE("sparse: secondary and glossy vertices take the dense cut; bad settings are rejected naming the value") {
+    const SparseFixture f;
+    SparseSettings s = sparse_settings(SparseMode::interpolate);
+    s.samples = 200;
+    const SparseDirect<float> d(f.scene, f.accel, LightPointOptions<float>{}, s);
+    RayQueries<SparseAccel> q(f.accel);
+    RandomSampler<float> sampler(1);
+    const auto pixels = sparse_pixels(f, 8);
+    REQUIRE(!pixels.empty());
+    const ShadingPoint<float>& sp = pixels.front().sp;
+    const CutReceiver<float> r{sp.x, sp.n, sp.frame, sp.brdf, 0.0f};
+    const auto dense = evaluate_cut(d.tree(), r, s.cut, [&](const PointLight<float>& l) { return CutDirect<float>::visible(sp, l, q); });
+    CHECK(d.estimate(sp, sampler, q, nullptr).luminance() == dense.L.luminance());  // no vertex record: not primary
+    const SurfaceBrdf<float> glossy(Material<float>::glossy(Rgb<float>(0.4f), Rgb<float>(0.3f), 20.0f), Vec3<float>(0, 0, 1));
+    ShadingPoint<float> gp = sp;
+    gp.brdf = &glossy;
+    CHECK(d.shade(gp, q).dense);
+    const auto rejects = [&](auto&& edit, const char* value) {
+        SparseSettings b = s;
+        edit(b);
+        CHECK_THROWS_WITH_AS(SparseDirect<float>(f.scene, f.accel, LightPointOptions<float>{}, b), doctest::Contains(value), Error);
+    };
+    rejects([](SparseSettings& b) { b.samples = 0; }, "samples 0");
+    rejects([](SparseSettings& b) { b.neighbours = 1; }, "neighbours 1");
+    rejects([](SparseSettings& b) { b.neighbours = 40; }, "neighbours 40");
+    rejects([](SparseSettings& b) { b.agreement = -0.5; }, "agreement -0.5");
+    rejects([](SparseSettings& b) { b.max_radius = 0; }, "max_radius 0");
+    rejects([](SparseSettings& b) { b.cut.max_nodes = 0; }, "max_nodes 0");
+    rejects([](SparseSettings& b) { b.cut.threshold = -1; }, "threshold -1");
 }

@@ -9,7 +9,7 @@
 //     nearest samples (eq. 5.12, 5.14) with the Epanechnikov weights
 //     p_i = (d_k^2 - d_i^2) / d_k^2 (eq. 5.13; d: eq. 5.22, d_k: the k-th nearest, weight 0);
 //     where every weight is 0 (k samples at one distance) the nearest sample's E. No shadow
-//     ray. Glossy vertices get the dense cut (the seed leaves their gloss out).
+//     ray.
 //   reconstruct (§5.3.2): the dense cut's search (lights/cuts.hpp) in which every node it
 //     reaches is first offered for interpolation: if the k samples' relative irradiances R_j
 //     (eq. 5.15, a node below a sample's cut taking its ancestor's) agree,
@@ -17,7 +17,11 @@
 //     the node is R_0 f_rep G_rep I_C with R_0 the nearest sample's (eq. 5.21), no shadow
 //     ray; otherwise it is evaluated as the dense cut evaluates it (the representative's
 //     shadow ray, accepted below the threshold, else refined; leaves are exact).
-// Elsewhere (secondary vertices, too few samples near) the dense cut. With t_interp = 0 no
+// Elsewhere (secondary vertices, too few samples near, glossy vertices) the dense cut. Both
+// modes are for Lambertian receivers, as the seed's (ED?L paths only): a glossy f varies
+// across a node's lights, which neither the irradiance nor the relative irradiance of the
+// samples sees (a root interpolated with f_rep at a glossy floor was off by up to 5x in the
+// tests), so glossy vertices take the dense cut, whose bound refines where f varies. With t_interp = 0 no
 // node agrees and the reconstruction cut is the dense cut exactly.
 // Repaired or changed from the seed's text: eq. 5.13's distances are squared ratios of d, the
 // k-th sample only sets the radius; eq. 5.20 compares max_j R_j with the average one-sidedly,
@@ -86,8 +90,8 @@ public:
     Shaded shade(const ShadingPoint<T>& sp, Q& queries) const {
         thread_local std::vector<SampleNeighbour<T>> near;
         samples_->nearest(sp.x, sp.n, settings_.neighbours, near);
-        const bool enough = near.size() == std::size_t(settings_.neighbours);
-        if (enough && settings_.mode == SparseMode::interpolate && sp.brdf->lobe_count() == 1)
+        const bool enough = near.size() == std::size_t(settings_.neighbours) && sp.brdf->lobe_count() == 1;
+        if (enough && settings_.mode == SparseMode::interpolate)
             return Shaded{sp.brdf->kd() / pi<T> * interpolate(near), 0, 0, 0, false};
         const CutReceiver<T> r{sp.x, sp.n, sp.frame, sp.brdf, T(0)};
         const auto visible = [&](const PointLight<T>& l) { return CutDirect<T>::visible(sp, l, queries); };
