@@ -103,8 +103,9 @@ public:
     /// Its packed relative irradiances and left-child indices.
     std::span<const std::uint16_t> values(std::size_t i) const { return {values_.data() + first_[i], first_[i + 1] - first_[i]}; }
     std::span<const std::uint16_t> left(std::size_t i) const { return {left_.data() + first_[i], first_[i + 1] - first_[i]}; }
-    /// The shadow rays the samples' cuts cast, in all.
+    /// The shadow rays the samples' cuts cast, and their nodes, in all.
     std::uint64_t shadow_rays() const { return rays_; }
+    std::uint64_t cut_nodes() const { return nodes_; }
     /// The kernel's largest radius (world units).
     T radius() const { return radius_; }
     /// The k nearest samples of x (normal n) within radius(), nearest first.
@@ -125,7 +126,7 @@ private:
         Vec3<T> x{0}, n{0};
         Rgb<T> E{T(0)};
         std::vector<std::uint16_t> values, left;
-        int rays = 0;
+        int rays = 0, nodes = 0;
     };
 
     template <class A>
@@ -144,7 +145,7 @@ private:
             evaluate_cut(tree, r, s.cut, [&](const PointLight<T>& l) { return CutDirect<T>::visible(sp, l, q); }, &trace);
         std::unordered_map<std::uint32_t, Rgb<T>> on_cut;
         for (const auto& c : trace) on_cut.emplace(c.node, c.estimate * pi<T>);
-        out = Sample{true, sp.x, sp.n, cut.L * pi<T>, {0}, {0}, cut.shadow_rays};
+        out = Sample{true, sp.x, sp.n, cut.L * pi<T>, {0}, {0}, cut.shadow_rays, cut.nodes};
         encode(tree, r, on_cut, tree.root(), 0, out);
         return out;
     }
@@ -184,13 +185,14 @@ private:
         left_.insert(left_.end(), a.left.begin(), a.left.end());
         first_.push_back(std::uint32_t(values_.size()));
         rays_ += std::uint64_t(a.rays);
+        nodes_ += std::uint64_t(a.nodes);
     }
 
     std::vector<Vec3<T>> x_, n_;
     std::vector<Rgb<T>> E_;
     std::vector<std::uint16_t> values_, left_;
     std::vector<std::uint32_t> first_{0};
-    std::uint64_t rays_ = 0;
+    std::uint64_t rays_ = 0, nodes_ = 0;
     T radius_ = 0;
     SampleNeighbours<T> neighbours_;
 };
