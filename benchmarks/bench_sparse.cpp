@@ -10,7 +10,8 @@
 //   --neighbours K      k nearest samples (8)        --quick      a small run
 //   --threshold T       the cuts' threshold (0.02)   --max-nodes N  the cuts' largest size (300)
 //   --max-radius F      the kernel's largest radius, a fraction of the scene's diagonal (0.1)
-// After the CSV, "#" lines give each sparse row's fraction of pixels shaded by the dense cut.
+// After the CSV, "#" lines give each sparse row's fraction of pixels shaded by the dense cut and
+// the seconds of its sample cuts (part of its seconds) and their bytes per sample.
 #include <cstdio>
 #include <exception>
 #include <sstream>
@@ -53,13 +54,14 @@ int main(int argc, char** argv) try {
     for (const char* name : {"hall", "kitchen", "lie-hall"}) {
         if (scene != "all" && scene != name) continue;
         const auto s = glint::builtin_scene<float>(name);
-        std::vector<double> dense;
-        const auto rows = glint::bench::measure_sparse(s, o, &dense);
+        std::vector<glint::bench::SparseExtras> extras;
+        const auto rows = glint::bench::measure_sparse(s, o, &extras);
         for (const auto& r : rows)
             std::printf("%s,%s,%zu,%.2f,%.2f,%.4f,%.5f,%.5g\n", r.scene.c_str(), r.method.c_str(), r.lights, r.lights_per_pixel,
                         r.shadow_rays_per_pixel, r.seconds, r.error_E, r.rmse);
         for (std::size_t i = 2; i < rows.size(); ++i)
-            std::printf("# %s %s: %.1f%% of pixels by the dense cut\n", name, rows[i].method.c_str(), 100 * dense[i]);
+            std::printf("# %s %s: %.1f%% of pixels by the dense cut; sample cuts %.4f s, %.0f bytes per sample\n", name,
+                        rows[i].method.c_str(), 100 * extras[i].dense_share, extras[i].build_seconds, extras[i].bytes_per_sample);
         std::fflush(stdout);
     }
 } catch (const std::exception& e) {

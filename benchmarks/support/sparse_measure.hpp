@@ -36,6 +36,11 @@ namespace glint::bench {
 /// bench_lights' row (blocker_tests_per_pixel stays 0 here).
 using SparseRow = LieRow;
 
+/// What a row's CSV columns leave out.
+struct SparseExtras {
+    double dense_share = 0, build_seconds = 0, bytes_per_sample = 0;
+};
+
 struct SparseMeasureOptions {
     int width = 128, height = 128, reps = 2;
     std::vector<int> samples{5000};         // construction camera rays, one setting per value
@@ -114,16 +119,17 @@ inline std::pair<double, double> sparse_errors(const std::vector<float>& img, co
 }  // namespace detail
 
 /// The rows "standard", "cuts" and, per samples setting, "sparse-interp-N" and per agreement
-/// "sparse-recon-N-t", for `scene`; `dense_share`, when given, receives each row's fraction of pixels
-/// that a sparse method shaded by the dense cut (too few samples near, glossy).
+/// "sparse-recon-N-t", for `scene`; `extras`, when given, receives per row the fraction of pixels
+/// that a sparse method shaded by the dense cut (too few samples near, glossy), the seconds of
+/// its sample cuts (in the row's seconds) and their bytes per sample.
 inline std::vector<SparseRow> measure_sparse(const Scene<float>& scene, const SparseMeasureOptions& o,
-                                             std::vector<double>* dense_share = nullptr) {
+                                             std::vector<SparseExtras>* extras = nullptr) {
     using namespace detail;
     const SparseAccel accel(std::span<const TriangleVertices<float>>(scene.triangles));
     struct Method {
         std::string name;
         SparseMethod run;
-        double build = 0, build_nodes = 0, build_rays = 0;
+        double build = 0, build_nodes = 0, build_rays = 0, bytes = 0;
     };
     std::vector<Method> methods;
     std::vector<SparseDirect<float>> sparse;  // kept alive for the methods' lambdas
@@ -158,7 +164,7 @@ inline std::vector<SparseRow> measure_sparse(const Scene<float>& scene, const Sp
             methods.push_back({name, [&d](const ShadingPoint<float>& sp, RayQueries<SparseAccel>& q) {
                                    const auto r = d.shade(sp, q);
                                    return SparseShade{r.L, r.nodes, r.shadow_rays, r.dense};
-                               }, build, double(S.cut_nodes()), double(S.shadow_rays())});
+                               }, build, double(S.cut_nodes()), double(S.shadow_rays()), S.bytes_per_sample()});
         }
     }
     std::vector<SparsePass> best(methods.size());
@@ -170,9 +176,9 @@ inline std::vector<SparseRow> measure_sparse(const Scene<float>& scene, const Sp
         }
     const double px = double(o.width) * double(o.height);
     std::vector<SparseRow> rows;
-    if (dense_share) dense_share->clear();
+    if (extras) extras->clear();
     for (std::size_t m = 0; m < methods.size(); ++m) {
-        if (dense_share) dense_share->push_back(best[m].dense / px);
+        if (extras) extras->push_back({best[m].dense / px, methods[m].build, methods[m].bytes});
         const auto [E, rmse] = sparse_errors(best[m].L, best[0].L);
         rows.push_back({scene.name, methods[m].name, tree.lights().size(), (best[m].nodes + methods[m].build_nodes) / px,
                         (best[m].rays + methods[m].build_rays) / px, best[m].seconds + methods[m].build, E, rmse, 0});
