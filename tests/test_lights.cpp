@@ -1116,6 +1116,11 @@ TEST_CASE("sparse: secondary and glossy vertices take the dense cut; bad setting
     ShadingPoint<float> gp = sp;
     gp.brdf = &glossy;
     CHECK(d.shade(gp, q).dense);
+    Scene<float> dark = f.scene;  // no lights: no samples, no light, no crash
+    dark.point_lights.clear();
+    const SparseDirect<float> none(dark, f.accel, LightPointOptions<float>{}, s);
+    CHECK(none.samples().size() == 0);
+    CHECK(none.shade(sp, q).L.luminance() == 0.0f);
     const auto rejects = [&](auto&& edit, const char* value) {
         SparseSettings b = s;
         edit(b);

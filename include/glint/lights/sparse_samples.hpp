@@ -133,6 +133,7 @@ private:
     static Sample make_sample(const Scene<T>& scene, const A& accel, const LightClusterTree<T>& tree, const SparseSettings& s,
                               const Halton<T>& h, std::uint64_t index) {
         Sample out;
+        if (tree.empty()) return out;  // no lights: no samples, every point the (empty) dense cut
         std::optional<SurfaceBrdf<T>> brdf;
         ShadingPoint<T> sp;
         if (!lie_camera_point(scene, accel, lie_sample_ray(scene.camera, h, index, T(s.aspect)), brdf, sp)) return out;
