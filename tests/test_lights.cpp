@@ -963,3 +963,244 @@ TEST_CASE("light tree: CompactLightBounds' importance and importance_pair are th
         CHECK(zero > 1000);
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Sparse sampling (Fernandez 2004, §5.3-5.4): interpolation and reconstruction cuts.
+
+#include <glint/lights/sparse_direct.hpp>
+
+namespace {
+
+using SparseAccel = MeshBvh<MollerTrumbore<float>, 8>;
+
+/// The small LIE hall (36 point lights, pillars, screens and low walls) and its accelerator.
+struct SparseFixture {
+    Scene<float> scene = lambertian(lie_hall_scene<float>(8, 1, 6));
+    SparseAccel accel{std::span<const TriangleVertices<float>>(scene.triangles)};
+
+    /// The sparse methods shade Lambertian points (glossy ones take the dense cut): the glossy floor made diffuse.
+    static Scene<float> lambertian(Scene<float> s) {
+        for (auto& m : s.materials)
+            if (m.kind == MaterialKind::glossy) m = Material<float>::lambertian(m.kd);
+        return s;
+    }
+};
+
+SparseSettings sparse_settings(SparseMode mode, int threads = 1) {
+    SparseSettings s;
+    s.mode = mode;
+    s.samples = 1500;
+    s.threads = threads;
+    return s;
+}
+
+/// A primary hit of a pixel centre, its BRDF kept with it.
+struct SparsePixel {
+    std::optional<SurfaceBrdf<float>> brdf;
+    ShadingPoint<float> sp;
+    int x = 0, y = 0;
+};
+
+/// The diffuse hits of the pixel centres of a size x size view (square, as the samples').
+std::vector<SparsePixel> sparse_pixels(const SparseFixture& f, int size) {
+    std::vector<SparsePixel> out;
+    out.reserve(std::size_t(size * size));
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            out.emplace_back();
+            SparsePixel& p = out.back();
+            p.x = x;
+            p.y = y;
+            const Ray<float> ray = f.scene.camera.ray((float(x) + 0.5f) / float(size), (float(y) + 0.5f) / float(size), 1.0f);
+            if (!lie_camera_point(f.scene, f.accel, ray, p.brdf, p.sp)) out.pop_back();
+        }
+    return out;
+}
+
+/// The exact direct light at p over the tree's lights: every light its own shadow ray.
+Rgb<float> sparse_exact(const SparseDirect<float>& d, const SparsePixel& p, RayQueries<SparseAccel>& q) {
+    const CutReceiver<float> r{p.sp.x, p.sp.n, p.sp.frame, p.sp.brdf, 0.0f};
+    return evaluate_cut(d.tree(), r, CutSettings{0.0, 0}, [&](const PointLight<float>& l) { return CutDirect<float>::visible(p.sp, l, q); }).L;
+}
+
+}  // namespace
+
+TEST_CASE("sparse: reconstruction cuts with agreement 0 are the dense cut at every pixel; at 5% they interpolate nodes and save rays") {
+    const SparseFixture f;
+    const SparseDirect<float> recon(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::reconstruct));
+    const SparseDirect<float> strict = recon.with(SparseMode::reconstruct, 0.0);
+    RayQueries<SparseAccel> q(f.accel);
+    long dense_rays = 0, recon_rays = 0, interpolated = 0, fallbacks = 0;
+    const auto pixels = sparse_pixels(f, 32);
+    REQUIRE(pixels.size() > 800);
+    for (const SparsePixel& p : pixels) {
+        const CutReceiver<float> r{p.sp.x, p.sp.n, p.sp.frame, p.sp.brdf, 0.0f};
+        const CutResult<float> dense =
+            evaluate_cut(recon.tree(), r, recon.settings().cut, [&](const PointLight<float>& l) { return CutDirect<float>::visible(p.sp, l, q); });
+        const auto s = strict.shade(p.sp, q);
+        CHECK(s.interpolated == 0);
+        for (std::size_t c = 0; c < 3; ++c) CHECK(s.L[c] == dense.L[c]);
+        CHECK(s.shadow_rays == dense.shadow_rays);
+        const auto loose = recon.shade(p.sp, q);
+        dense_rays += dense.shadow_rays;
+        recon_rays += loose.shadow_rays;
+        interpolated += loose.interpolated;
+        fallbacks += loose.dense;
+    }
+    MESSAGE("shadow rays per pixel: dense " << double(dense_rays) / double(pixels.size()) << ", reconstruction "
+                                            << double(recon_rays) / double(pixels.size()) << "; interpolated nodes per pixel "
+                                            << double(interpolated) / double(pixels.size()) << "; dense fallbacks " << fallbacks);
+    CHECK(fallbacks < long(pixels.size()) / 10);
+    CHECK(interpolated > long(pixels.size()));
+    CHECK(recon_rays < dense_rays);
+}
+
+TEST_CASE("sparse: interpolation returns a sample's own value there (k = 2), and is a normalized Epanechnikov average") {
+    const SparseFixture f;
+    SparseSettings s2 = sparse_settings(SparseMode::interpolate);
+    s2.neighbours = 2;
+    const SparseDirect<float> two(f.scene, f.accel, LightPointOptions<float>{}, s2);
+    const SparseDirect<float> eight(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::interpolate));
+    const SparseSamples<float>& S = eight.samples();
+    REQUIRE(S.size() > 1000);
+    std::vector<SampleNeighbour<float>> near;
+    int checked = 0;
+    for (std::size_t i = 0; i < S.size(); i += 7) {
+        two.samples().nearest(S.position(i), S.normal(i), 2, near);
+        REQUIRE(near.size() == 2);
+        if (near[0].sample != i) continue;  // another sample at the very same point
+        const Rgb<float> e = two.interpolate(near);
+        for (std::size_t c = 0; c < 3; ++c) CHECK(e[c] == S.irradiance(i)[c]);
+        S.nearest(S.position(i), S.normal(i), 8, near);
+        if (near.size() < 8) continue;
+        double sum = 0, lo = 1e30, hi = -1e30;
+        double w = 0;
+        const double dk2 = double(near.back().distance) * double(near.back().distance);
+        for (std::size_t j = 0; j + 1 < near.size(); ++j) {
+            const double p = (dk2 - double(near[j].distance) * double(near[j].distance)) / dk2;
+            CHECK(p >= 0.0);
+            CHECK(p <= 1.0);
+            const Rgb<float>& E = S.irradiance(near[j].sample);
+            sum += double(E[1]) * p;
+            w += p;
+            lo = std::min(lo, double(E[1]));
+            hi = std::max(hi, double(E[1]));
+        }
+        const Rgb<float> e8 = eight.interpolate(near);
+        CHECK(double(e8[1]) == doctest::Approx(sum / w).epsilon(1e-5));
+        CHECK(double(e8[1]) >= lo * (1 - 1e-6));  // a convex combination: the weights are normalized
+        CHECK(double(e8[1]) <= hi * (1 + 1e-6));
+        ++checked;
+    }
+    CHECK(checked > 100);
+}
+
+namespace {
+
+/// Eq. 4.3's per-pixel error min(|L - L_exact| / L_exact, 1) on luminance.
+double sparse_error(const Rgb<float>& L, const Rgb<float>& exact) {
+    const double e = exact.luminance(), d = std::abs(double(L.luminance()) - e);
+    return e > 0 ? std::min(d / e, 1.0) : (d > 0 ? 1.0 : 0.0);
+}
+
+}  // namespace
+
+TEST_CASE("sparse: interpolation's bias is at shadow edges (stated), where reconstruction cuts keep the error small") {
+    const SparseFixture f;
+    const SparseDirect<float> interp(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::interpolate));
+    const SparseDirect<float> recon = interp.with(SparseMode::reconstruct, 0.05);
+    RayQueries<SparseAccel> q(f.accel);
+    const int size = 48;
+    const auto pixels = sparse_pixels(f, size);
+    // Each pixel's shadowed fraction (exact light / light without shadows); a pixel is at a
+    // shadow edge when it differs from a 4-neighbour's by more than 0.05.
+    std::vector<double> lit(std::size_t(size * size), -1);
+    std::vector<Rgb<float>> exact(std::size_t(size * size));
+    for (const SparsePixel& p : pixels) {
+        const CutReceiver<float> r{p.sp.x, p.sp.n, p.sp.frame, p.sp.brdf, 0.0f};
+        const double open = evaluate_cut(interp.tree(), r, CutSettings{0.0, 0}, [](const PointLight<float>&) { return true; }).L.luminance();
+        const std::size_t i = std::size_t(p.y * size + p.x);
+        exact[i] = sparse_exact(interp, p, q);
+        lit[i] = open > 0 ? exact[i].luminance() / open : 1.0;
+    }
+    double err[2][3] = {}, count[2] = {};
+    const SparseDirect<float> strict = interp.with(SparseMode::reconstruct, 0.0);
+    for (const SparsePixel& p : pixels) {
+        bool edge = false;
+        const std::size_t i = std::size_t(p.y * size + p.x);
+        for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+            const int x = p.x + dx, y = p.y + dy;
+            if (x >= 0 && y >= 0 && x < size && y < size && lit[std::size_t(y * size + x)] >= 0)
+                edge = edge || std::abs(lit[std::size_t(y * size + x)] - lit[i]) > 0.05;
+        }
+        err[edge][0] += sparse_error(interp.shade(p.sp, q).L, exact[i]);
+        err[edge][1] += sparse_error(recon.shade(p.sp, q).L, exact[i]);
+        err[edge][2] += sparse_error(strict.shade(p.sp, q).L, exact[i]);
+        count[edge] += 1;
+    }
+    REQUIRE(count[0] > 300);
+    REQUIRE(count[1] > 300);
+    const double ie = err[1][0] / count[1], io = err[0][0] / count[0], re = err[1][1] / count[1], ro = err[0][1] / count[0];
+    const double de = err[1][2] / count[1], d_o = err[0][2] / count[0];
+    MESSAGE("E at shadow edges / elsewhere (" << count[1] << " / " << count[0] << " pixels): interpolation " << ie << " / " << io
+                                             << ", reconstruction " << re << " / " << ro << ", dense " << de << " / " << d_o);
+    CHECK(ie > io);        // the stated bias: interpolation blurs shadow edges, its error is largest there
+    CHECK(ie > 4 * re);    // reconstruction cuts keep the edges (§5.3.2)
+    CHECK(re < de + 0.01);  // and add under 1% to the dense cut's own error, at edges and elsewhere
+    CHECK(ro < d_o + 0.01);
+}
+
+TEST_CASE("sparse: the samples and every pixel's light are the same for any construction thread count") {
+    const SparseFixture f;
+    const SparseDirect<float> one(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::reconstruct, 1));
+    const SparseDirect<float> three(f.scene, f.accel, LightPointOptions<float>{}, sparse_settings(SparseMode::reconstruct, 3));
+    const SparseSamples<float>&a = one.samples(), &b = three.samples();
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        CHECK(a.position(i) == b.position(i));
+        CHECK(a.irradiance(i).luminance() == b.irradiance(i).luminance());
+        CHECK(std::ranges::equal(a.values(i), b.values(i)));
+        CHECK(std::ranges::equal(a.left(i), b.left(i)));
+    }
+    RayQueries<SparseAccel> q(f.accel);
+    for (const SparsePixel& p : sparse_pixels(f, 16))
+        for (const SparseMode m : {SparseMode::interpolate, SparseMode::reconstruct})
+            CHECK(one.with(m, 0.05).shade(p.sp, q).L.luminance() == three.with(m, 0.05).shade(p.sp, q).L.luminance());
+    MESSAGE("bytes per sample (" << a.size() << " samples): " << a.bytes_per_sample());
+}
+
+TEST_CASE("sparse: secondary and glossy vertices take the dense cut; bad settings are rejected naming the value") {
+    const SparseFixture f;
+    SparseSettings s = sparse_settings(SparseMode::interpolate);
+    s.samples = 200;
+    const SparseDirect<float> d(f.scene, f.accel, LightPointOptions<float>{}, s);
+    RayQueries<SparseAccel> q(f.accel);
+    RandomSampler<float> sampler(1);
+    const auto pixels = sparse_pixels(f, 8);
+    REQUIRE(!pixels.empty());
+    const ShadingPoint<float>& sp = pixels.front().sp;
+    const CutReceiver<float> r{sp.x, sp.n, sp.frame, sp.brdf, 0.0f};
+    const auto dense = evaluate_cut(d.tree(), r, s.cut, [&](const PointLight<float>& l) { return CutDirect<float>::visible(sp, l, q); });
+    CHECK(d.estimate(sp, sampler, q, nullptr).luminance() == dense.L.luminance());  // no vertex record: not primary
+    const SurfaceBrdf<float> glossy(Material<float>::glossy(Rgb<float>(0.4f), Rgb<float>(0.3f), 20.0f), Vec3<float>(0, 0, 1));
+    ShadingPoint<float> gp = sp;
+    gp.brdf = &glossy;
+    CHECK(d.shade(gp, q).dense);
+    Scene<float> dark = f.scene;  // no lights: no samples, no light, no crash
+    dark.point_lights.clear();
+    const SparseDirect<float> none(dark, f.accel, LightPointOptions<float>{}, s);
+    CHECK(none.samples().size() == 0);
+    CHECK(none.shade(sp, q).L.luminance() == 0.0f);
+    const auto rejects = [&](auto&& edit, const char* value) {
+        SparseSettings b = s;
+        edit(b);
+        CHECK_THROWS_WITH_AS(SparseDirect<float>(f.scene, f.accel, LightPointOptions<float>{}, b), doctest::Contains(value), Error);
+    };
+    rejects([](SparseSettings& b) { b.samples = 0; }, "samples 0");
+    rejects([](SparseSettings& b) { b.neighbours = 1; }, "neighbours 1");
+    rejects([](SparseSettings& b) { b.neighbours = 40; }, "neighbours 40");
+    rejects([](SparseSettings& b) { b.agreement = -0.5; }, "agreement -0.5");
+    rejects([](SparseSettings& b) { b.max_radius = 0; }, "max_radius 0");
+    rejects([](SparseSettings& b) { b.cut.max_nodes = 0; }, "max_nodes 0");
+    rejects([](SparseSettings& b) { b.cut.threshold = -1; }, "threshold -1");
+}

@@ -35,6 +35,7 @@
 #include <glint/lights/cuts.hpp>
 #include <glint/lights/lie_direct.hpp>
 #include <glint/lights/light_points.hpp>
+#include <glint/lights/sparse_direct.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
 #include "clock.hpp"
@@ -61,6 +62,10 @@ struct DirectCost {
 struct DirectMethod {
     std::string name;
     std::function<Rgb<float>(const ShadingPoint<float>&, DirectQueries&, DirectCost&)> shade;
+    /// Work the method redoes for every image before its pass (sparse sampling's sample cuts):
+    /// counted in its row's seconds and per-pixel cost, as Fernandez 2004's tables count it.
+    double per_image_seconds = 0;
+    DirectCost per_image_cost{};
 };
 
 /// Methods and the rows of their precomputation ("<name>-build": seconds only).
@@ -161,6 +166,38 @@ inline DirectMethods cut_methods(const DirectScene& d, const std::vector<double>
     return out;
 }
 
+/// Fernandez 2004, §5.3-5.4's sparse sampling over the scene's lights: "sparse-interp"
+/// (interpolation) and "sparse-recon-<t>" (reconstruction cuts, agreement tolerance t) from one
+/// set of sample cuts at `samples` Halton camera rays, single thread. The sample cuts are
+/// redone for every image: their seconds, lights and rays are in both rows (per_image_*);
+/// the cluster tree's build is the "sparse-build" row.
+inline DirectMethods sparse_methods(const DirectScene& d, int samples, double agreement, const CutSettings& cut) {
+    SparseSettings s;
+    s.mode = SparseMode::interpolate, s.samples = samples, s.agreement = agreement, s.cut = cut, s.threads = 1;
+    s.aspect = double(d.width) / double(d.height);
+    const auto t0 = std::chrono::steady_clock::now();
+    const CutDirect<float> tree_only(d.scene, LightPointOptions<float>{}, cut);  // the tree's build alone
+    const double tree_seconds = seconds_since(t0);
+    const auto t1 = std::chrono::steady_clock::now();
+    auto interp = std::make_shared<const SparseDirect<float>>(d.scene, d.accel, LightPointOptions<float>{}, s);
+    const double per_image = std::max(0.0, seconds_since(t1) - tree_seconds);
+    auto recon = std::make_shared<const SparseDirect<float>>(interp->with(SparseMode::reconstruct, agreement));
+    const SparseSamples<float>& S = interp->samples();
+    const DirectCost sample_cuts{double(S.cut_nodes()), double(S.shadow_rays()), 0};
+    DirectMethods out;
+    out.builds.push_back({d.scene.name, "sparse-build", d.lights.size(), 0, 0, tree_seconds});
+    const std::string t = std::to_string(agreement).substr(0, 4);
+    for (const auto& [name, m] : {std::pair{std::string("sparse-interp"), interp}, std::pair{"sparse-recon-" + t, recon}})
+        out.methods.push_back({name,
+                               [m](const ShadingPoint<float>& sp, DirectQueries& q, DirectCost& c) {
+                                   const auto r = m->shade(sp, q);
+                                   c.lights += r.nodes, c.rays += r.shadow_rays;
+                                   return r.L;
+                               },
+                               per_image, sample_cuts});
+    return out;
+}
+
 /// One pass of method m over the image: per-pixel luminance, summed cost, seconds.
 struct DirectImage {
     std::vector<float> L;
@@ -212,7 +249,14 @@ inline std::vector<DirectRow> measure_direct(const DirectScene& d, const std::ve
             if (r == 0 || img.seconds < best[m].seconds) best[m] = std::move(img);
         }
     std::vector<DirectRow> rows;
-    for (std::size_t m = 0; m < n; ++m) rows.push_back(direct_row(d, methods[m].name, best[m], best[0].L));
+    const double px = double(d.width) * double(d.height);
+    for (std::size_t m = 0; m < n; ++m) {
+        DirectRow row = direct_row(d, methods[m].name, best[m], best[0].L);
+        row.seconds += methods[m].per_image_seconds;
+        row.lights_per_pixel += methods[m].per_image_cost.lights / px;
+        row.shadow_rays_per_pixel += methods[m].per_image_cost.rays / px;
+        rows.push_back(row);
+    }
     if (reference) *reference = best[0].L;
     return rows;
 }

@@ -73,7 +73,6 @@ public:
     const LightClusterTree<T>& tree() const { return *tree_; }
     const CutSettings& settings() const { return cut_; }
 
-private:
     /// A shadow ray to light l; an oriented point lies on a surface, so its end is offset off it.
     template <class Q>
     static bool visible(const ShadingPoint<T>& sp, const PointLight<T>& l, Q& queries) {
@@ -82,6 +81,7 @@ private:
         return queries.visible(sp, l.position, coordinate_error(std::max({a.x, a.y, a.z})), l.axis);
     }
 
+private:
     const Scene<T>* scene_;
     bool covers_area_lights_;
     CutSettings cut_;

@@ -171,7 +171,7 @@ namespace detail {
 
 /// The nodes a cut has evaluated: each node's error and its slot in `evals`, the evaluations
 /// of representatives (f G V, and V), shared by a child with its parent's representative.
-template <Scalar T, class Visible>
+template <Scalar T, class Visible, class Interpolate>
 struct CutSearch {
     struct Entry {
         T error;
@@ -186,13 +186,20 @@ struct CutSearch {
     const LightClusterTree<T>& tree;
     const CutReceiver<T>& r;
     Visible& visible;
+    Interpolate& interpolate;
     CutResult<T>& out;
     std::vector<Evaluation>& evals;
 
     /// Node k's entry and its approximation's luminance; `parent`: the entry it refines.
     std::pair<Entry, T> entry(std::uint32_t k, const Entry* parent) {
         const LightNode<T>& n = tree.node(k);
+        const T relative = interpolate(k, parent ? parent->node : LightNode<T>::none);
         std::uint32_t slot;
+        if (relative >= T(0)) {  // interpolated: the representative's f G times the relative value, no ray
+            slot = std::uint32_t(evals.size());
+            evals.push_back({light_factor(tree.lights()[n.rep], r) * relative, true});
+            return {Entry{T(0), k, slot}, (evals[slot].factor * n.intensity).luminance()};
+        }
         if (parent && tree.node(parent->node).rep == n.rep) {
             slot = parent->slot;
         } else {
@@ -224,11 +231,15 @@ struct CutSearch {
 }  // namespace detail
 
 /// The cut of `tree` at r (`visible(light)`: its shadow ray), its radiance sum_C L_C.
-/// `trace`, when given, receives every accepted node.
-template <Scalar T, class Visible>
+/// `interpolate(node, parent)` (parent: LightNode::none at the root), asked of every node the
+/// cut reaches before its shadow ray, returns a relative value R >= 0 to take the node as
+/// R f_rep G_rep I_C without a ray (accepted as it comes), or a negative value for the dense
+/// cut's treatment (lights/sparse_direct.hpp's reconstruction cuts). `trace`, when given,
+/// receives every accepted node.
+template <Scalar T, class Visible, class Interpolate>
 CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>& r, const CutSettings& s, Visible&& visible,
-                          std::vector<CutRecord<T>>* trace = nullptr) {
-    using Search = detail::CutSearch<T, std::remove_reference_t<Visible>>;
+                          Interpolate&& interpolate, std::vector<CutRecord<T>>* trace = nullptr) {
+    using Search = detail::CutSearch<T, std::remove_reference_t<Visible>, std::remove_reference_t<Interpolate>>;
     using Entry = typename Search::Entry;
     CutResult<T> out;
     if (tree.empty()) return out;
@@ -236,7 +247,7 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
     thread_local std::vector<typename Search::Evaluation> evals;
     heap.clear();
     evals.clear();
-    Search search{tree, r, visible, out, evals};
+    Search search{tree, r, visible, interpolate, out, evals};
     T total = 0;  // the running total: the sum of the cut's approximations
     // A node of error 0 (a leaf, or one that cannot contribute) is accepted as it comes.
     const auto add = [&](const std::pair<Entry, T>& en) {
@@ -266,6 +277,13 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
         add(search.entry(n.right, &e));
     }
     return out;
+}
+
+/// The dense cut: no node interpolated.
+template <Scalar T, class Visible>
+CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>& r, const CutSettings& s, Visible&& visible,
+                          std::vector<CutRecord<T>>* trace = nullptr) {
+    return evaluate_cut(tree, r, s, visible, [](std::uint32_t, std::uint32_t) { return T(-1); }, trace);
 }
 
 }  // namespace glint

@@ -22,6 +22,7 @@
 #include <glint/core/error.hpp>
 #include <glint/lights/cut_direct.hpp>
 #include <glint/lights/lie_direct.hpp>
+#include <glint/lights/sparse_direct.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -100,7 +101,7 @@ inline LieSettings factory_lie_settings() {
 
 /// The direct-lighting policies a name can choose.
 template <Scalar T>
-using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, CutDirect<T>, LieDirect<T>>;
+using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, CutDirect<T>, LieDirect<T>, SparseDirect<T>>;
 
 template <Scalar T>
 std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&)>> direct_choices() {
@@ -126,6 +127,10 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
          [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), true)); }},
         {"cuts", "Fernandez 2004 5.2's dense light cuts over every light, area lights as points (biased)",
          [](Sc s, St t) { return D(CutDirect<T>(s, t)); }},
+        {"sparse-interp", "Fernandez 2004 5.3.1's interpolation of 5000 sample cuts at primary hits (blurs shadow edges)",
+         [](Sc s, St) { return D(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::interpolate})); }},
+        {"sparse-recon", "Fernandez 2004 5.3.2's reconstruction cuts from 5000 sample cuts at primary hits (biased)",
+         [](Sc s, St) { return D(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::reconstruct})); }},
     };
     return table;
 }
