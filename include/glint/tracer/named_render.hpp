@@ -5,9 +5,10 @@
 //
 // Types are chosen only where they pay in the hot loop: the direct-lighting policy and the
 // sampler become a std::variant here and one std::visit picks the PathTracer instantiation
-// (4 x 2 per accelerator type); the roulette rule, the BRDF selection and the scene's features
-// are values. check_names() checks every name at once, so that a command line can reject an
-// unknown one before it reads a file or builds a tree.
+// (4 x 2 per accelerator type: Fernandez 2004's systems share one type, ManyLightDirect); the
+// roulette rule, the BRDF selection and the scene's features are values. check_names() checks
+// every name at once, so that a command line can reject an unknown one before it reads a file
+// or builds a tree.
 #pragma once
 
 #include <algorithm>
@@ -20,9 +21,7 @@
 #include <variant>
 
 #include <glint/core/error.hpp>
-#include <glint/lights/cut_direct.hpp>
-#include <glint/lights/lie_direct.hpp>
-#include <glint/lights/sparse_direct.hpp>
+#include <glint/lights/many_light_direct.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -101,7 +100,7 @@ inline LieSettings factory_lie_settings() {
 
 /// The direct-lighting policies a name can choose.
 template <Scalar T>
-using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, CutDirect<T>, LieDirect<T>, SparseDirect<T>>;
+using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, ManyLightDirect<T>>;
 
 template <Scalar T>
 std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&)>> direct_choices() {
@@ -122,15 +121,19 @@ std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSett
         {"combined", "Szecsi 2009 3.2's combined estimator, lambda pooled",
          [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
         {"lie", "Fernandez 2004 ch. 3's local illumination environments (biased where unsampled)",
-         [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), false)); }},
+         [](Sc s, St) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(), false))); }},
         {"lie-mask", "the same with Weber masking (drops up to 2% per cell)",
-         [](Sc s, St) { return D(LieDirect<T>(s, detail::factory_lie_settings(), true)); }},
+         [](Sc s, St) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(), true))); }},
         {"cuts", "Fernandez 2004 5.2's dense light cuts over every light, area lights as points (biased)",
-         [](Sc s, St t) { return D(CutDirect<T>(s, t)); }},
+         [](Sc s, St t) { return D(ManyLightDirect<T>(CutDirect<T>(s, t))); }},
         {"sparse-interp", "Fernandez 2004 5.3.1's interpolation of 5000 sample cuts at primary hits (blurs shadow edges)",
-         [](Sc s, St) { return D(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::interpolate})); }},
+         [](Sc s, St) {
+             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::interpolate})));
+         }},
         {"sparse-recon", "Fernandez 2004 5.3.2's reconstruction cuts from 5000 sample cuts at primary hits (biased)",
-         [](Sc s, St) { return D(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::reconstruct})); }},
+         [](Sc s, St) {
+             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::reconstruct})));
+         }},
     };
     return table;
 }
