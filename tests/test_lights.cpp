@@ -287,7 +287,7 @@ LieSettings lie_settings(int samples, bool early_blockers = true) {
 /// Brute force: the outcome of light j's shadow ray at sp through the BVH (lie_visible,
 /// lie_no_light or the first blocker), and its unshadowed contribution.
 std::int32_t brute_outcome(const LieAccel& accel, const ShadingPoint<float>& sp, const LieLight<float>& l, Rgb<float>& c) {
-    if (!lie_unshadowed(sp, l, c)) return lie_no_light;
+    if (!point_light_unshadowed(l.light, sp, c)) return lie_no_light;
     StoreHit<float> h;
     return accel.closest_hit(lie_shadow_ray(sp, l), h) ? std::int32_t(h.id) : lie_visible;
 }

@@ -99,7 +99,7 @@ inline DirectMethod standard_method(const DirectScene& d) {
     return {"standard", [&d](const ShadingPoint<float>& sp, DirectQueries& q, DirectCost& c) {
                 Rgb<float> L(0.0f), f;
                 for (const LieLight<float>& l : d.lights) {
-                    if (!lie_unshadowed(sp, l, f)) continue;
+                    if (!point_light_unshadowed(l.light, sp, f)) continue;
                     c.lights += 1, c.rays += 1;
                     if (q.unoccluded(lie_shadow_ray(sp, l))) L += f;
                 }
@@ -117,7 +117,7 @@ inline DirectMethod no_shadows_method(const DirectScene& d) {
     return {"no-shadows", [&d](const ShadingPoint<float>& sp, DirectQueries&, DirectCost& c) {
                 Rgb<float> L(0.0f), f;
                 for (const LieLight<float>& l : d.lights)
-                    if (lie_unshadowed(sp, l, f)) c.lights += 1, L += f;
+                    if (point_light_unshadowed(l.light, sp, f)) c.lights += 1, L += f;
                 return L;
             }};
 }

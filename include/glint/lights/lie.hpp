@@ -116,20 +116,6 @@ Ray<T> lie_shadow_ray(const ShadingPoint<T>& sp, const LieLight<T>& l) {
     return Ray<T>{xo, yo - xo, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)};
 }
 
-/// f I cos / r^2 of light l at sp, without visibility, as the path tracer shades a point light;
-/// false (no ray to cast) where it cannot contribute: behind the shading plane, outside the cone.
-template <Scalar T>
-bool lie_unshadowed(const ShadingPoint<T>& sp, const LieLight<T>& l, Rgb<T>& out) {
-    const Vec3<T> d = l.light.position - sp.x;
-    const T r2 = glm::dot(d, d);
-    const Vec3<T> wi = d / std::sqrt(r2);
-    const Vec3<T> wl = sp.frame.to_local(wi);
-    const Rgb<T> I = l.light.intensity_towards(-wi);
-    if (wl.z <= T(0) || I.max() <= T(0)) return false;
-    out = I * sp.brdf->f(wl) * (wl.z / r2);
-    return true;
-}
-
 /// The construction's camera ray `index` (>= 1): through Halton(2,3) point `index` of the image.
 template <Scalar T>
 Ray<T> lie_sample_ray(const Camera<T>& camera, const Halton<T>& h, std::uint64_t index, T aspect) {
@@ -249,7 +235,7 @@ private:
             Rgb<T> c;
             std::int32_t& o = b.outcome[i * nl + j];
             b.contribution[i * nl + j] = T(0);
-            if (!lie_unshadowed(sp, lights_[j], c)) {
+            if (!point_light_unshadowed(lights_[j].light, sp, c)) {
                 o = lie_no_light;
                 continue;
             }

@@ -85,7 +85,7 @@ public:
             if (masking_ && e.masked) continue;
             const LieLight<T>& l = lie_->lights()[e.light];
             Rgb<T> f;
-            if (!lie_unshadowed(sp, l, f)) continue;
+            if (!point_light_unshadowed(l.light, sp, f)) continue;
             ++out.cost.lights;
             if (e.state == LieState::partial && !(lists ? through_blockers(sp, l, e, out.cost) : through_accel(sp, l, queries, out.cost)))
                 continue;
@@ -102,7 +102,7 @@ public:
         Shaded out;
         for (const LieLight<T>& l : lie_->lights()) {
             Rgb<T> f;
-            if (!lie_unshadowed(sp, l, f)) continue;
+            if (!point_light_unshadowed(l.light, sp, f)) continue;
             ++out.cost.lights;
             if (through_accel(sp, l, queries, out.cost)) out.L += f;
         }

@@ -139,14 +139,10 @@ private:
 template <Scalar T, class Q>
     requires ShadowQueries<Q, T>
 Rgb<T> point_light_direct(const PointLight<T>& pl, const ShadingPoint<T>& sp, Q& queries) {
-    const Vec3<T> d = pl.position - sp.x;
-    const T r2 = glm::dot(d, d);
-    const Vec3<T> wi = d / std::sqrt(r2);
-    const Vec3<T> wl = sp.frame.to_local(wi);
-    const Rgb<T> I = pl.intensity_towards(-wi);
-    if (wl.z <= T(0) || I.max() <= T(0)) return Rgb<T>(T(0));
-    if (!queries.visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0)))) return Rgb<T>(T(0));
-    return I * sp.brdf->f(wl) * (wl.z / r2);
+    Rgb<T> L;
+    if (!point_light_unshadowed(pl, sp, L) || !queries.visible(sp, pl.position, Vec3<T>(T(0)), Vec3<T>(T(0))))
+        return Rgb<T>(T(0));
+    return L;
 }
 
 /// Every point light at sp, one shadow ray each (the standard ray tracer's loop): the point

@@ -35,6 +35,20 @@ struct ShadingPoint {
     const SurfaceBrdf<T>* brdf;
 };
 
+/// Point light pl's f I cos / r^2 at sp, without visibility, into `out`; false (no ray to
+/// cast) where it cannot contribute: behind the shading plane or outside the light's cone.
+template <Scalar T>
+bool point_light_unshadowed(const PointLight<T>& pl, const ShadingPoint<T>& sp, Rgb<T>& out) {
+    const Vec3<T> d = pl.position - sp.x;
+    const T r2 = glm::dot(d, d);
+    const Vec3<T> wi = d / std::sqrt(r2);
+    const Vec3<T> wl = sp.frame.to_local(wi);
+    const Rgb<T> I = pl.intensity_towards(-wi);
+    if (wl.z <= T(0) || I.max() <= T(0)) return false;
+    out = I * sp.brdf->f(wl) * (wl.z / r2);
+    return true;
+}
+
 /// How emission found at the end of a ray is weighted, given the vertex the ray left: whole
 /// (camera rays, specular bounces, no light sampling), or, where lights were also sampled
 /// there, by the lighting policies' weight for a BRDF sample of density `pdf`; x and n are
