@@ -74,8 +74,7 @@ struct Row {
 void errors(const Image<Rgb<float>>& img, const Image<Rgb<float>>& ref, double& e, double& rmse) {
     double se = 0, sq = 0;
     for (std::size_t i = 0; i < img.size(); ++i) {
-        const double l = img.pixels[i].luminance(), lr = ref.pixels[i].luminance();
-        se += lr > 0 ? std::min(std::abs(l - lr) / lr, 1.0) : (l > 0 ? 1.0 : 0.0);
+        se += bench::error_e_term(img.pixels[i].luminance(), ref.pixels[i].luminance());
         for (std::size_t c = 0; c < 3; ++c) sq += std::pow(double(img.pixels[i][c]) - double(ref.pixels[i][c]), 2);
     }
     e = se / double(img.size());

@@ -223,12 +223,19 @@ inline DirectImage direct_pass(const DirectScene& d, const DirectMethod& m) {
     return out;
 }
 
+/// Fernandez 2004's eq. 4.3 at one pixel: min(|l - l_exact| / l_exact, 1) on luminance (a
+/// pixel with l_exact = 0 counts 0 if l = 0, else 1); E is its mean over the pixels.
+inline double error_e_term(double l, double l_exact) {
+    const double diff = std::abs(l - l_exact);
+    return l_exact > 0 ? std::min(diff / l_exact, 1.0) : (diff > 0 ? 1.0 : 0.0);
+}
+
 /// Method `name`'s row from its image, E and rmse against the reference luminance `ref`.
 inline DirectRow direct_row(const DirectScene& d, const std::string& name, const DirectImage& img, std::span<const float> ref) {
     double e = 0, se = 0;
     for (std::size_t i = 0; i < img.L.size(); ++i) {
-        const double r = ref[i], diff = std::abs(double(img.L[i]) - r);
-        e += r > 0 ? std::min(diff / r, 1.0) : (diff > 0 ? 1.0 : 0.0);
+        const double diff = double(img.L[i]) - double(ref[i]);
+        e += error_e_term(double(img.L[i]), double(ref[i]));
         se += diff * diff;
     }
     const double px = double(img.L.size());
