@@ -205,16 +205,38 @@ struct NamedRender {
     int pilot_paths = 0;
 };
 
+/// The table entries a NamedRender names, each looked up once (resolve_names).
+template <Scalar T>
+struct NamedChoices {
+    const Choice<Roulette<T, 3> (*)(const RouletteParams<T>&)>* roulette;
+    bool estimate;  // the roulette name ends in "+estimate"
+    DirectChoice<T> (*direct)(const Scene<T>&, const PathTracerSettings<T>&);
+    BrdfSelection selection;
+    SamplerChoice<T> (*sampler)(int, int, std::uint64_t);
+    Rgb<T> (*weights)();
+    EstimateSource estimate_source;
+};
+
+/// Looks up every name of `o`; throws glint::Error for the first unknown one, naming it and
+/// the known ones.
+template <Scalar T>
+NamedChoices<T> resolve_names(const NamedRender<T>& o) {
+    const auto roulette = find_roulette<T>(o.roulette);
+    NamedChoices<T> c{roulette.first,
+                      roulette.second,
+                      find_choice(direct_choices<T>(), "direct lighting", o.direct).make,
+                      find_choice(selection_choices(), "BRDF selection", o.selection).make,
+                      find_choice(sampler_choices<T>(), "sampler", o.sampler).make,
+                      find_choice(weights_choices<T>(), "roulette weights", o.weights).make,
+                      find_choice(estimate_choices(), "radiance estimate", o.estimate).make};
+    if (o.rr_depth < 0) throw Error("roulette depth must be >= 0, got " + std::to_string(o.rr_depth));
+    return c;
+}
+
 /// Throws glint::Error for the first unknown name of `o`, naming it and the known ones.
 template <Scalar T>
 void check_names(const NamedRender<T>& o) {
-    find_roulette<T>(o.roulette);
-    find_choice(direct_choices<T>(), "direct lighting", o.direct);
-    find_choice(selection_choices(), "BRDF selection", o.selection);
-    find_choice(sampler_choices<T>(), "sampler", o.sampler);
-    find_choice(weights_choices<T>(), "roulette weights", o.weights);
-    find_choice(estimate_choices(), "radiance estimate", o.estimate);
-    if (o.rr_depth < 0) throw Error("roulette depth must be >= 0, got " + std::to_string(o.rr_depth));
+    resolve_names(o);
 }
 
 namespace detail {
@@ -231,11 +253,11 @@ int pilot_paths(const NamedRender<T>& o) {
 /// time is counted in the result.
 template <class Accel, class S, class D, Scalar T>
 RenderResult render_policies(const Scene<T>& scene, const Accel& accel, const D& direct, const S& sampler,
-                             PathTracerSettings<T> ts, bool estimate, const NamedRender<T>& o) {
+                             PathTracerSettings<T> ts, const NamedChoices<T>& names, const NamedRender<T>& o) {
     using Tracer = PathTracer<Accel, S, D>;
     const MisEnvironment<T> env(scene);
-    if (!estimate) return render_image(scene, o.image, Tracer(scene, accel, direct, env, ts), sampler);
-    const bool pilot = find_choice(estimate_choices(), "radiance estimate", o.estimate).make == EstimateSource::pilot;
+    if (!names.estimate) return render_image(scene, o.image, Tracer(scene, accel, direct, env, ts), sampler);
+    const bool pilot = names.estimate_source == EstimateSource::pilot;
     if (!pilot) {
         Rgb<T> power, albedo;
         T area;
@@ -259,22 +281,17 @@ RenderResult render_policies(const Scene<T>& scene, const Accel& accel, const D&
 }  // namespace detail
 
 /// Renders `scene` with accelerator `accel` (built over scene.triangles) and the policies `o`
-/// names (check_names first).
+/// names (every name looked up before anything is built).
 template <class Accel, Scalar T>
 RenderResult render_named(const Scene<T>& scene, const Accel& accel, const NamedRender<T>& o) {
-    check_names(o);
+    const NamedChoices<T> names = resolve_names(o);
     PathTracerSettings<T> ts = o.tracer;
-    ts.selection = find_choice(selection_choices(), "BRDF selection", o.selection).make;
-    const RouletteParams<T> params{find_choice(weights_choices<T>(), "roulette weights", o.weights).make(), o.rr_depth,
-                                   o.throughput_cutoff, scene.features().grey};
-    const auto roulette = find_roulette<T>(o.roulette);  // the rule's entry, and "+estimate"
-    const bool estimate = roulette.second;
-    ts.roulette = roulette.first->make(params);
-    const DirectChoice<T> direct = find_choice(direct_choices<T>(), "direct lighting", o.direct).make(scene, ts);
-    const SamplerChoice<T> sampler =
-        find_choice(sampler_choices<T>(), "sampler", o.sampler).make(o.image.width, o.image.height, o.seed);
+    ts.selection = names.selection;
+    ts.roulette = names.roulette->make({names.weights(), o.rr_depth, o.throughput_cutoff, scene.features().grey});
+    const DirectChoice<T> direct = names.direct(scene, ts);
+    const SamplerChoice<T> sampler = names.sampler(o.image.width, o.image.height, o.seed);
     return std::visit(
-        [&](const auto& d, const auto& s) { return detail::render_policies(scene, accel, d, s, ts, estimate, o); }, direct,
+        [&](const auto& d, const auto& s) { return detail::render_policies(scene, accel, d, s, ts, names, o); }, direct,
         sampler);
 }
 
