@@ -10,7 +10,9 @@
 // method's fastest row at E <= 2%. Options: --direct-size N (128), --direct-reps N (3),
 // --hall-sides N (128), --hall-rings N (256), --pillar-sides N (128), --pillar-rings N (128),
 // --kitchen-points N (4608), --thresholds a,b (0.02,0.01), --max-nodes N (300),
-// --lie-samples N (32768), --depth N | --adaptive T (default adaptive, 8), --three-state.
+// --lie-samples N (32768), --depth N | --adaptive T (default adaptive, 8), --three-state,
+// --sparse-samples N (0: 5000 on 512², scaled), --sparse-agreement T (0.05), --sparse-priority P
+// (0: uniform samples; P: that fraction placed by Fernandez 2004, §5.4.3's priorities).
 //
 // path: the path tracer, error against time. Per scene
 // (hall, kitchen), a high-spp reference (the light tree, all threads), then each method at

@@ -1169,6 +1169,60 @@ TEST_CASE("sparse: the samples and every pixel's light are the same for any cons
     MESSAGE("bytes per sample (" << a.size() << " samples): " << a.bytes_per_sample());
 }
 
+TEST_CASE("sparse: sample priorities (§5.4.3) keep the uniform samples, then favour large reconstruction cuts far from samples") {
+    const SparseFixture f;
+    SparseSettings half = sparse_settings(SparseMode::reconstruct), prio = sparse_settings(SparseMode::reconstruct);
+    half.samples = 750;
+    prio.priority = 0.5;  // 750 uniform and 750 prioritized of 3000 candidates
+    const SparseDirect<float> uniform(f.scene, f.accel, LightPointOptions<float>{}, half);
+    const SparseDirect<float> chosen(f.scene, f.accel, LightPointOptions<float>{}, prio);
+    prio.threads = 3;
+    const SparseDirect<float> chosen3(f.scene, f.accel, LightPointOptions<float>{}, prio);
+    const SparseSamples<float>&U = uniform.samples(), &P = chosen.samples();
+    REQUIRE(U.size() > 500);
+    REQUIRE(P.size() == U.size() + 750);
+    REQUIRE(chosen3.samples().size() == P.size());
+    std::set<std::uint64_t> picked;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+        CHECK(chosen3.samples().halton_index(i) == P.halton_index(i));  // any thread count
+        if (i < U.size()) CHECK(P.position(i) == U.position(i));      // the uniform samples first
+        else picked.insert(P.halton_index(i));
+    }
+    // Each candidate's priority under the uniform samples, as the placement computes it.
+    RayQueries<SparseAccel> q(f.accel);
+    const Halton<float> h(2);
+    std::vector<std::pair<double, bool>> w;  // priority, picked
+    for (std::uint64_t index = 751; index <= 750 + 3000; ++index) {
+        std::optional<SurfaceBrdf<float>> brdf;
+        ShadingPoint<float> sp;
+        if (!lie_camera_point(f.scene, f.accel, lie_sample_ray(f.scene.camera, h, index, 1.0f), brdf, sp)) continue;
+        std::vector<SampleNeighbour<float>> near;
+        U.nearest(sp.x, sp.n, 1, near);
+        const double d = near.empty() ? double(U.radius()) : double(near.front().distance);
+        w.push_back({double(std::max(1, uniform.shade(sp, q).nodes)) * d, picked.count(index) > 0});
+    }
+    REQUIRE(w.size() > 2000);
+    CHECK(std::ranges::count_if(w, [](const auto& c) { return c.second; }) == 750);  // only candidates are picked
+    // Drawn in proportion to priority: the top quarter of the candidates' priorities holds far
+    // more than a quarter of the picks. A pick that ignored priority (hypergeometric: mean 187.5
+    // of 750, standard deviation about 10) would exceed 187.5 + 4 sd with probability < 1e-4.
+    std::vector<double> sorted;
+    for (const auto& c : w) sorted.push_back(c.first);
+    std::ranges::sort(sorted);
+    const double top = sorted[sorted.size() * 3 / 4];
+    double top_picks = 0, picked_mean = 0, all_mean = 0;
+    for (const auto& c : w) {
+        top_picks += c.second && c.first >= top;
+        picked_mean += c.second ? c.first / 750.0 : 0.0;
+        all_mean += c.first / double(w.size());
+    }
+    const double sd = std::sqrt(750.0 * 0.25 * 0.75 * (1.0 - 750.0 / double(w.size())));
+    MESSAGE("picks in the top quarter of priorities: " << top_picks << " of 750 (uniform: 187.5 +- " << sd
+                                                       << "); mean priority picked " << picked_mean << ", all " << all_mean);
+    CHECK(top_picks > 187.5 + 4.0 * sd);
+    CHECK(picked_mean > all_mean);
+}
+
 TEST_CASE("sparse: secondary and glossy vertices take the dense cut; bad settings are rejected naming the value") {
     const SparseFixture f;
     SparseSettings s = sparse_settings(SparseMode::interpolate);
@@ -1203,4 +1257,6 @@ TEST_CASE("sparse: secondary and glossy vertices take the dense cut; bad setting
     rejects([](SparseSettings& b) { b.max_radius = 0; }, "max_radius 0");
     rejects([](SparseSettings& b) { b.cut.max_nodes = 0; }, "max_nodes 0");
     rejects([](SparseSettings& b) { b.cut.threshold = -1; }, "threshold -1");
+    rejects([](SparseSettings& b) { b.priority = 1; }, "priority 1");
+    rejects([](SparseSettings& b) { b.candidates = 0; }, "candidates 0");
 }

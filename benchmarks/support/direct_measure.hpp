@@ -168,12 +168,14 @@ inline DirectMethods cut_methods(const DirectScene& d, const std::vector<double>
 
 /// Fernandez 2004, §5.3-5.4's sparse sampling over the scene's lights: "sparse-interp"
 /// (interpolation) and "sparse-recon-<t>" (reconstruction cuts, agreement tolerance t) from one
-/// set of sample cuts at `samples` Halton camera rays, single thread. The sample cuts are
+/// set of sample cuts at `samples` Halton camera rays (a fraction `priority` of them placed by
+/// §5.4.3's priorities), single thread. The sample cuts are
 /// redone for every image: their seconds, lights and rays are in both rows (per_image_*);
 /// the cluster tree's build is the "sparse-build" row.
-inline DirectMethods sparse_methods(const DirectScene& d, int samples, double agreement, const CutSettings& cut) {
+inline DirectMethods sparse_methods(const DirectScene& d, int samples, double agreement, double priority, const CutSettings& cut) {
     SparseSettings s;
     s.mode = SparseMode::interpolate, s.samples = samples, s.agreement = agreement, s.cut = cut, s.threads = 1;
+    s.priority = priority;
     s.aspect = double(d.width) / double(d.height);
     const auto t0 = std::chrono::steady_clock::now();
     const CutDirect<float> tree_only(d.scene, LightPointOptions<float>{}, cut);  // the tree's build alone

@@ -28,6 +28,7 @@ struct DirectOptions {
     int max_nodes = 300;
     int sparse_samples = 0;          // sample cuts per image (0: the seed's density, 5000 on 512²)
     double sparse_agreement = 0.05;  // reconstruction's agreement tolerance (eq. 5.20)
+    double sparse_priority = 0.0;    // the fraction of sample cuts placed by priority (§5.4.3)
     LieSettings lie = [] {
         LieSettings s;
         s.samples = 1 << 15;
@@ -54,6 +55,7 @@ struct DirectOptions {
         else if (f == "--max-nodes") max_nodes = integer();
         else if (f == "--sparse-samples") sparse_samples = integer();
         else if (f == "--sparse-agreement") sparse_agreement = std::stod(value());
+        else if (f == "--sparse-priority") sparse_priority = std::stod(value());
         else if (f == "--lie-samples") lie.samples = integer();
         else if (f == "--depth") lie.subdivision = LieSubdivision::fixed, lie.depth = integer();
         else if (f == "--adaptive") lie.subdivision = LieSubdivision::adaptive, lie.blocker_threshold = integer();
@@ -71,6 +73,7 @@ struct DirectOptions {
         if (thresholds.empty()) throw Error("--thresholds needs at least one value");
         if (sparse_samples < 0) throw Error("--sparse-samples must be >= 0 (0: the seed's density), got " + std::to_string(sparse_samples));
         if (!(sparse_agreement >= 0)) throw Error("--sparse-agreement must be >= 0, got " + std::to_string(sparse_agreement));
+        if (!(sparse_priority >= 0 && sparse_priority < 1)) throw Error("--sparse-priority must be in [0, 1), got " + std::to_string(sparse_priority));
         lie.validate();
     }
     static std::vector<double> numbers(const std::string& text) {
@@ -105,7 +108,7 @@ inline DirectMethods direct_methods(const DirectScene& d, const DirectOptions& o
     append(out, lie_methods(d, o.lie));
     append(out, cut_methods(d, o.thresholds, o.max_nodes));
     const int samples = o.sparse_samples > 0 ? o.sparse_samples : std::max(64, int(5000.0 * o.size * o.size / (512.0 * 512.0)));
-    append(out, sparse_methods(d, samples, o.sparse_agreement, CutSettings{o.thresholds.front(), o.max_nodes}));
+    append(out, sparse_methods(d, samples, o.sparse_agreement, o.sparse_priority, CutSettings{o.thresholds.front(), o.max_nodes}));
     return out;
 }
 

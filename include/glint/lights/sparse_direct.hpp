@@ -37,11 +37,18 @@
 // extra error is where all k samples agree and the point does not (a shadow the samples miss).
 #pragma once
 
+#include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
+#include <utility>
 #include <span>
 #include <vector>
 
+#include <glint/core/random.hpp>
 #include <glint/lights/cut_direct.hpp>
 #include <glint/lights/lie_direct.hpp>
 #include <glint/lights/sparse_samples.hpp>
@@ -65,10 +72,15 @@ public:
     };
 
     /// Samples through `accel` (over scene.triangles); lights as LightPointOptions says.
+    /// With s.priority > 0, the uniform samples first, then those chosen by priority
+    /// (prioritized()).
     template <RayAccelerator A>
     SparseDirect(const Scene<T>& scene, const A& accel, const LightPointOptions<T>& lights, const SparseSettings& s)
-        : dense_((s.validate(), scene), lights, s.cut), settings_(s),
-          samples_(std::make_shared<const SparseSamples<T>>(scene, accel, dense_.tree(), s)) {}
+        : dense_((s.validate(), scene), lights, s.cut), settings_(s) {
+        auto samples = std::make_shared<SparseSamples<T>>(scene, accel, dense_.tree(), s);
+        samples_ = samples;
+        if (s.prioritized() > 0) samples->add(scene, accel, dense_.tree(), s, prioritized(scene, accel, *samples));
+    }
     /// Samples through an accelerator of its own (what a factory that has none calls).
     SparseDirect(const Scene<T>& scene, const LightPointOptions<T>& lights, const SparseSettings& s)
         : SparseDirect(scene, BuildAccel(std::span<const TriangleVertices<T>>(scene.triangles)), lights, s) {}
@@ -88,16 +100,22 @@ public:
     template <class Q>
         requires PointShadowQueries<Q, T>
     Shaded shade(const ShadingPoint<T>& sp, Q& queries) const {
+        return shade(sp, queries, settings_.mode);
+    }
+    /// The same in mode `mode`.
+    template <class Q>
+        requires PointShadowQueries<Q, T>
+    Shaded shade(const ShadingPoint<T>& sp, Q& queries, SparseMode mode) const {
         thread_local std::vector<SampleNeighbour<T>> near;
         samples_->nearest(sp.x, sp.n, settings_.neighbours, near);
         const bool enough = near.size() == std::size_t(settings_.neighbours) && sp.brdf->lobe_count() == 1;
-        if (enough && settings_.mode == SparseMode::interpolate)
+        if (enough && mode == SparseMode::interpolate)
             return Shaded{sp.brdf->kd() / pi<T> * interpolate(near), 0, 0, 0, false};
         const CutReceiver<T> r{sp.x, sp.n, sp.frame, sp.brdf, T(0)};
         const auto visible = [&](const PointLight<T>& l) { return CutDirect<T>::visible(sp, l, queries); };
         Shaded out;
         CutResult<T> c;
-        if (enough && settings_.mode == SparseMode::reconstruct) {
+        if (enough && mode == SparseMode::reconstruct) {
             Agreement a{*samples_, dense_.tree(), near, T(settings_.agreement), 0};
             c = evaluate_cut(dense_.tree(), r, settings_.cut, visible, a);
             out.interpolated = a.interpolated;
@@ -138,6 +156,60 @@ public:
     }
 
 private:
+    /// The Halton indices of the prioritized samples: s.prioritized() of the s.candidates times
+    /// as many points after the uniform ones, drawn without replacement with probability
+    /// proportional to §5.4.3's priority w, the size of the point's reconstruction cut (at
+    /// least 1) times its distance (eq. 5.22) to the nearest sample (the kernel's radius where
+    /// none is within it): the largest keys log(u) / w (Efraimidis and Spirakis 2006). Each
+    /// candidate's key depends on its index only: the same for any thread count. The
+    /// candidates' shadow rays and nodes count in the samples' cost.
+    template <RayAccelerator A>
+    std::vector<std::uint64_t> prioritized(const Scene<T>& scene, const A& accel, SparseSamples<T>& samples) const {
+        const SparseSettings& s = settings_;
+        const int m = s.prioritized() * s.candidates, blocks = (m + 31) / 32;
+        std::vector<Candidate> c(static_cast<std::size_t>(m));
+        const Halton<T> halton(2);
+        detail::parallel_blocks(blocks, s.threads, [&](std::atomic<int>& next) {
+            RayQueries<A> q(accel);
+            for (int b; (b = next++) < blocks;)
+                for (int i = b * 32; i < std::min(m, (b + 1) * 32); ++i)
+                    c[std::size_t(i)] = candidate(scene, accel, q, halton, std::uint64_t(s.uniform() + 1 + i));
+        });
+        for (const Candidate& k : c) samples.count(k.shadow_rays, k.nodes);
+        const auto n = std::min(std::size_t(s.prioritized()), c.size());
+        std::partial_sort(c.begin(), c.begin() + std::ptrdiff_t(n), c.end(),
+                          [](const Candidate& a, const Candidate& b) { return a.key > b.key; });
+        std::vector<std::uint64_t> out;
+        for (std::size_t i = 0; i < n && c[i].key > -infinity<double>; ++i) out.push_back(c[i].index);
+        std::sort(out.begin(), out.end());
+        return out;
+    }
+
+    /// A candidate point of prioritized(): its Halton index, its key log(u) / priority (-inf
+    /// where the camera ray finds no diffuse point), and what shading it cost.
+    struct Candidate {
+        double key = -infinity<double>;
+        std::uint64_t index = 0;
+        int shadow_rays = 0, nodes = 0;
+    };
+    template <RayAccelerator A>
+    Candidate candidate(const Scene<T>& scene, const A& accel, RayQueries<A>& q, const Halton<T>& h, std::uint64_t index) const {
+        Candidate c;
+        c.index = index;
+        std::optional<SurfaceBrdf<T>> brdf;
+        ShadingPoint<T> sp;
+        if (!lie_camera_point(scene, accel, lie_sample_ray(scene.camera, h, index, T(settings_.aspect)), brdf, sp)) return c;
+        std::vector<SampleNeighbour<T>> near;
+        samples_->nearest(sp.x, sp.n, 1, near);
+        const T distance = near.empty() ? samples_->radius() : near.front().distance;
+        const Shaded r = shade(sp, q, SparseMode::reconstruct);
+        c.shadow_rays = r.shadow_rays, c.nodes = r.nodes;
+        const double w = double(std::max(1, r.nodes)) * double(distance);  // §5.4.3's priority
+        Pcg32 rng = Pcg32::hashed(0x5a3b1e5ULL, index);
+        if (w > 0) c.key = std::log(1.0 - rng.uniform<double>()) / w;  // log of a u in (0, 1]
+        return c;
+    }
+
     /// The reconstruction's interpolation test for the cut search: each neighbour's slot in its
     /// packed arrays per node reached (a node is reached only after its parent).
     struct Agreement {

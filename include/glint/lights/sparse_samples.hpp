@@ -18,15 +18,23 @@
 // Repaired from the seed's text: eq. 5.15 uses i both for the sample and for the node's lights;
 // its sum runs over the lights l of C, I_C = sum_l I_l, and x_i is the sample.
 //
+// Sample priorities (§5.4.3): with SparseSettings::priority = p > 0, the first (1 - p) of the
+// samples are uniform over the image (Halton points 1, 2, ...); the rest are drawn among
+// candidate points (the Halton points after them) with probability proportional to a priority,
+// the size of the reconstruction cut at the candidate times its distance to the nearest sample
+// (lights/sparse_direct.hpp computes it and calls add()).
+//
 // The samples' cuts are traced on `threads` threads, each sample into its own slot, and then
-// packed in Halton order: the samples are the same for any thread count.
+// packed in the order of their Halton indices: the samples are the same for any thread count.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <optional>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -50,6 +58,8 @@ struct SparseSettings {
     double agreement = 0.05;  // t_interp of eq. 5.20
     double max_radius = 0.1;  // the k-th sample farther (eq. 5.22) than this fraction of the scene's diagonal: dense cut
     double aspect = 1.0;      // width / height of the image whose view is sampled
+    double priority = 0.0;    // the fraction of `samples` placed by priority (§5.4.3); 0: all uniform
+    int candidates = 4;       // candidate points per prioritized sample
     int threads = 0;          // construction threads (0: all); the samples do not depend on it
     CutSettings cut{};        // the sample cuts, the dense fallback, and reconstruction's evaluation threshold
 
@@ -60,10 +70,15 @@ struct SparseSettings {
         if (!(agreement >= 0) || !std::isfinite(agreement)) bad("agreement " + std::to_string(agreement) + " must be finite and >= 0");
         if (!(max_radius > 0)) bad("max_radius " + std::to_string(max_radius) + " must be > 0");
         if (!(aspect > 0 && aspect < 1e6)) bad("aspect " + std::to_string(aspect) + " must be > 0");
+        if (!(priority >= 0 && priority < 1)) bad("priority " + std::to_string(priority) + " must be in [0, 1)");
+        if (candidates < 1 || candidates > 64) bad("candidates " + std::to_string(candidates) + " must be in [1, 64]");
         cut.validate();
         if (cut.max_nodes == 0 || cut.max_nodes > 16000)
             bad("cut.max_nodes " + std::to_string(cut.max_nodes) + " must be in [1, 16000] (2-byte indices)");
     }
+    /// The samples placed by priority; the others (the first Halton points) are uniform.
+    int prioritized() const { return int(std::lround(priority * double(samples))); }
+    int uniform() const { return samples - prioritized(); }
 };
 
 template <Scalar T>
@@ -72,30 +87,41 @@ public:
     static constexpr std::uint16_t unknown = 0xffff;
     static constexpr T scale = T(4096);
 
-    /// The samples of `scene` seen by its camera, through `accel`, with cuts of `tree`.
+    /// The uniform samples of `scene` seen by its camera (Halton points 1 to s.uniform()),
+    /// through `accel`, with cuts of `tree`.
     template <RayAccelerator A>
     SparseSamples(const Scene<T>& scene, const A& accel, const LightClusterTree<T>& tree, const SparseSettings& s) {
         s.validate();
-        std::vector<Sample> all(std::size_t(s.samples));
-        const int block = 32, blocks = (s.samples + block - 1) / block;
-        const Halton<T> halton(2);
-        detail::parallel_blocks(blocks, s.threads, [&](std::atomic<int>& next) {
-            for (int b; (b = next++) < blocks;)
-                for (int i = b * block; i < std::min(s.samples, (b + 1) * block); ++i)
-                    all[std::size_t(i)] = make_sample(scene, accel, tree, s, halton, std::uint64_t(i + 1));
-        });
-        for (Sample& a : all)
-            if (a.valid) pack(a);
         AABB<T> box;
         for (const auto& t : scene.triangles)
             for (const auto& v : t) box.extend(v);
         radius_ = T(s.max_radius) * glm::length(box.extent());
+        std::vector<std::uint64_t> first(std::size_t(s.uniform()));
+        std::iota(first.begin(), first.end(), std::uint64_t(1));
+        add(scene, accel, tree, s, first);
+    }
+    /// Adds the samples at the Halton points `indices` (the camera's view, as the constructor's).
+    template <RayAccelerator A>
+    void add(const Scene<T>& scene, const A& accel, const LightClusterTree<T>& tree, const SparseSettings& s,
+             std::span<const std::uint64_t> indices) {
+        const int n = int(indices.size()), block = 32, blocks = (n + block - 1) / block;
+        std::vector<Sample> all(indices.size());
+        const Halton<T> halton(2);
+        detail::parallel_blocks(blocks, s.threads, [&](std::atomic<int>& next) {
+            for (int b; (b = next++) < blocks;)
+                for (int i = b * block; i < std::min(n, (b + 1) * block); ++i)
+                    all[std::size_t(i)] = make_sample(scene, accel, tree, s, halton, indices[std::size_t(i)]);
+        });
+        for (Sample& a : all)
+            if (a.valid) pack(a);
         neighbours_ = SampleNeighbours<T>(x_, n_);
     }
     SparseSamples(const SparseSamples&) = delete;  // the kd-tree refers to x_ and n_
     SparseSamples& operator=(const SparseSamples&) = delete;
 
     std::size_t size() const { return x_.size(); }
+    /// The Halton index of sample i's camera ray (lie_sample_ray).
+    std::uint64_t halton_index(std::size_t i) const { return index_[i]; }
     const Vec3<T>& position(std::size_t i) const { return x_[i]; }
     const Vec3<T>& normal(std::size_t i) const { return n_[i]; }
     /// The sample's irradiance (eq. 5.11 summed over its cut).
@@ -103,7 +129,12 @@ public:
     /// Its packed relative irradiances and left-child indices.
     std::span<const std::uint16_t> values(std::size_t i) const { return {values_.data() + first_[i], first_[i + 1] - first_[i]}; }
     std::span<const std::uint16_t> left(std::size_t i) const { return {left_.data() + first_[i], first_[i + 1] - first_[i]}; }
-    /// The shadow rays the samples' cuts cast, and their nodes, in all.
+    /// Adds work done to place the samples (shading the prioritized samples' candidates).
+    void count(int shadow_rays, int nodes) {
+        rays_ += std::uint64_t(shadow_rays);
+        nodes_ += std::uint64_t(nodes);
+    }
+    /// The shadow rays the samples' cuts (and their placement) cast, and their nodes, in all.
     std::uint64_t shadow_rays() const { return rays_; }
     std::uint64_t cut_nodes() const { return nodes_; }
     /// The kernel's largest radius (world units).
@@ -123,6 +154,7 @@ public:
 private:
     struct Sample {
         bool valid = false;
+        std::uint64_t index = 0;
         Vec3<T> x{0}, n{0};
         Rgb<T> E{T(0)};
         std::vector<std::uint16_t> values, left;
@@ -146,7 +178,7 @@ private:
             evaluate_cut(tree, r, s.cut, [&](const PointLight<T>& l) { return CutDirect<T>::visible(sp, l, q); }, &trace);
         std::unordered_map<std::uint32_t, Rgb<T>> on_cut;
         for (const auto& c : trace) on_cut.emplace(c.node, c.estimate * pi<T>);
-        out = Sample{true, sp.x, sp.n, cut.L * pi<T>, {0}, {0}, cut.shadow_rays, cut.nodes};
+        out = Sample{true, index, sp.x, sp.n, cut.L * pi<T>, {0}, {0}, cut.shadow_rays, cut.nodes};
         encode(tree, r, on_cut, tree.root(), 0, out);
         return out;
     }
@@ -179,6 +211,7 @@ private:
     }
 
     void pack(const Sample& a) {
+        index_.push_back(a.index);
         x_.push_back(a.x);
         n_.push_back(a.n);
         E_.push_back(a.E);
@@ -189,6 +222,7 @@ private:
         nodes_ += std::uint64_t(a.nodes);
     }
 
+    std::vector<std::uint64_t> index_;
     std::vector<Vec3<T>> x_, n_;
     std::vector<Rgb<T>> E_;
     std::vector<std::uint16_t> values_, left_;
