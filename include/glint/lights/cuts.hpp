@@ -267,9 +267,13 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
         heap.pop_back();
         const LightNode<T>& n = tree.node(e.node);
         const T allowed = T(s.threshold) * total;
-        const bool by_threshold = e.error <= allowed;
-        if (by_threshold || std::size_t(out.nodes) + heap.size() + 1 >= cap) {
-            search.accept(e, allowed, by_threshold, trace);
+        if (e.error <= allowed) {  // the largest error is within the threshold: so is every other
+            search.accept(e, allowed, true, trace);
+            for (const Entry& rest : heap) search.accept(rest, allowed, true, trace);
+            break;
+        }
+        if (std::size_t(out.nodes) + heap.size() + 1 >= cap) {
+            search.accept(e, allowed, false, trace);
             continue;
         }
         total -= (evals[e.slot].factor * n.intensity).luminance();
