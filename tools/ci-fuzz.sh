@@ -15,7 +15,9 @@ cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -D
       -DGLINT_BUILD_TESTS=OFF -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_EXAMPLES=OFF > build-fuzz/ci.log
 cmake --build build-fuzz -j"$jobs" >> build-fuzz/ci.log
 echo "ci-fuzz: targets built in $((SECONDS - t0)) s"
-for src in tests/fuzz/fuzz_*.cpp; do
+# One target: runs it, prints its line; a failure prints the log's tail and returns 1.
+fuzz_one() {
+  local src=$1 name short log execs cov ft corp
   name=$(basename "$src" .cpp)
   short=${name#fuzz_}
   mkdir -p "build-fuzz/corpus/$short" "build-fuzz/artifacts"
@@ -25,11 +27,15 @@ for src in tests/fuzz/fuzz_*.cpp; do
        "build-fuzz/corpus/$short" "tests/fuzz/corpus/$short" > "$log" 2>&1; then
     tail -40 "$log"
     echo "ci-fuzz: FAILED $name (reproducer in build-fuzz/artifacts/)"
-    exit 1
+    return 1
   fi
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$')
   cov=$(grep -E '^#[0-9]+.*(DONE|pulse|NEW|REDUCE)' "$log" | tail -1 | grep -o 'cov: [0-9]*' | grep -o '[0-9]*')
   ft=$(grep -E '^#[0-9]+.*(DONE|pulse|NEW|REDUCE)' "$log" | tail -1 | grep -o 'ft: [0-9]*' | grep -o '[0-9]*')
   corp=$(ls "build-fuzz/corpus/$short" | wc -l)
   echo "ci-fuzz: $name ${seconds} s: ${execs:-?} execs, cov ${cov:-?} edges, ft ${ft:-?} features, corpus +$corp inputs, 0 crashes"
-done
+}
+# The targets run $jobs at a time (each is single-threaded).
+export -f fuzz_one
+export seconds
+ls tests/fuzz/fuzz_*.cpp | xargs -P "$jobs" -I{} bash -c 'fuzz_one {}' || { echo "ci-fuzz: a target failed"; exit 1; }

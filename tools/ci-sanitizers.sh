@@ -20,11 +20,17 @@ for s in "${suites[@]}"; do targets+=(--target "test_$s"); done
 cmake --build build-asan -j"$jobs" "${targets[@]}" >> build-asan/ci.log || { grep -E "error" build-asan/ci.log | head -20; exit 1; }
 echo "ci-sanitizers: ASan+UBSan suites built in $((SECONDS - t0)) s"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-for s in "${suites[@]}"; do
-  t=$SECONDS
-  ./build-asan/tests/test_"$s" --minimal > "build-asan/test_$s.log" 2>&1 || { cat "build-asan/test_$s.log"; echo "ci-sanitizers: FAILED test_$s under ASan+UBSan"; exit 1; }
+# One suite: runs it, prints its line; a failure prints its log and returns 1. The suites run
+# $jobs at a time.
+run_suite() {
+  local s=$1 t=$SECONDS
+  ./build-asan/tests/test_"$s" --minimal > "build-asan/test_$s.log" 2>&1 || { cat "build-asan/test_$s.log"; echo "ci-sanitizers: FAILED test_$s under ASan+UBSan"; return 1; }
   echo "ci-sanitizers: test_$s passed under ASan+UBSan ($((SECONDS - t)) s)"
-done
+}
+export -f run_suite
+t=$SECONDS
+printf '%s\n' "${suites[@]}" | xargs -P "$jobs" -I{} bash -c 'run_suite {}' || { echo "ci-sanitizers: a suite failed"; exit 1; }
+echo "ci-sanitizers: suites ran in $((SECONDS - t)) s"
 
 t0=$SECONDS
 cmake -S . -B build-tsan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DGLINT_NATIVE=OFF \
