@@ -326,7 +326,7 @@ auto with_tracer(const Scene<float>& scene, const DefaultAccel& accel, const Rou
                  const NamedRender<float>& o, F&& f) {
     PathTracerSettings<float> ts = o.tracer;
     ts.roulette = roulette;
-    const DirectChoice<float> direct = find_choice(direct_choices<float>(), "direct lighting", o.direct).make(scene, ts);
+    const DirectChoice<float> direct = find_choice(direct_choices<float>(), "direct lighting", o.direct).make(scene, ts, o.image);
     return std::visit(
         [&]<class D>(const D& d) {
             return f(PathTracer<DefaultAccel, RandomSampler<float>, D>(scene, accel, d, MisEnvironment<float>(scene), ts));

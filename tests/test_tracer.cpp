@@ -677,6 +677,23 @@ TEST_CASE("pixel_jitter off: every sample of a pixel follows the ray through its
     CHECK(noisy_jittered > 0);
 }
 
+TEST_CASE("the named LIE and sparse policies sample the view of the image they render (its aspect, not a square)") {
+    const Scene<float> s = builtin_scene<float>("lie-hall");
+    RenderSettings image;
+    image.width = 64;
+    image.height = 32;
+    const PathTracerSettings<float> ts;
+    for (const char* name : {"lie", "lie-mask", "sparse-interp", "sparse-recon"}) {
+        CAPTURE(name);
+        const DirectChoice<float> d = find_choice(direct_choices<float>(), "direct lighting", name).make(s, ts, image);
+        REQUIRE(std::holds_alternative<ManyLightDirect<float>>(d));
+        const auto& system = std::get<ManyLightDirect<float>>(d).system();
+        if (const auto* lie = std::get_if<LieDirect<float>>(&system)) CHECK(lie->lie().settings().aspect == 2.0);
+        else if (const auto* sparse = std::get_if<SparseDirect<float>>(&system)) CHECK(sparse->settings().aspect == 2.0);
+        else FAIL("not a LIE or sparse policy");
+    }
+}
+
 TEST_CASE("every built-in scene renders finite, non-negative images with every direct policy") {
     for (const auto& name : builtin_scene_names()) {
         const Scene<float> s = builtin_scene<float>(name);

@@ -90,10 +90,22 @@ inline std::span<const Choice<BrdfSelection>> selection_choices() {
 }
 
 namespace detail {
-/// The LIEs of a named render: 2^15 construction samples of a square view.
-inline LieSettings factory_lie_settings() {
+/// The width / height of the image a named render makes (the view the LIE and sparse samples cover).
+inline double image_aspect(const RenderSettings& image) {
+    return double(std::max(image.width, 1)) / double(std::max(image.height, 1));
+}
+/// The LIEs of a named render: 2^15 construction samples of the image's view.
+inline LieSettings factory_lie_settings(const RenderSettings& image) {
     LieSettings s;
     s.samples = 1 << 15;
+    s.aspect = image_aspect(image);
+    return s;
+}
+/// Sparse sampling in `mode` over the image's view.
+inline SparseSettings factory_sparse_settings(SparseMode mode, const RenderSettings& image) {
+    SparseSettings s;
+    s.mode = mode;
+    s.aspect = image_aspect(image);
     return s;
 }
 }  // namespace detail
@@ -103,36 +115,37 @@ template <Scalar T>
 using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, ManyLightDirect<T>>;
 
 template <Scalar T>
-std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&)>> direct_choices() {
+std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&, const RenderSettings&)>> direct_choices() {
     using D = DirectChoice<T>;
     using Sc = const Scene<T>&;
     using St = const PathTracerSettings<T>&;
-    static constexpr Choice<D (*)(Sc, St)> table[] = {
-        {"mis", "light and BRDF samples by the balance heuristic; lights by power", [](Sc s, St t) { return D(MisDirect<T>(s, t)); }},
-        {"power", "the same as mis (Cycles 3.4's light selection)", [](Sc s, St t) { return D(MisDirect<T>(s, t)); }},
+    using Im = const RenderSettings&;
+    static constexpr Choice<D (*)(Sc, St, Im)> table[] = {
+        {"mis", "light and BRDF samples by the balance heuristic; lights by power", [](Sc s, St t, Im) { return D(MisDirect<T>(s, t)); }},
+        {"power", "the same as mis (Cycles 3.4's light selection)", [](Sc s, St t, Im) { return D(MisDirect<T>(s, t)); }},
         {"tree", "the same, lights by the stochastic light tree (Conty Estevez and Kulla 2018)",
-         [](Sc s, St t) { return D(MisDirect<T>(s, t, LightSelection::tree)); }},
+         [](Sc s, St t, Im) { return D(MisDirect<T>(s, t, LightSelection::tree)); }},
         {"brdf", "no light sampling: emission counts where the walk meets it",
-         [](Sc s, St t) { return D(BrdfOnlyDirect<T>(s, t)); }},
+         [](Sc s, St t, Im) { return D(BrdfOnlyDirect<T>(s, t)); }},
         {"importance", "Szecsi 2009 3.2's light samples, lambda = 0",
-         [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::importance)); }},
+         [](Sc s, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::importance)); }},
         {"correlated", "Szecsi 2009 3.2's correlated estimator, lambda = 1",
-         [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::correlated)); }},
+         [](Sc s, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::correlated)); }},
         {"combined", "Szecsi 2009 3.2's combined estimator, lambda pooled",
-         [](Sc s, St t) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
+         [](Sc s, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
         {"lie", "Fernandez 2004 ch. 3's local illumination environments (biased where unsampled)",
-         [](Sc s, St) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(), false))); }},
+         [](Sc s, St, Im i) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(i), false))); }},
         {"lie-mask", "the same with Weber masking (drops up to 2% per cell)",
-         [](Sc s, St) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(), true))); }},
+         [](Sc s, St, Im i) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(i), true))); }},
         {"cuts", "Fernandez 2004 5.2's dense light cuts over every light, area lights as points (biased)",
-         [](Sc s, St t) { return D(ManyLightDirect<T>(CutDirect<T>(s, t))); }},
+         [](Sc s, St t, Im) { return D(ManyLightDirect<T>(CutDirect<T>(s, t))); }},
         {"sparse-interp", "Fernandez 2004 5.3.1's interpolation of 5000 sample cuts at primary hits (blurs shadow edges)",
-         [](Sc s, St) {
-             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::interpolate})));
+         [](Sc s, St, Im i) {
+             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, detail::factory_sparse_settings(SparseMode::interpolate, i))));
          }},
         {"sparse-recon", "Fernandez 2004 5.3.2's reconstruction cuts from 5000 sample cuts at primary hits (biased)",
-         [](Sc s, St) {
-             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, SparseSettings{.mode = SparseMode::reconstruct})));
+         [](Sc s, St, Im i) {
+             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, detail::factory_sparse_settings(SparseMode::reconstruct, i))));
          }},
     };
     return table;
@@ -210,7 +223,7 @@ template <Scalar T>
 struct NamedChoices {
     const Choice<Roulette<T, 3> (*)(const RouletteParams<T>&)>* roulette;
     bool estimate;  // the roulette name ends in "+estimate"
-    DirectChoice<T> (*direct)(const Scene<T>&, const PathTracerSettings<T>&);
+    DirectChoice<T> (*direct)(const Scene<T>&, const PathTracerSettings<T>&, const RenderSettings&);
     BrdfSelection selection;
     SamplerChoice<T> (*sampler)(int, int, std::uint64_t);
     Rgb<T> (*weights)();
@@ -288,7 +301,7 @@ RenderResult render_named(const Scene<T>& scene, const Accel& accel, const Named
     PathTracerSettings<T> ts = o.tracer;
     ts.selection = names.selection;
     ts.roulette = names.roulette->make({names.weights(), o.rr_depth, o.throughput_cutoff, scene.features().grey});
-    const DirectChoice<T> direct = names.direct(scene, ts);
+    const DirectChoice<T> direct = names.direct(scene, ts, o.image);
     const SamplerChoice<T> sampler = names.sampler(o.image.width, o.image.height, o.seed);
     return std::visit(
         [&](const auto& d, const auto& s) { return detail::render_policies(scene, accel, d, s, ts, names, o); }, direct,
