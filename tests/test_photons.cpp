@@ -4,12 +4,16 @@
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/photons/photon.hpp>
+#include <glint/photons/photon_map.hpp>
 #include <glint/photons/photon_tracing.hpp>
+#include <glint/photons/radiance_estimate.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
@@ -80,14 +84,15 @@ void check_conservation(const Scene<float>& s, float a, bool store_direct) {
 }  // namespace
 
 TEST_CASE("photon: RGBE power and quantized direction round trips") {
-    const Photon p(Vec3<float>(1, 2, 3), Rgb<float>(0.5f, 0.25f, 0.125f), Vec3<float>(0, 0, -1));
+    const Photon p(Vec3<float>(1, 2, 3), Rgb<float>(0.5f, 0.25f, 0.125f), Vec3<float>(0, 0, -1), Vec3<float>(0, 0, 1));
     CHECK(p.power()[0] == doctest::Approx(0.5f).epsilon(1.0 / 256));
     CHECK(p.power()[1] == doctest::Approx(0.25f).epsilon(1.0 / 256));
     CHECK(p.power()[2] == doctest::Approx(0.125f).epsilon(1.0 / 128));
     CHECK(p.direction().z < -0.999f);
-    CHECK(Photon(Vec3<float>(0), Rgb<float>(0.0f), Vec3<float>(1, 0, 0)).power().max() == 0.0f);
+    CHECK(p.normal().z > 0.999f);
+    CHECK(Photon(Vec3<float>(0), Rgb<float>(0.0f), Vec3<float>(1, 0, 0), Vec3<float>(0, 0, 1)).power().max() == 0.0f);
     // A value whose mantissa rounds up to 256 moves to the next exponent.
-    CHECK(Photon(Vec3<float>(0), Rgb<float>(0.9999f), Vec3<float>(1, 0, 0)).power()[0] == doctest::Approx(1.0f));
+    CHECK(Photon(Vec3<float>(0), Rgb<float>(0.9999f), Vec3<float>(1, 0, 0), Vec3<float>(0, 0, 1)).power()[0] == doctest::Approx(1.0f));
     Pcg32 rng(3);
     for (int i = 0; i < 1000; ++i) {
         const Vec3<float> d = square_to_uniform_sphere(Vec2<float>(rng.uniform<float>(), rng.uniform<float>()));
@@ -113,7 +118,7 @@ TEST_CASE("photon tracing: L S+ D paths go to the caustic map, independent of th
     REQUIRE(one.global.size() == three.global.size());
     REQUIRE(one.caustic.size() == three.caustic.size());
     CHECK(std::equal(one.global.begin(), one.global.end(), three.global.begin(), [](const Photon& a, const Photon& b) {
-        return a.position == b.position && a.rgbe == b.rgbe && a.theta == b.theta && a.phi == b.phi;
+        return a.position == b.position && a.rgbe == b.rgbe && a.incoming == b.incoming && a.surface == b.surface;
     }));
     CHECK(one.emitted == 10000);
     CHECK(!one.caustic.empty());
@@ -129,4 +134,133 @@ TEST_CASE("photon tracing: bad settings and dark scenes are refused") {
     Scene<float> dark = s;
     dark.point_lights.clear();
     CHECK_THROWS_WITH_AS(trace_photons(dark, accel, PhotonSettings{}), doctest::Contains("no light"), Error);
+}
+
+namespace {
+
+/// n photons at random points: uniform in the unit cube, or (grid) on a 4^3 lattice so that
+/// many distances tie.
+std::vector<Photon> random_photons(std::size_t n, std::uint64_t seed, bool grid) {
+    Pcg32 rng(seed);
+    std::vector<Photon> out(n);
+    for (Photon& p : out) {
+        for (int a = 0; a < 3; ++a)
+            p.position[a] = grid ? float(rng.bounded(4)) * 0.25f : rng.uniform<float>();
+        p.set_power(Rgb<float>(1.0f));
+    }
+    return out;
+}
+
+/// The squared distances of the k nearest within r (<= r), by brute force, sorted.
+std::vector<float> brute_knn(std::span<const Photon> ps, const Vec3<float>& x, std::size_t k, float r) {
+    const float bound = std::nextafter(r * r, std::numeric_limits<float>::infinity());
+    std::vector<float> d;
+    for (const Photon& p : ps) {
+        const float dx = x.x - p.position.x, dy = x.y - p.position.y, dz = x.z - p.position.z;
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < bound) d.push_back(d2);
+    }
+    std::sort(d.begin(), d.end());
+    d.resize(std::min(d.size(), k));
+    return d;
+}
+
+/// Photons of total power 1 uniform on the unit square at z = 0, arriving from above.
+PhotonMap uniform_plane(std::size_t n, std::uint64_t seed) {
+    Pcg32 rng(seed);
+    std::vector<Photon> ps;
+    for (std::size_t i = 0; i < n; ++i)
+        ps.emplace_back(Vec3<float>(rng.uniform<float>(), rng.uniform<float>(), 0.0f), Rgb<float>(1.0f / float(n)),
+                        Vec3<float>(0, 0, -1), Vec3<float>(0, 0, 1));
+    return PhotonMap(std::move(ps));
+}
+
+}  // namespace
+
+TEST_CASE("photon map: kNN equals brute force (ties, k beyond the set, radius zero, empty map)") {
+    std::vector<PhotonNeighbour> out;
+    for (const bool grid : {false, true})
+        for (const std::size_t n : {std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(7), std::size_t(64),
+                                    std::size_t(1000), std::size_t(4097)}) {
+            const std::vector<Photon> ps = random_photons(n, 11 + n, grid);
+            const PhotonMap map(ps);
+            REQUIRE(map.size() == n);
+            Pcg32 rng(n);
+            for (int q = 0; q < 40; ++q) {
+                const Vec3<float> x = q % 4 == 0 ? ps[rng.bounded(std::uint32_t(n))].position
+                                                 : Vec3<float>(rng.uniform<float>(), rng.uniform<float>(), rng.uniform<float>());
+                for (const std::size_t k : {std::size_t(1), std::size_t(8), std::size_t(50), n + 5})
+                    for (const float r : {std::numeric_limits<float>::infinity(), 0.3f, 0.0f}) {
+                        map.knn(x, k, r, out);
+                        std::vector<float> got;
+                        for (const PhotonNeighbour& f : out) {
+                            const Vec3<float> d = x - map.photon(f.index).position;
+                            CHECK(f.d2 == d.x * d.x + d.y * d.y + d.z * d.z);
+                            got.push_back(f.d2);
+                        }
+                        std::sort(got.begin(), got.end());
+                        CHECK(got == brute_knn(ps, x, k, r));
+                    }
+            }
+        }
+    const PhotonMap empty;
+    empty.knn(Vec3<float>(0), 10, 1.0f, out);
+    CHECK(out.empty());
+    const PhotonMap one(random_photons(5, 1, false));
+    one.knn(Vec3<float>(0), 0, 1.0f, out);
+    CHECK(out.empty());
+    CHECK_THROWS_WITH_AS(one.knn(Vec3<float>(0), 3, -1.0f, out), doctest::Contains("max_radius"), Error);
+}
+
+TEST_CASE("radiance estimate: bias k / (k - 1) without a filter, none with the cone filter k_c = 1") {
+    // On a uniform density the k-th neighbour's disc holds a Beta(k, N - k + 1) share of the
+    // square, so the plain estimate's mean is the irradiance (1) times k / (k - 1); the cone
+    // filter with k_c = 1 gives the k-th photon weight 0 and the others 2/3 on average, which
+    // its normalization c = 1/3 undoes: unbiased. Query points 0.1 apart are nearly independent.
+    const std::size_t k = 20;
+    RadianceEstimateSettings plain{.k = k, .max_radius = 1.0f};
+    RadianceEstimateSettings cone = plain;
+    cone.filter = PhotonFilter::cone;
+    std::vector<PhotonNeighbour> scratch;
+    double sp = 0, sp2 = 0, sc = 0, sc2 = 0, m = 0;
+    for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+        const PhotonMap map = uniform_plane(4000, seed);
+        for (int i = 1; i <= 9; ++i)
+            for (int j = 1; j <= 9; ++j) {
+                const Vec3<float> x(0.1f * float(i), 0.1f * float(j), 0.0f), n(0, 0, 1);
+                const double a = irradiance_estimate(map, x, n, plain, scratch)[0];
+                const double b = irradiance_estimate(map, x, n, cone, scratch)[0];
+                sp += a, sp2 += a * a, sc += b, sc2 += b * b, m += 1;
+                CHECK(irradiance_estimate(map, x, -n, plain, scratch).max() == 0.0f);  // photons from the other side
+            }
+    }
+    const double mp = sp / m, mc = sc / m;
+    const double ep = std::sqrt((sp2 / m - mp * mp) / (m - 1)), ec = std::sqrt((sc2 / m - mc * mc) / (m - 1));
+    const double bias = double(k) / double(k - 1);
+    INFO("plain " << mp << " +- " << ep << " (expected " << bias << "), cone " << mc << " +- " << ec);
+    CHECK(std::abs(mp - bias) < 4 * ep);
+    CHECK(std::abs(mp - 1.0) > 4 * ep);  // the bias is resolved: the test could tell
+    CHECK(std::abs(mc - 1.0) < 4 * ec);
+    CHECK_THROWS_WITH_AS(PrecomputedIrradiance(uniform_plane(10, 1), RadianceEstimateSettings{.k = 0}), doctest::Contains("k must"), Error);
+}
+
+TEST_CASE("precomputed irradiance: the nearest precomputed photon's estimate, normals respected") {
+    const PhotonMap map = uniform_plane(2000, 5);
+    const RadianceEstimateSettings s{.k = 30, .max_radius = 0.5f};
+    const PrecomputedIrradiance pre(map, s, 2);
+    CHECK(pre.size() == 500);
+    std::vector<PhotonNeighbour> scratch;
+    Pcg32 rng(9);
+    for (int q = 0; q < 50; ++q) {
+        const Vec3<float> x(rng.uniform<float>(), rng.uniform<float>(), 0.01f), n(0, 0, 1);
+        std::size_t best = 0;
+        float bd = std::numeric_limits<float>::infinity();
+        for (std::size_t i = 0; i < map.size(); i += 4) {
+            const Vec3<float> d = x - map.photon(i).position;
+            if (glm::dot(d, d) < bd) bd = glm::dot(d, d), best = i;
+        }
+        const Rgb<float> want = irradiance_estimate(map, map.photon(best).position, map.photon(best).normal(), s, scratch);
+        CHECK(pre.lookup(map, x, n, 0.5f, scratch)[0] == want[0]);
+        CHECK(pre.lookup(map, x, -n, 0.5f, scratch).max() == 0.0f);
+    }
 }

@@ -132,7 +132,7 @@ void trace_photon(const Scene<T>& s, const A& accel, const PhotonEmitters<T>& em
     light_walk(s, accel, Roulette<T, 3>::classic(), ray, power, rng, settings.max_depth, 0, [&](const LightWalkVertex<T>& v) {
         if (v.first && !v.via_specular && !settings.store_direct) return;
         const Photon photon{Vec3<float>(v.x), Rgb<float>(float(v.power[0]), float(v.power[1]), float(v.power[2])),
-                            Vec3<float>(v.direction)};
+                            Vec3<float>(v.direction), Vec3<float>(v.n)};
         (v.first && v.via_specular ? caustic : global).push_back(photon);
     });
 }
