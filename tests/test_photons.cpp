@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <glint/intersection/moller_trumbore.hpp>
+#include <glint/photons/final_gather.hpp>
 #include <glint/photons/photon.hpp>
 #include <glint/photons/photon_map.hpp>
 #include <glint/photons/photon_tracing.hpp>
@@ -263,4 +264,35 @@ TEST_CASE("precomputed irradiance: the nearest precomputed photon's estimate, no
         CHECK(pre.lookup(map, x, n, 0.5f, scratch)[0] == want[0]);
         CHECK(pre.lookup(map, x, -n, 0.5f, scratch).max() == 0.0f);
     }
+}
+
+TEST_CASE("final gather: a Lambertian point returns kd under uniform radiance and kd F towards the ceiling") {
+    const Scene<float> s = closed_box(0.5f, false, false);
+    const Accel accel(s.triangles);
+    RayQueries<Accel> queries(accel);
+    const Material<float> m = Material<float>::lambertian(Rgb<float>(0.8f, 0.5f, 0.2f));
+    const Vec3<float> n(0, 1, 0);
+    const Frame<float> frame = Frame<float>::from_normal(n);
+    const SurfaceBrdf<float> brdf(m, Vec3<float>(0, 0, 1));
+    const ShadingPoint<float> sp{Vec3<float>(0, -1, 0), coordinate_error(1.0f), n, frame, &brdf};
+    Pcg32 rng(17);
+    auto uniform = [&] { return rng.uniform<float>(); };
+    const Rgb<float> all = final_gather(queries, sp, 50, uniform,
+                                        [](const Ray<float>&, const StoreHit<float>* h) { return Rgb<float>(h ? 1.0f : 0.0f); });
+    for (int c = 0; c < 3; ++c) CHECK(all[std::size_t(c)] == doctest::Approx(m.kd[std::size_t(c)]).epsilon(1e-4));
+    CHECK(queries.rays() == 50);
+    // Form factor from the floor's centre to the 2 x 2 ceiling 2 above: four 1 x 1 corner
+    // rectangles, F = 4 (2 / (2 pi)) X / sqrt(1 + X^2) atan(X / sqrt(1 + X^2)), X = 1/2.
+    const double X = 0.5, q = X / std::sqrt(1 + X * X), F = 4.0 * 2.0 / (2.0 * pi<double>) * q * std::atan(q);
+    auto ceiling = [&](const Ray<float>&, const StoreHit<float>* h) { return Rgb<float>(h && s.normal(h->id).y < -0.5f ? 1.0f : 0.0f); };
+    double sum = 0, sq = 0;
+    const int runs = 2000;
+    for (int r = 0; r < runs; ++r) {
+        const double v = final_gather(queries, sp, 16, uniform, ceiling)[0] / 0.8;
+        sum += v, sq += v * v;
+    }
+    const double mean = sum / runs, se = std::sqrt((sq / runs - mean * mean) / (runs - 1));
+    INFO("F " << F << " gathered " << mean << " +- " << se);
+    CHECK(std::abs(mean - F) < 4 * se);
+    CHECK(se < 0.01 * F);
 }
