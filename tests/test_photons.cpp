@@ -15,6 +15,7 @@
 #include <glint/photons/photon_map.hpp>
 #include <glint/photons/photon_tracing.hpp>
 #include <glint/photons/radiance_estimate.hpp>
+#include <glint/photons/surface_groups.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
@@ -52,13 +53,12 @@ Scene<float> closed_box(float a, bool area_light, bool specular) {
 std::vector<double> stored_per_photon(const Scene<float>& s, const Accel& accel, const PhotonSettings& st) {
     const PhotonEmitters<float> emitters(s);
     std::vector<double> out;
-    std::vector<Photon> g, c;
     for (std::size_t i = 0; i < st.photons; ++i) {
-        g.clear(), c.clear();
-        trace_photon(s, accel, emitters, st, i, g, c);
+        PhotonSet set;
+        trace_photon(s, accel, emitters, st, i, set);
         double sum = 0;
-        for (const Photon& p : g) sum += p.power().luminance();
-        for (const Photon& p : c) sum += p.power().luminance();
+        for (const Photon& p : set.global) sum += p.power().luminance();
+        for (const Photon& p : set.caustic) sum += p.power().luminance();
         out.push_back(sum);
     }
     return out;
@@ -122,6 +122,9 @@ TEST_CASE("photon tracing: L S+ D paths go to the caustic map, independent of th
         return a.position == b.position && a.rgbe == b.rgbe && a.incoming == b.incoming && a.surface == b.surface;
     }));
     CHECK(one.emitted == 10000);
+    CHECK(one.global_triangle.size() == one.global.size());
+    CHECK(one.caustic_triangle.size() == one.caustic.size());
+    CHECK(one.global_triangle == three.global_triangle);
     CHECK(!one.caustic.empty());
     const PhotonSet plain = trace_photons(closed_box(0.5f, false, false), Accel(closed_box(0.5f, false, false).triangles), st);
     CHECK(plain.caustic.empty());
@@ -295,4 +298,42 @@ TEST_CASE("final gather: a Lambertian point returns kd under uniform radiance an
     INFO("F " << F << " gathered " << mean << " +- " << se);
     CHECK(std::abs(mean - F) < 4 * se);
     CHECK(se < 0.01 * F);
+}
+
+TEST_CASE("surface groups: a corner's two walls are two groups below 90 degrees, and light no longer leaks") {
+    Scene<float> s;
+    const auto white = s.add_material(Material<float>::lambertian(Rgb<float>(0.6f)));
+    using V = Vec3<float>;
+    s.add_quad(V(-1, 0, 1), V(1, 0, 1), V(1, 0, -1), V(-1, 0, -1), white);  // floor, normal +y
+    s.add_quad(V(-1, 0, -1), V(1, 0, -1), V(1, 2, -1), V(-1, 2, -1), white);  // wall, normal +z
+    s.point_lights.push_back(PointLight<float>::isotropic(V(0, 1, 0), Rgb<float>(1.0f)));
+    REQUIRE(s.normal(0).y > 0.99f);
+    REQUIRE(s.normal(2).z > 0.99f);
+    const auto tris = std::span<const TriangleVertices<float>>(s.triangles);
+    CHECK(surface_groups(tris, 1.2f).count == 2);                  // about 69 degrees
+    CHECK(surface_groups(tris, 2.0f).count == 1);                  // about 115 degrees
+    CHECK(surface_groups(tris, 0.0f).count == 4);                  // no angle is below 0: every triangle alone
+    CHECK_THROWS_WITH_AS(surface_groups(tris, -1.0f), doctest::Contains("alpha"), Error);
+    const SurfaceGroups groups = surface_groups(tris, 1.2f);
+    CHECK(groups.group_of[0] == groups.group_of[1]);
+    CHECK(groups.group_of[0] != groups.group_of[2]);
+
+    const Accel accel(s.triangles);
+    const PhotonSet set = trace_photons(s, accel, PhotonSettings{.photons = 20000, .seed = 2, .threads = 2});
+    const GroupedPhotonMaps grouped(set.global, set.global_triangle, groups, 2);
+    const PhotonMap single(set.global);
+    REQUIRE(grouped.groups() == 2);
+    CHECK(grouped.group(0).size() + grouped.group(1).size() == single.size());
+    std::vector<PhotonNeighbour> out;
+    std::size_t leaked_single = 0;
+    for (int i = 0; i < 20; ++i) {
+        const V x(-0.95f + 0.1f * float(i), 0.0f, -0.97f);  // on the floor, near the corner
+        grouped.map_of_triangle(0).knn(x, 50, 0.3f, out);
+        CHECK(out.size() > 20);
+        for (const PhotonNeighbour& q : out) CHECK(grouped.map_of_triangle(0).photon(q.index).normal().y > 0.99f);
+        single.knn(x, 50, 0.3f, out);
+        for (const PhotonNeighbour& q : out) leaked_single += single.photon(q.index).normal().z > 0.99f;
+    }
+    CHECK(leaked_single > 100);  // one map for both walls gathers the wall's photons on the floor
+    CHECK_THROWS_WITH_AS(GroupedPhotonMaps(set.global, std::span<const std::uint32_t>(), groups), doctest::Contains("triangle indices"), Error);
 }

@@ -58,6 +58,9 @@ struct PhotonSettings {
 struct PhotonSet {
     std::vector<Photon> global, caustic;
     std::size_t emitted = 0;
+    /// The scene triangle each photon of `global` and `caustic` lies on (parallel arrays):
+    /// what one map per surface group (photons/surface_groups.hpp) sorts photons by.
+    std::vector<std::uint32_t> global_triangle, caustic_triangle;
 };
 
 /// The scene's emitters chosen by luminance power (emissive triangles, point lights).
@@ -119,10 +122,10 @@ private:
 };
 
 /// Traces photon `index` of a set of `settings.photons` (its own stream), appending what it
-/// stores to `global` and `caustic`.
+/// stores to out's maps (and their triangles).
 template <RayAccelerator A, Scalar T = typename A::scalar_type>
 void trace_photon(const Scene<T>& s, const A& accel, const PhotonEmitters<T>& emitters, const PhotonSettings& settings,
-                  std::uint64_t index, std::vector<Photon>& global, std::vector<Photon>& caustic) {
+                  std::uint64_t index, PhotonSet& out) {
     Pcg32 rng = Pcg32::hashed(settings.seed, index);
     std::array<T, 5> u{};
     for (T& v : u) v = rng.uniform<T>();
@@ -133,7 +136,9 @@ void trace_photon(const Scene<T>& s, const A& accel, const PhotonEmitters<T>& em
         if (v.first && !v.via_specular && !settings.store_direct) return;
         const Photon photon{Vec3<float>(v.x), Rgb<float>(float(v.power[0]), float(v.power[1]), float(v.power[2])),
                             Vec3<float>(v.direction), Vec3<float>(v.n)};
-        (v.first && v.via_specular ? caustic : global).push_back(photon);
+        const bool caustic = v.first && v.via_specular;
+        (caustic ? out.caustic : out.global).push_back(photon);
+        (caustic ? out.caustic_triangle : out.global_triangle).push_back(v.triangle);
     });
 }
 
@@ -153,7 +158,7 @@ PhotonSet trace_photons(const Scene<T>& s, const A& accel, const PhotonSettings&
         for (int b = next++; b < int(blocks); b = next++) {
             const std::size_t end = std::min(settings.photons, std::size_t(b + 1) * block);
             for (std::size_t i = std::size_t(b) * block; i < end; ++i)
-                trace_photon(s, accel, emitters, settings, i, parts[std::size_t(b)].global, parts[std::size_t(b)].caustic);
+                trace_photon(s, accel, emitters, settings, i, parts[std::size_t(b)]);
         }
     });
     PhotonSet out;
@@ -161,6 +166,8 @@ PhotonSet trace_photons(const Scene<T>& s, const A& accel, const PhotonSettings&
     for (const PhotonSet& p : parts) {
         out.global.insert(out.global.end(), p.global.begin(), p.global.end());
         out.caustic.insert(out.caustic.end(), p.caustic.begin(), p.caustic.end());
+        out.global_triangle.insert(out.global_triangle.end(), p.global_triangle.begin(), p.global_triangle.end());
+        out.caustic_triangle.insert(out.caustic_triangle.end(), p.caustic_triangle.begin(), p.caustic_triangle.end());
     }
     return out;
 }

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <span>
 
 #include <glint/core/math.hpp>
@@ -35,6 +36,7 @@ struct LightWalkVertex {
     Vec3<T> direction;            // unit direction the walk arrived in (towards the surface)
     Rgb<T> power;                 // power arriving at x
     const Material<T>* material;  // the hit's material (not specular)
+    std::uint32_t triangle;       // the scene triangle hit
     int depth;                    // scattering vertices before this one (first_depth at the first hit)
     bool first;                   // no non-specular vertex before this one on the walk
     bool via_specular;            // a mirror or dielectric lies between the walk's start and x
@@ -80,7 +82,7 @@ void light_walk(const Scene<T>& s, const A& accel, const R& roulette, Ray<T> ray
             ray = detail::light_spawn(x, n, specular_direction(m, ray.direction, ng, rng.uniform<T>()));
             continue;
         }
-        visit(LightWalkVertex<T>{x, n, safe_normalize(ray.direction), beta * scale, &m, depth, first, via_specular});
+        visit(LightWalkVertex<T>{x, n, safe_normalize(ray.direction), beta * scale, &m, hit.id, depth, first, via_specular});
         first = false;
         const Frame<T> frame = Frame<T>::from_normal(n);
         const SurfaceBrdf<T> brdf(m, frame.to_local(-safe_normalize(ray.direction)));
