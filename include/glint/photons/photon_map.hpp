@@ -8,8 +8,9 @@
 //
 // Query (Jensen 2001, §6.4): the k nearest photons within a maximum radius R (distance <= R),
 // found by a depth-first descent to the query's side with an explicit stack of the far
-// sides still to visit, each with the squared distance to its splitting plane, skipped once
-// that exceeds the current bound. The found photons are collected unordered until k are
+// sides still to visit, each with the squared distance from the query to its cell (Arya and
+// Mount 1993's incremental distance: tighter than the distance to the splitting plane alone),
+// skipped once that exceeds the current bound. The found photons are collected unordered until k are
 // there, then kept as a max-heap on squared distance, whose top bounds the search. Nodes are
 // 16 bytes (position and split axis), kept apart from the photons' payload so that a query
 // reads four nodes per cache line.
@@ -126,30 +127,44 @@ private:
     void search(const Vec3<float>& x, Bound& b, const Accept& accept) const {
         struct Pending {
             std::uint32_t node;
-            float d2;
+            float d2;         // squared distance from x to the subtree's cell
+            Vec3<float> off;  // its per-axis offsets
         };
         std::array<Pending, 64> stack;  // one far side per level: depth <= 32
         int top = 0;
         const auto n = std::uint32_t(nodes_.size());
         const Node* nodes = nodes_.data();
         std::uint32_t i = 0;
+        float cell = 0.0f;           // squared distance from x to node i's cell
+        Vec3<float> off(0.0f);       // per-axis distance from x to that cell
         for (;;) {
             while (i < n) {
                 const Node& nd = nodes[i];
                 const float dx = x.x - nd.p[0], dy = x.y - nd.p[1], dz = x.z - nd.p[2];
                 const float d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 < b.r2 && accept(i)) b.add(d2, i);
-                const float delta = x[int(nd.axis)] - nd.p[nd.axis];
+                const auto a = int(nd.axis);
+                const float delta = x[a] - nd.p[a];
                 const std::uint32_t left = 2 * i + 1;
                 const std::uint32_t near = delta > 0.0f ? left + 1 : left, far = delta > 0.0f ? left : left + 1;
-                if (far < n && delta * delta < b.r2) stack[std::size_t(top++)] = {far, delta * delta};
+                if (far < n) {
+                    // Arya and Mount 1993's incremental distance: the far cell differs from
+                    // this one on axis a only, where it lies |delta| away.
+                    const float far_d2 = cell - off[a] * off[a] + delta * delta;
+                    if (far_d2 < b.r2) {
+                        Pending& p = stack[std::size_t(top++)];
+                        p = {far, far_d2, off};
+                        p.off[a] = delta;
+                    }
+                }
                 i = near;
             }
             do {
                 if (top == 0) return;
                 --top;
             } while (stack[std::size_t(top)].d2 >= b.r2);
-            i = stack[std::size_t(top)].node;
+            const Pending& p = stack[std::size_t(top)];
+            i = p.node, cell = p.d2, off = p.off;
         }
     }
 
