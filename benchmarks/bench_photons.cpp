@@ -12,13 +12,14 @@
 // surface group (alpha = 30 degrees). Larsen: balancing 0.56 -> 0.08 s, irradiance 13.80 ->
 // 5.88 s. Everything on one thread.
 // kNN against nanoflann (KDTreeSingleIndexAdaptor, L2_Simple, leaf size 10, its knnSearch)
-// on the same 10^6 photons, the same random query points, k = 50 and 500, single thread,
+// on the same photons (10^4, 10^5, 10^6), the same random query points, k = 50 and 500, single thread,
 // the two alternating for `passes` passes; glint queries with an unbounded radius. Printed:
 // microseconds per query and glint's speed / nanoflann's; the sums of the found squared
 // distances must agree.
 //
-// Usage: bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S]
+// Usage: bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only]
 // --quick: 20 000 photons, M = 1 and 10, 5 000 scene photons, 200 queries, 1 pass.
+// --photons N: N photons for Table 8.1 and the kNN comparison; --knn-only: the comparison alone.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -54,6 +55,7 @@ namespace {
 struct Options {
     std::size_t photons = 1000000, scene_photons = 50000, queries = 20000;
     std::vector<std::size_t> maps{1, 10, 100, 1000};
+    std::vector<std::size_t> knn_sizes{10000, 100000, 1000000};
     int passes = 5;
     std::uint64_t seed = 1;
 };
@@ -62,12 +64,13 @@ Options parse(int argc, char** argv) {
     Options o;
     bench::Args a(argc, argv);
     while (a.next()) {
-        if (a.flag() == "--quick") o.photons = 20000, o.scene_photons = 5000, o.queries = 200, o.maps = {1, 10}, o.passes = 1;
-        else if (a.flag() == "--photons") o.photons = a.number<std::size_t>(1000, 100000000);
+        if (a.flag() == "--quick") o.photons = 20000, o.scene_photons = 5000, o.queries = 200, o.maps = {1, 10}, o.passes = 1, o.knn_sizes = {20000};
+        else if (a.flag() == "--photons") o.photons = a.number<std::size_t>(1000, 100000000), o.knn_sizes = {o.photons};
+        else if (a.flag() == "--knn-only") o.maps.clear(), o.scene_photons = 0;
         else if (a.flag() == "--queries") o.queries = a.number<std::size_t>(1, 100000000);
         else if (a.flag() == "--passes") o.passes = a.number<int>(1, 1000);
         else if (a.flag() == "--seed") o.seed = a.number<std::uint64_t>();
-        else a.unknown("bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S]");
+        else a.unknown("bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only]");
     }
     return o;
 }
@@ -168,16 +171,16 @@ struct PhotonCloud {
 };
 using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PhotonCloud>, PhotonCloud, 3>;
 
-void versus_nanoflann(const Options& o) {
+void versus_nanoflann(const Options& o, std::size_t size) {
     Pcg32 rng(o.seed + 7);
-    const std::vector<Photon> photons = random_photons(o.photons, rng);
+    const std::vector<Photon> photons = random_photons(size, rng);
     const std::vector<Vec3<float>> points = random_points(o.queries, rng);
     const PhotonMap map(photons);
     const PhotonCloud cloud{photons};
     NanoTree nano(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
     nano.buildIndex();
     std::printf("\n# kNN against nanoflann %d.%d.%d: %zu photons uniform in the unit cube, %zu random queries, one thread, %d alternating passes\n",
-                NANOFLANN_VERSION >> 8, (NANOFLANN_VERSION >> 4) & 15, NANOFLANN_VERSION & 15, o.photons, o.queries, o.passes);
+                NANOFLANN_VERSION >> 8, (NANOFLANN_VERSION >> 4) & 15, NANOFLANN_VERSION & 15, size, o.queries, o.passes);
     std::printf("%6s %12s %14s %16s %8s\n", "k", "glint_us", "nanoflann_us", "glint/nanoflann", "same");
     for (const std::size_t k : {std::size_t(50), std::size_t(500)}) {
         std::vector<PhotonNeighbour> out;
@@ -212,10 +215,10 @@ int main(int argc, char** argv) {
     try {
         const Options o = parse(argc, argv);
         std::printf("# bench_photons (timings single-threaded; ratios from the same run)\n");
-        table_8_1(o);
-        table_8_2(o);
+        if (!o.maps.empty()) table_8_1(o);
+        if (o.scene_photons > 0) table_8_2(o);
 #ifdef GLINT_HAVE_NANOFLANN
-        versus_nanoflann(o);
+        for (const std::size_t size : o.knn_sizes) versus_nanoflann(o, size);
 #else
         std::printf("\n# nanoflann not found: the kNN comparison is skipped\n");
 #endif

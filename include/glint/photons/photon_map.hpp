@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include <glint/core/cache_line_allocator.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/photons/photon.hpp>
@@ -47,13 +48,13 @@ public:
             throw Error("glint::PhotonMap: " + std::to_string(photons.size()) + " photons exceed 2^32 - 1");
         std::vector<Entry> work(photons.size());
         for (std::size_t i = 0; i < photons.size(); ++i) work[i] = {photons[i].position, std::uint32_t(i)};
-        nodes_.resize(photons.size());
+        nodes_.resize(photons.size() + 1);  // node j = photon j - 1: heap indices from 1
         photons_.resize(photons.size());
         if (!work.empty()) balance(work.data(), work.size(), 0, bounds(work), photons);
     }
 
-    std::size_t size() const { return nodes_.size(); }
-    bool empty() const { return nodes_.empty(); }
+    std::size_t size() const { return photons_.size(); }
+    bool empty() const { return photons_.empty(); }
     /// The photons in heap order: index i of a PhotonNeighbour.
     std::span<const Photon> photons() const { return photons_; }
     const Photon& photon(std::size_t i) const { return photons_[i]; }
@@ -71,7 +72,7 @@ public:
                  const Accept& accept) const {
         out.clear();
         if (!(max_radius >= 0.0f)) throw Error("glint::PhotonMap::knn: max_radius must be >= 0 (got " + std::to_string(max_radius) + ")");
-        if (k == 0 || nodes_.empty()) return;
+        if (k == 0 || photons_.empty()) return;
         Bound b{std::nextafter(max_radius * max_radius, std::numeric_limits<float>::infinity()), k, out};
         search(x, b, accept);
     }
@@ -132,22 +133,24 @@ private:
         };
         std::array<Pending, 64> stack;  // one far side per level: depth <= 32
         int top = 0;
-        const auto n = std::uint32_t(nodes_.size());
+        const auto end = std::uint32_t(nodes_.size());  // nodes 1 .. end - 1
         const Node* nodes = nodes_.data();
-        std::uint32_t i = 0;
-        float cell = 0.0f;           // squared distance from x to node i's cell
+        std::uint32_t j = 1;
+        float cell = 0.0f;           // squared distance from x to node j's cell
         Vec3<float> off(0.0f);       // per-axis distance from x to that cell
         for (;;) {
-            while (i < n) {
-                const Node& nd = nodes[i];
+            while (j < end) {
+                const Node& nd = nodes[j];
+                // With 64-byte aligned nodes of 16 bytes, node j's four grandchildren 4j ..
+                // 4j + 3 fill one cache line: fetch it while this level is worked on.
+                __builtin_prefetch(nodes + std::min(4 * j, end - 1));
                 const float dx = x.x - nd.p[0], dy = x.y - nd.p[1], dz = x.z - nd.p[2];
                 const float d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 < b.r2 && accept(i)) b.add(d2, i);
+                if (d2 < b.r2 && accept(j - 1)) b.add(d2, j - 1);
                 const auto a = int(nd.axis);
                 const float delta = x[a] - nd.p[a];
-                const std::uint32_t left = 2 * i + 1;
-                const std::uint32_t near = delta > 0.0f ? left + 1 : left, far = delta > 0.0f ? left : left + 1;
-                if (far < n) {
+                const std::uint32_t near = 2 * j + (delta > 0.0f), far = 2 * j + (delta <= 0.0f);
+                if (far < end) {
                     // Arya and Mount 1993's incremental distance: the far cell differs from
                     // this one on axis a only, where it lies |delta| away.
                     const float far_d2 = cell - off[a] * off[a] + delta * delta;
@@ -157,14 +160,14 @@ private:
                         p.off[a] = delta;
                     }
                 }
-                i = near;
+                j = near;
             }
             do {
                 if (top == 0) return;
                 --top;
             } while (stack[std::size_t(top)].d2 >= b.r2);
             const Pending& p = stack[std::size_t(top)];
-            i = p.node, cell = p.d2, off = p.off;
+            j = p.node, cell = p.d2, off = p.off;
         }
     }
 
@@ -187,7 +190,7 @@ private:
         const std::size_t m = left_size(n);
         std::nth_element(e, e + m, e + n, [axis](const Entry& a, const Entry& b) { return a.p[axis] < b.p[axis]; });
         const Entry& med = e[m];
-        nodes_[heap] = {{med.p.x, med.p.y, med.p.z}, std::uint32_t(axis)};
+        nodes_[heap + 1] = {{med.p.x, med.p.y, med.p.z}, std::uint32_t(axis)};
         photons_[heap] = src[med.index];
         const float split = med.p[axis];
         if (m > 0) {
@@ -202,7 +205,7 @@ private:
         }
     }
 
-    std::vector<Node> nodes_;
+    std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
     std::vector<Photon> photons_;
 };
 
