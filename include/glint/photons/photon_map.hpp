@@ -140,6 +140,15 @@ private:
         Vec3<float> off(0.0f);       // per-axis distance from x to that cell
         for (;;) {
             while (j < end) {
+                if (8 * j >= end) {  // at most two levels below: test them all, no stack
+                    for (const std::uint32_t lo : {j, 2 * j, 4 * j})
+                        for (std::uint32_t c = lo; c < std::min(end, lo + lo / j); ++c) {
+                            const float dx = x.x - nodes[c].p[0], dy = x.y - nodes[c].p[1], dz = x.z - nodes[c].p[2];
+                            const float d2 = dx * dx + dy * dy + dz * dz;
+                            if (d2 < b.r2 && accept(c - 1)) b.add(d2, c - 1);
+                        }
+                    break;
+                }
                 const Node& nd = nodes[j];
                 // With 64-byte aligned nodes of 16 bytes, node j's four grandchildren 4j ..
                 // 4j + 3 fill one cache line: fetch it while this level is worked on.
