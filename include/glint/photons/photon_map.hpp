@@ -10,7 +10,8 @@
 // found by a depth-first descent to the query's side with an explicit stack of the far
 // sides still to visit, each with the squared distance from the query to its cell (Arya and
 // Mount 1993's incremental distance: tighter than the distance to the splitting plane alone),
-// skipped once that exceeds the current bound. The found photons are collected unordered until k are
+// skipped once that exceeds the current bound; a subtree of three levels or fewer is tested
+// whole, without the stack. The found photons are collected unordered until k are
 // there, then kept as a max-heap on squared distance, whose top bounds the search. Nodes are
 // 16 bytes (position and split axis), kept apart from the photons' payload so that a query
 // reads four nodes per cache line.
@@ -60,7 +61,8 @@ public:
     const Photon& photon(std::size_t i) const { return photons_[i]; }
 
     /// The k nearest photons to x within distance max_radius (<= max_radius), into `out`
-    /// (cleared first) as a max-heap on d2 when k were found (out.front(): the farthest),
+    /// (overwritten; its storage is reused, so a caller's vector makes queries allocation-free)
+    /// as a max-heap on d2 when min(k, size()) were found (out.front(): the farthest),
     /// unordered when fewer were. Ties at the k-th distance are broken arbitrarily.
     void knn(const Vec3<float>& x, std::size_t k, float max_radius, std::vector<PhotonNeighbour>& out) const {
         nearest(x, k, max_radius, out, [](std::uint32_t) { return true; });
@@ -70,11 +72,13 @@ public:
     template <class Accept>
     void nearest(const Vec3<float>& x, std::size_t k, float max_radius, std::vector<PhotonNeighbour>& out,
                  const Accept& accept) const {
-        out.clear();
         if (!(max_radius >= 0.0f)) throw Error("glint::PhotonMap::knn: max_radius must be >= 0 (got " + std::to_string(max_radius) + ")");
-        if (k == 0 || photons_.empty()) return;
-        Bound b{std::nextafter(max_radius * max_radius, std::numeric_limits<float>::infinity()), k, out};
+        if (k == 0 || photons_.empty()) return out.clear();
+        k = std::min(k, photons_.size());
+        if (out.size() < k) out.resize(k);  // written in place; shrunk to what was found below
+        Bound b{std::nextafter(max_radius * max_radius, std::numeric_limits<float>::infinity()), k, out.data()};
         search(x, b, accept);
+        out.resize(b.count);
     }
 
 private:
@@ -89,38 +93,38 @@ private:
     struct Box {
         Vec3<float> lo, hi;
     };
-    /// The found set and its bound: all photons closer than `r2` until k are found.
+    /// The found set and its bound: all photons closer than `r2` until k are found, then a
+    /// max-heap of k whose top is the bound.
     struct Bound {
         float r2;
         std::size_t k;
-        std::vector<PhotonNeighbour>& out;
+        PhotonNeighbour* heap;
+        std::size_t count = 0;
 
         void add(float d2, std::uint32_t i) {
-            if (out.size() < k) {
-                out.push_back({d2, i});
-                if (out.size() == k) {
-                    std::make_heap(out.begin(), out.end(), less);
-                    r2 = out.front().d2;
+            if (count < k) {
+                heap[count++] = {d2, i};
+                if (count == k) {
+                    std::make_heap(heap, heap + k, [](const PhotonNeighbour& a, const PhotonNeighbour& b) { return a.d2 < b.d2; });
+                    r2 = heap[0].d2;
                 }
                 return;
             }
             sift_down({d2, i});
-            r2 = out.front().d2;
+            r2 = heap[0].d2;
         }
-        static bool less(const PhotonNeighbour& a, const PhotonNeighbour& b) { return a.d2 < b.d2; }
         /// Replaces the heap's top by e and restores the heap.
         void sift_down(PhotonNeighbour e) {
-            const std::size_t n = out.size();
             std::size_t i = 0;
             for (;;) {
                 std::size_t c = 2 * i + 1;
-                if (c >= n) break;
-                if (c + 1 < n && out[c + 1].d2 > out[c].d2) ++c;
-                if (out[c].d2 <= e.d2) break;
-                out[i] = out[c];
+                if (c >= k) break;
+                if (c + 1 < k && heap[c + 1].d2 > heap[c].d2) ++c;
+                if (heap[c].d2 <= e.d2) break;
+                heap[i] = heap[c];
                 i = c;
             }
-            out[i] = e;
+            heap[i] = e;
         }
     };
 
