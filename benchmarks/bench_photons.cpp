@@ -2,7 +2,7 @@
 // surface group (photons/surface_groups.hpp) against Larsen 2004's Tables 8.1 and 8.2, and
 // the kNN query against nanoflann, the peer a user would pick for kNN in 3D.
 //
-// Table 8.1 (Larsen 2004, §8.3): 10^6 random photons (uniform in the unit cube, 20 bytes
+// Table 8.1 (Larsen 2004, §8.2): 10^6 random photons (uniform in the unit cube, 20 bytes
 // here, 40 in Larsen's) shared at random among M = 1, 10, 100, 1000 maps; the time to
 // balance all M maps, and the time of a 500-nearest lookup in a random one of the maps at a
 // random point (the average over `queries` lookups). Larsen: balancing 5.05, 3.08, 0.70,

@@ -1,12 +1,12 @@
-// glint/photons/photon_map.hpp: the photon map as a left-balanced kd-tree (Jensen 2001, §6.3;
-// Larsen 2004, §4): a complete binary tree stored in heap order (node i's children are
+// glint/photons/photon_map.hpp: the photon map as a left-balanced kd-tree (Jensen 2001, ch. 6;
+// Larsen 2004, §4.3): a complete binary tree stored in heap order (node i's children are
 // 2i + 1 and 2i + 2), so it needs no pointers; each node is a photon.
 //
-// Balancing (Jensen 2001, §6.3.1): each subtree splits its photons on the axis of their
+// Balancing (Jensen 2001, ch. 6): each subtree splits its photons on the axis of their
 // bounding box's largest extent, at the element that makes the left subtree exactly as large
 // as a left-balanced tree's (found by std::nth_element), and recurses: O(n log n).
 //
-// Query (Jensen 2001, §6.4): the k nearest photons within a maximum radius R (distance <= R),
+// Query (Jensen 2001, ch. 6): the k nearest photons within a maximum radius R (distance <= R),
 // found by a depth-first descent to the query's side with an explicit stack of the far
 // sides still to visit, each with the squared distance from the query to its cell (Arya and
 // Mount 1993's incremental distance: tighter than the distance to the splitting plane alone),
