@@ -337,3 +337,25 @@ TEST_CASE("surface groups: a corner's two walls are two groups below 90 degrees,
     CHECK(leaked_single > 100);  // one map for both walls gathers the wall's photons on the floor
     CHECK_THROWS_WITH_AS(GroupedPhotonMaps(set.global, std::span<const std::uint32_t>(), groups), doctest::Contains("triangle indices"), Error);
 }
+
+TEST_CASE("photon map stress: NaN and infinite queries find nothing, far coordinates and equal points work") {
+    std::vector<PhotonNeighbour> out;
+    std::vector<Photon> ps = random_photons(300, 4, false);
+    for (Photon& p : ps) p.position = p.position * 1e-3f + Vec3<float>(1e6f, -1e6f, 1e6f);  // far from the origin
+    const PhotonMap far(ps);
+    far.knn(Vec3<float>(std::nanf(""), 0, 0), 10, 1.0f, out);
+    CHECK(out.empty());
+    far.knn(Vec3<float>(std::numeric_limits<float>::infinity(), 0, 0), 10, std::numeric_limits<float>::infinity(), out);
+    CHECK(out.empty());
+    const Vec3<float> x = ps[7].position;
+    far.knn(x, 10, std::numeric_limits<float>::infinity(), out);
+    std::vector<float> got;
+    for (const PhotonNeighbour& q : out) got.push_back(q.d2);
+    std::sort(got.begin(), got.end());
+    CHECK(got == brute_knn(ps, x, 10, std::numeric_limits<float>::infinity()));
+    const PhotonMap same(std::vector<Photon>(100, ps[0]));  // every photon at one point
+    same.knn(ps[0].position, 30, 0.0f, out);
+    CHECK(out.size() == 30);
+    same.knn(ps[0].position, 300, 0.0f, out);
+    CHECK(out.size() == 100);
+}
