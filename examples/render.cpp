@@ -328,13 +328,23 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
     return 0;
 }
 
+/// glint-render's progress bar on stderr: the share of tiles finished, the seconds spent and
+/// the seconds left at the mean rate so far.
+void progress_bar(const RenderProgress& p) {
+    const int tiles = std::max(p.tiles, 1), bar = 40 * p.tiles_done / tiles;
+    const double left = p.tiles_done > 0 ? p.seconds * double(tiles - p.tiles_done) / double(p.tiles_done) : 0.0;
+    std::fprintf(stderr, "\r[%.*s%.*s] %3d%%  %.1f s, %.1f s left   ", bar, "########################################", 40 - bar,
+                 "                                        ", 100 * p.tiles_done / tiles, p.seconds, left);
+    if (p.tiles_done == tiles) std::fprintf(stderr, "\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
         Args g;
         NamedRender<float> o;
-        o.image.progress = isatty(STDERR_FILENO) != 0;  // a progress bar only on a terminal
+        if (isatty(STDERR_FILENO) != 0) o.image.progress = progress_bar;  // a progress bar only on a terminal
         if (!parse_args(argc, argv, g, o)) return 0;
         Scene<float> scene = g.mesh.empty() ? builtin_scene<float>(g.scene_name) : scene_from_obj(g.mesh, g.env);
         if (!g.env.empty() && g.mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));

@@ -10,9 +10,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #define STB_IMAGE_STATIC
@@ -675,6 +677,43 @@ TEST_CASE("pixel_jitter off: every sample of a pixel follows the ray through its
     CHECK(noisy_centres == 0);
     CHECK(light_pixels > 0);
     CHECK(noisy_jittered > 0);
+}
+
+TEST_CASE("renderer: a host's executor runs the workers and a progress callback sees every tile; the image does not change") {
+    const Scene<float> s = builtin_scene<float>("cornell");
+    NamedRender<float> o;
+    o.image.width = 40;
+    o.image.height = 24;  // 3 x 2 tiles of 16 x 16
+    o.image.spp = 2;
+    o.image.threads = 3;
+    const RenderResult own = render_scene(s, o);
+    int calls = 0, workers = 0;
+    o.image.executor = [&](int n, const std::function<void(int)>& task) {  // the host's pool: its own threads
+        ++calls;
+        workers = n;
+        std::vector<std::thread> pool;
+        for (int i = 0; i < n; ++i) pool.emplace_back([&task, i] { task(i); });
+        for (auto& t : pool) t.join();
+    };
+    std::vector<RenderProgress> seen;
+    o.image.progress = [&](const RenderProgress& p) { seen.push_back(p); };  // never two calls at once
+    const RenderResult hosted = render_scene(s, o);
+    CHECK(calls == 1);
+    CHECK(workers == 3);
+    REQUIRE(seen.size() == 6);
+    for (std::size_t i = 0; i < seen.size(); ++i) {
+        CHECK(seen[i].tiles == 6);
+        CHECK(seen[i].tiles_done == int(i) + 1);
+        if (i > 0) CHECK(seen[i].seconds >= seen[i - 1].seconds);
+    }
+    o.image.executor = [](int n, const std::function<void(int)>& task) {  // one task after another
+        for (int i = 0; i < n; ++i) task(i);
+    };
+    o.image.progress = nullptr;
+    const RenderResult serial = render_scene(s, o);
+    CHECK(hosted.image.pixels == own.image.pixels);
+    CHECK(serial.image.pixels == own.image.pixels);
+    CHECK(hosted.rays == own.rays);
 }
 
 TEST_CASE("the named LIE and sparse policies sample the view of the image they render (its aspect, not a square)") {

@@ -1,7 +1,8 @@
 // glint/tracer/renderer.hpp: the renderer around an integrator.
 //
 // The renderer owns what every image needs whatever the light transport: 16x16 tiles over
-// std::thread workers, the progress bar, the statistics (rays, paths, capped walks, seconds)
+// std::thread workers (or the host's Executor), progress reported to the host's callback (the
+// library prints nothing), the statistics (rays, paths, capped walks, seconds)
 // and each pixel's mean and variance, which it hands to a film policy (Film, the default, keeps
 // the image's layers; any FilmPolicy plugs in). For each pixel sample it asks its camera
 // policy for a ray and the integrator (PathTracer, VplIntegrator, or any type that satisfies
@@ -17,7 +18,7 @@
 #include <chrono>
 #include <concepts>
 #include <cstdint>
-#include <cstdio>
+#include <functional>
 #include <mutex>
 #include <span>
 #include <string>
@@ -33,12 +34,23 @@
 
 namespace glint {
 
+/// What the renderer reports after each finished tile: tiles finished and in all, and the
+/// seconds since the render started.
+struct RenderProgress {
+    int tiles_done = 0, tiles = 0;
+    double seconds = 0;
+};
+
 /// The image's settings; each integrator has its own (PathTracerSettings, VplSettings).
 struct RenderSettings {
     int width = 256, height = 256;
     int spp = 16;
-    int threads = 0;             // 0: std::thread::hardware_concurrency()
-    bool progress = false;       // progress bar on stderr
+    int threads = 0;  // workers; 0: std::thread::hardware_concurrency()
+    /// Runs the workers on the host's threads (empty: glint's own std::threads).
+    Executor executor{};
+    /// Called after each finished tile, from the rendering threads but never two calls at once
+    /// (empty: nothing reported).
+    std::function<void(const RenderProgress&)> progress{};
     /// Camera rays through uniformly jittered points of each pixel (the pixel's area average,
     /// the default) or through its centre only. With centres, an image estimates the radiance
     /// along fixed rays, so that its error against a reference of the same rays is light
@@ -207,9 +219,15 @@ public:
         const int tiles = tx * ((h + tile - 1) / tile);
         film.resize(w, h);
         std::vector<typename I::pixel_state> states(std::size_t(w) * std::size_t(h));
-        std::atomic<int> done{0};
+        int done = 0;  // tiles finished (counted under progress_mutex_)
         std::atomic<std::uint64_t> rays{0}, capped{0};
         const auto start = std::chrono::steady_clock::now();
+        const auto report = [&] {
+            if (!settings_.progress) return;
+            std::lock_guard lock(progress_mutex_);
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            settings_.progress(RenderProgress{++done, tiles, seconds});
+        };
         detail::parallel_blocks(tiles, settings_.threads, [&](std::atomic<int>& next) {
             S sampler = prototype;
             auto thread = detail::make_thread_state(integrator);
@@ -220,11 +238,11 @@ public:
                     for (int x = x0; x < std::min(x0 + tile, w); ++x)
                         tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)],
                                               thread, film);
-                progress(++done, tiles);
+                report();
             }
             rays += tally.rays;
             capped += tally.capped;
-        });
+        }, settings_.executor);
         integrator.finish(film, std::span<const typename I::pixel_state>(states));
         RenderStats out;
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -268,15 +286,6 @@ private:
         }
         film.set_pixel(x, y, mean, n > 1 ? m2 / T(n - 1) / T(n) : Rgb<T>(T(0)));
         return tally;
-    }
-
-    void progress(int done, int tiles) const {
-        if (!settings_.progress) return;
-        std::lock_guard lock(progress_mutex_);
-        const int bar = 40 * done / tiles;
-        std::fprintf(stderr, "\r[%.*s%.*s] %3d%%", bar, "########################################", 40 - bar,
-                     "                                        ", 100 * done / tiles);
-        if (done == tiles) std::fprintf(stderr, "\n");
     }
 
     C camera_;
