@@ -27,6 +27,7 @@
 #include <unistd.h>
 
 #include <glint/io/exr.hpp>
+#include <glint/version.hpp>
 #include <glint/io/obj.hpp>
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
@@ -60,7 +61,7 @@ std::string choices(const char* flag, std::span<const Choice<Make>> table) {
 
 void usage() {
     std::string text =
-        "usage: glint-render (--scene NAME | --mesh FILE.obj) [options]\n"
+        "usage: glint-render (--scene NAME | --mesh FILE.obj) [options]   (or --help, --version)\n"
         "  --scene NAME        a built-in scene:\n" + choice_usage(scene_choices<float>()) +
         "  --mesh FILE         an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky\n"
         "  --env FILE.exr      lat-long environment map (envmap scene or --mesh)\n"
@@ -220,6 +221,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
             return argv[++i];
         };
         if (a == "--help" || a == "-h") { usage(); return false; }
+        if (a == "--version") { std::printf("glint-render %s\n", version_string); return false; }
         else if (a == "--scene") g.scene_name = value();
         else if (a == "--mesh") g.mesh = value();
         else if (a == "--env") g.env = value();

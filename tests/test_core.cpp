@@ -145,3 +145,11 @@ TEST_CASE("glint::Error carries its message") {
         CHECK(std::string(e.what()) == "scene.obj:12: expected 3 vertex indices");
     }
 }
+
+#include <glint/version.hpp>
+
+TEST_CASE("version: the string is the three numbers") {
+    CHECK(std::to_string(glint::version_major) + "." + std::to_string(glint::version_minor) + "." +
+              std::to_string(glint::version_patch) ==
+          glint::version_string);
+}
