@@ -56,6 +56,13 @@ exported with the nearest cosine-power lobe Cycles has, Ashikhmin-Shirley (a Bli
 about the half vector) with exponent 4n (roughness sqrt(sqrt(2 / (4n + 2)))): the two images
 differ (the region means show by how much), each renderer's error is still against its own
 reference, so the time ratio compares how each renders a glossy Cornell box, not one image.
+
+The caustic scenes (cornell-caustics, cornell-caustics-point: a glass sphere and a mirror cube
+in the Cornell box): the dielectric is Cycles' Glass BSDF with the sharp distribution (the ideal
+dielectric, glint's MaterialKind::dielectric), the mirror its Glossy BSDF, sharp; caustics are
+on (reflective and refractive), as for every scene. The point light is a Blender point light of
+radius 0. Region masks leave the sphere and the cube out (they belong to no region; 'image'
+keeps every pixel). tools/caustics_table.py compares glint's photon integrators on them.
 """
 import argparse
 import hashlib
@@ -81,12 +88,14 @@ SCENES = {
     'cornell': ['--scene', 'cornell'],
     'cornell-glossy': ['--scene', 'cornell-glossy'],
     'cornell-bunny': ['--scene', 'cornell', '--insert-mesh', '{bunny}'],
+    'cornell-caustics': ['--scene', 'cornell-caustics'],
+    'cornell-caustics-point': ['--scene', 'cornell-caustics-point'],
     'hall': ['--scene', 'hall'],
     'kitchen': ['--scene', 'kitchen'],
 }
 # Scenes that are not Cornell boxes have one region, 'image': every pixel whose 4 neighbours
 # hit geometry too.
-CORNELL = ('cornell', 'cornell-glossy', 'cornell-bunny')
+CORNELL = ('cornell', 'cornell-glossy', 'cornell-bunny', 'cornell-caustics', 'cornell-caustics-point')
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
