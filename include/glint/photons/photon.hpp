@@ -1,0 +1,76 @@
+// glint/photons/photon.hpp: the compact photon of a photon map, Jensen 2001, §5.2 (the
+// layout Larsen 2004, §4 uses): position as three floats, power in Ward's shared-exponent
+// RGBE form (4 bytes), the incoming direction as two bytes of spherical angles, and a byte
+// for the split axis of the left-balanced kd-tree (photons/photon_map.hpp): 20 bytes.
+//
+// RGBE here rounds each band's mantissa to nearest (Ward's original truncates and decodes
+// at the bin's centre): a band within 2^-9 of the largest band's value, relative, after a
+// round trip; bands below 2^-8 of the largest are flushed towards zero. The direction is
+// quantized to 256 steps of theta in [0, pi] and of phi in [0, 2 pi).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include <glint/core/math.hpp>
+#include <glint/core/spectrum.hpp>
+
+namespace glint {
+
+/// Ward's RGBE: three 8-bit mantissas sharing one exponent, rounded to nearest.
+inline std::array<std::uint8_t, 4> encode_rgbe(float r, float g, float b) {
+    const float v = std::max({r, g, b});
+    if (!(v > 1e-32f) || !std::isfinite(v)) return {0, 0, 0, 0};
+    int e = 0;
+    std::frexp(v, &e);  // v = m 2^e, m in [0.5, 1)
+    float scale = std::ldexp(1.0f, 8 - e);
+    if (std::lround(v * scale) > 255) scale = std::ldexp(1.0f, 8 - ++e);  // rounding reached 256
+    auto q = [&](float c) { return std::uint8_t(std::clamp(std::lround(std::max(c, 0.0f) * scale), 0L, 255L)); };
+    return {q(r), q(g), q(b), std::uint8_t(std::clamp(e + 128, 0, 255))};
+}
+
+inline Rgb<float> decode_rgbe(const std::array<std::uint8_t, 4>& c) {
+    if (c[3] == 0) return Rgb<float>(0.0f);
+    const float f = std::ldexp(1.0f, int(c[3]) - (128 + 8));
+    return Rgb<float>(float(c[0]) * f, float(c[1]) * f, float(c[2]) * f);
+}
+
+/// One stored photon (Jensen 2001, §5.2): 20 bytes.
+struct Photon {
+    Vec3<float> position{0.0f};
+    std::array<std::uint8_t, 4> rgbe{0, 0, 0, 0};  // power, Ward's RGBE
+    std::uint8_t theta = 0, phi = 0;                // incoming direction (travel direction), quantized
+    std::uint8_t plane = 0;                         // split axis in the balanced kd-tree (0, 1, 2; 3: leaf)
+    std::uint8_t flags = 0;                         // free for the user (glint leaves it 0)
+
+    Photon() = default;
+    Photon(const Vec3<float>& p, const Rgb<float>& power, const Vec3<float>& direction) : position(p) {
+        set_power(power);
+        set_direction(direction);
+    }
+
+    Rgb<float> power() const { return decode_rgbe(rgbe); }
+    void set_power(const Rgb<float>& p) { rgbe = encode_rgbe(p[0], p[1], p[2]); }
+
+    /// The unit direction the photon travelled in when it arrived (towards the surface).
+    Vec3<float> direction() const {
+        const float t = (float(theta) + 0.5f) * (pi<float> / 256.0f);
+        const float f = (float(phi) + 0.5f) * (2.0f * pi<float> / 256.0f);
+        return Vec3<float>(std::sin(t) * std::cos(f), std::sin(t) * std::sin(f), std::cos(t));
+    }
+    void set_direction(const Vec3<float>& d) {
+        const float len = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+        const float z = len > 0.0f ? std::clamp(d.z / len, -1.0f, 1.0f) : 1.0f;
+        const float t = std::acos(z);
+        float f = std::atan2(d.y, d.x);
+        if (f < 0.0f) f += 2.0f * pi<float>;
+        theta = std::uint8_t(std::min(255, int(t * (256.0f / pi<float>))));
+        phi = std::uint8_t(std::min(255, int(f * (256.0f / (2.0f * pi<float>)))));
+    }
+};
+
+static_assert(sizeof(Photon) == 20, "glint::Photon is Jensen's 20-byte photon");
+
+}  // namespace glint

@@ -1,0 +1,210 @@
+// glint/photons/photon_tracing.hpp: the first pass of photon mapping (Jensen 2001, ch. 5;
+// Larsen 2004, §4.1): photons emitted from the scene's lights in proportion to their power,
+// traced through every material, stored where they hit a non-specular surface.
+//
+// Emission: an emitter (an emissive triangle, Phi = pi Le A, or a point light, Phi =
+// PointLight::power()) is chosen with probability P_k proportional to the luminance of its
+// power; an area light's photon leaves a uniform point in a cosine-distributed direction, a
+// point light's in a uniform direction through the light's profile (power 4 pi I(w) / P_k).
+// Photon i draws its numbers from its own PCG stream Pcg32::hashed(seed, i), so a photon set
+// is the same for any thread count. Stored powers already carry the 1 / emitted of the
+// estimator: their sum estimates the power arriving at the scene's surfaces.
+//
+// Transport: at a mirror or dielectric the photon follows specular_direction (Fresnel choice
+// for a dielectric); at any other surface it is stored and then scattered by the material's
+// own BRDF (SurfaceBrdf: Lambertian and Phong lobes). Russian roulette on the albedo
+// (Jensen 2001, §5.1.5; the classic rule of sampling/roulette.hpp: continue with probability
+// luminance(albedo), power times albedo / probability), so that in a grey scene every photon
+// keeps the power it was emitted with.
+//
+// Maps: a photon whose path is L S+ D (one or more specular vertices, then the first
+// non-specular one) goes to `caustic`; every other stored photon to `global`, including,
+// when PhotonSettings::store_direct is set (the default), the first hit of direct light
+// (Jensen 2001, §9.1: the global map is what a final gather reads at its secondary hits).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/parallel.hpp>
+#include <glint/core/random.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/photons/photon.hpp>
+#include <glint/sampling/roulette.hpp>
+#include <glint/sampling/warps.hpp>
+#include <glint/tracer/brdf.hpp>
+#include <glint/tracer/scene.hpp>
+#include <glint/tracer/shading.hpp>
+#include <glint/trees/tree.hpp>
+
+namespace glint {
+
+struct PhotonSettings {
+    std::size_t photons = 100000;  // emitted photons
+    std::uint64_t seed = 1;
+    int max_depth = 64;            // cap on a photon's vertices (roulette ends walks long before)
+    int threads = 0;               // 0: hardware concurrency
+    bool store_direct = true;      // the first hit of direct light goes to the global map
+};
+
+struct PhotonSet {
+    std::vector<Photon> global, caustic;
+    std::size_t emitted = 0;
+};
+
+namespace detail {
+
+/// A ray leaving surface point sp (normal n, either side) in direction d, its origin offset
+/// past the point's rounding error (tracer/shading.hpp).
+template <Scalar T>
+Ray<T> photon_ray(const SurfacePoint<T>& sp, const Vec3<T>& n, const Vec3<T>& d) {
+    return Ray<T>{offset_origin(sp.x, sp.err, n, d), d, T(0), infinity<T>};
+}
+
+}  // namespace detail
+
+/// The scene's emitters chosen by luminance power (emissive triangles, point lights).
+template <Scalar T>
+class PhotonEmitters {
+public:
+    explicit PhotonEmitters(const Scene<T>& s) {
+        s.validate();
+        for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+            const Material<T>& m = s.materials[s.material_of[i]];
+            const auto& t = s.triangles[i];
+            const T a = triangle_area(t[0], t[1], t[2]);
+            if (m.emissive() && a > T(0)) push(std::uint32_t(i), false, m.emission * (pi<T> * a));
+        }
+        for (std::size_t i = 0; i < s.point_lights.size(); ++i)
+            if (s.point_lights[i].intensity.max() > T(0)) push(std::uint32_t(i), true, s.point_lights[i].power());
+        if (cdf_.empty() || !(cdf_.back() > T(0)))
+            throw Error("glint::trace_photons: scene '" + s.name + "' has no light that emits");
+    }
+
+    /// Total power of the emitters, per band.
+    const Rgb<T>& power() const { return power_; }
+
+    /// The ray photon leaves on from uniforms u[0..4], with the power it carries (not yet
+    /// divided by the number of photons).
+    Ray<T> emit(const Scene<T>& s, const std::array<T, 5>& u, Rgb<T>& power) const {
+        const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u[0] * cdf_.back());
+        const std::size_t k = std::min<std::size_t>(std::size_t(it - cdf_.begin()), cdf_.size() - 1);
+        const T p = (cdf_[k] - (k ? cdf_[k - 1] : T(0))) / cdf_.back();
+        const Source& e = sources_[k];
+        if (e.point) {
+            const PointLight<T>& l = s.point_lights[e.index];
+            const Vec3<T> d = square_to_uniform_sphere(Vec2<T>(u[3], u[4]));
+            power = l.intensity_towards(d) * (T(4) * pi<T> / p);
+            return Ray<T>{l.position, d, T(0), infinity<T>};
+        }
+        const auto& t = s.triangles[e.index];
+        const Vec3<T> n = s.normal(e.index);
+        const Vec3<T> m = glm::max(glm::max(glm::abs(t[0]), glm::abs(t[1])), glm::abs(t[2]));
+        const SurfacePoint<T> x{sample_triangle(t[0], t[1], t[2], Vec2<T>(u[1], u[2])), coordinate_error(std::max({m.x, m.y, m.z}))};
+        const Vec3<T> d = Frame<T>::from_normal(n).to_world(square_to_cosine_hemisphere(Vec2<T>(u[3], u[4])));
+        power = e.power / p;
+        return detail::photon_ray(x, n, d);
+    }
+
+private:
+    struct Source {
+        std::uint32_t index;
+        bool point;
+        Rgb<T> power;
+    };
+    void push(std::uint32_t i, bool point, const Rgb<T>& phi) {
+        sources_.push_back({i, point, phi});
+        power_ += phi;
+        cdf_.push_back((cdf_.empty() ? T(0) : cdf_.back()) + phi.luminance());
+    }
+    std::vector<Source> sources_;
+    std::vector<T> cdf_;
+    Rgb<T> power_{T(0)};
+};
+
+/// Traces photon `index` of a set of `settings.photons` (its own stream), appending what it
+/// stores to `global` and `caustic`.
+template <RayAccelerator A, Scalar T = typename A::scalar_type>
+void trace_photon(const Scene<T>& s, const A& accel, const PhotonEmitters<T>& emitters, const PhotonSettings& settings,
+                  std::uint64_t index, std::vector<Photon>& global, std::vector<Photon>& caustic) {
+    Pcg32 rng = Pcg32::hashed(settings.seed, index);
+    std::array<T, 5> u{};
+    for (T& v : u) v = rng.uniform<T>();
+    Rgb<T> power;
+    Ray<T> ray = emitters.emit(s, u, power);
+    power /= T(settings.photons);
+    const T scale = power.max();
+    if (!(scale > T(0))) return;
+    Rgb<T> beta = power / scale;  // what the roulette sees
+    const Roulette<T, 3> roulette = Roulette<T, 3>::classic();
+    bool specular_seen = false, diffuse_seen = false;
+    for (int depth = 0; depth < settings.max_depth; ++depth) {
+        StoreHit<T> hit;
+        if (!accel.closest_hit(ray, hit)) return;
+        const Material<T>& m = s.materials[s.material_of[hit.id]];
+        const Vec3<T> ng = s.normal(hit.id);
+        const Vec3<T> n = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
+        const SurfacePoint<T> sp = surface_point(s, hit);
+        if (m.specular()) {
+            const std::array<Rgb<T>, 1> lobe{specular_albedo(m)};
+            const auto sel = select_lobe(roulette, beta, std::span<const Rgb<T>>(lobe), rng.uniform<T>(), depth);
+            if (sel.terminated()) return;
+            beta *= lobe[0] / sel.probability[0];
+            specular_seen = true;
+            ray = detail::photon_ray(sp, n, specular_direction(m, ray.direction, ng, rng.uniform<T>()));
+            continue;
+        }
+        const Rgb<T> p = beta * scale;
+        const Photon photon{Vec3<float>(sp.x), Rgb<float>(float(p[0]), float(p[1]), float(p[2])), Vec3<float>(ray.direction)};
+        if (specular_seen && !diffuse_seen) caustic.push_back(photon);
+        else if (diffuse_seen || settings.store_direct) global.push_back(photon);
+        diffuse_seen = true;
+        const Frame<T> frame = Frame<T>::from_normal(n);
+        const SurfaceBrdf<T> brdf(m, frame.to_local(-safe_normalize(ray.direction)));
+        const T u_sel = rng.uniform<T>();
+        const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
+        const ScatterSample<T, 3> step = scatter(brdf, roulette, beta, u_sel, u_dir, depth);
+        if (step.terminated()) return;
+        beta *= step.weight;
+        if (!(beta.max() > T(0)) || !beta.is_finite()) return;
+        ray = detail::photon_ray(sp, n, frame.to_world(step.direction));
+    }
+}
+
+/// Emits settings.photons photons and traces them (see the header comment), on
+/// settings.threads threads in blocks of photon indices; the result does not depend on the
+/// thread count.
+template <RayAccelerator A, Scalar T = typename A::scalar_type>
+PhotonSet trace_photons(const Scene<T>& s, const A& accel, const PhotonSettings& settings) {
+    if (settings.photons == 0) throw Error("glint::trace_photons: photons must be positive (got 0)");
+    if (settings.max_depth < 1)
+        throw Error("glint::trace_photons: max_depth must be at least 1 (got " + std::to_string(settings.max_depth) + ")");
+    const PhotonEmitters<T> emitters(s);
+    constexpr std::size_t block = 4096;
+    const std::size_t blocks = (settings.photons + block - 1) / block;
+    std::vector<PhotonSet> parts(blocks);
+    detail::parallel_blocks(int(blocks), settings.threads, [&](std::atomic<int>& next) {
+        for (int b = next++; b < int(blocks); b = next++) {
+            const std::size_t end = std::min(settings.photons, std::size_t(b + 1) * block);
+            for (std::size_t i = std::size_t(b) * block; i < end; ++i)
+                trace_photon(s, accel, emitters, settings, i, parts[std::size_t(b)].global, parts[std::size_t(b)].caustic);
+        }
+    });
+    PhotonSet out;
+    out.emitted = settings.photons;
+    for (const PhotonSet& p : parts) {
+        out.global.insert(out.global.end(), p.global.begin(), p.global.end());
+        out.caustic.insert(out.caustic.end(), p.caustic.begin(), p.caustic.end());
+    }
+    return out;
+}
+
+}  // namespace glint
