@@ -33,6 +33,7 @@
 #include <glint/io/scene_json.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
+#include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
 
 #include "vpl_cli.hpp"
@@ -44,9 +45,11 @@ namespace {
 enum class Tonemap { clamp, reinhard };
 constexpr Choice<Tonemap> tonemaps[] = {{"clamp", "exposure, clip at 1, sRGB", Tonemap::clamp},
                                         {"reinhard", "x / (1 + x) first", Tonemap::reinhard}};
-constexpr Choice<bool> integrators[] = {{"path", "the path tracer", false},
-                                        {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, "
-                                                "--direct and --sampler do not apply)", true}};
+enum class IntegratorKind { path, vpl };
+constexpr Choice<IntegratorKind> integrators[] = {
+    {"path", "the path tracer (with --time-budget: passes of --spp samples per pixel)", IntegratorKind::path},
+    {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, --direct and --sampler do not apply; "
+            "no passes)", IntegratorKind::vpl}};
 constexpr Choice<bool> visibilities[] = {{"rays", "shadow rays", false},
                                          {"spheres", "occluder spheres from --insert-mesh or --mesh", true}};
 constexpr Choice<VplGather> gathers[] = {{"all", "every VPL, a shadow ray each", VplGather::all},
@@ -88,9 +91,11 @@ void usage() {
         "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n" +
         choices("  --tonemap NAME      PNG preview", std::span<const Choice<Tonemap>>(tonemaps)) +
         "  --seed N            random seed (default 0)\n"
+        "  --time-budget S     progressive passes until S seconds are spent (path, sppm, photons); prints\n"
+        "                      the passes done\n"
         "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
         "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n" +
-        choices("  --integrator NAME   integrator", std::span<const Choice<bool>>(integrators)) +
+        choices("  --integrator NAME   integrator", std::span<const Choice<IntegratorKind>>(integrators)) +
         "  --vpls N            vpl: shooting walks (default 1024)\n" +
         choices("  --visibility NAME   vpl: visibility", std::span<const Choice<bool>>(visibilities)) +
         "  --spheres K         vpl: occluder spheres (default 100)\n"
@@ -196,6 +201,7 @@ struct Args {
     std::optional<Vec3f> eye, look_at, up;
     std::optional<float> fov_degrees;
     std::string integrator = "path";
+    double time_budget = 0;  // --time-budget: seconds of passes, 0: one render
     VplCliOptions vpl;
 };
 
@@ -205,7 +211,7 @@ void check_names(const Args& g, const NamedRender<float>& o) {
     if (!g.scene_name.empty()) find_choice(scene_choices<float>(), "scene", g.scene_name);
     find_choice(accelerator_choices(), "accelerator", g.accel);
     find_choice(std::span<const Choice<Tonemap>>(tonemaps), "tonemap", g.tonemap);
-    find_choice(std::span<const Choice<bool>>(integrators), "integrator", g.integrator);
+    find_choice(std::span<const Choice<IntegratorKind>>(integrators), "integrator", g.integrator);
     find_choice(std::span<const Choice<bool>>(visibilities), "visibility", g.vpl.visibility);
     find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather);
 }
@@ -248,6 +254,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--fov") g.fov_degrees = to_float(a, value(), 0.01f, 179.0f);
         else if (a == "--tonemap") g.tonemap = value();
         else if (a == "--seed") o.seed = to_u64(a, value());
+        else if (a == "--time-budget") g.time_budget = to_float(a, value(), 1e-3f, 1e6f);
         else if (a == "--insert-mesh") g.insert = value();
         else if (a == "--export-scene") g.export_json = value();
         else if (a == "--integrator") g.integrator = value();
@@ -259,6 +266,8 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else throw Error("unknown option '" + a + "' (see --help)");
     }
     check_names(g, o);
+    if (g.time_budget > 0 && g.integrator == "vpl")
+        throw Error("--time-budget applies to integrators with passes (path, sppm, photons), not '" + g.integrator + "'");
     if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
     if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
         throw Error("--width x --height = " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
@@ -314,7 +323,18 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
     const auto build_start = std::chrono::steady_clock::now();
     const AcceleratorChoice accel = find_choice(accelerator_choices(), "accelerator", g.accel).make(scene.triangles);
     const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
-    const RenderResult r = std::visit([&](const auto& a) { return render_named(scene, *a, o); }, accel);
+    ProgressiveResult r;
+    if (g.time_budget > 0) {
+        // Passes of --spp samples, each with its own seed, averaged.
+        r = render_passes(PassBudget{g.time_budget, 0}, [&](int k) {
+            NamedRender<float> pass = o;
+            pass.seed = o.seed + std::uint64_t(k) * 0x9E3779B97F4A7C15ull;
+            return std::visit([&](const auto& a) { return render_named(scene, *a, pass); }, accel);
+        });
+    } else {
+        static_cast<RenderResult&>(r) = std::visit([&](const auto& a) { return render_named(scene, *a, o); }, accel);
+        r.passes = 1;
+    }
     const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
     write_exr(exr, r.image, exr_layers(r));
     write_png(png, r.image, g.exposure, g.tonemap == "reinhard");
@@ -322,6 +342,9 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
                 scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, double(r.rays) / r.seconds * 1e-6,
                 (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), exr.c_str(),
                 png.c_str());
+    if (g.time_budget > 0)
+        std::printf("passes: %d of %d spp (%d spp) in %.3f s, budget %.3f s\n", r.passes, o.image.spp, r.passes * o.image.spp,
+                    r.seconds, g.time_budget);
     if (r.capped_walks > 0)
         std::fprintf(stderr, "glint-render: warning: %llu walks reached the depth cap of %d vertices and were cut "
                      "(biased); raise --max-depth\n", (unsigned long long)r.capped_walks, o.tracer.max_depth);
