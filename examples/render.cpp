@@ -36,6 +36,7 @@
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
 
+#include "photon_cli.hpp"
 #include "vpl_cli.hpp"
 
 using namespace glint;
@@ -45,11 +46,13 @@ namespace {
 enum class Tonemap { clamp, reinhard };
 constexpr Choice<Tonemap> tonemaps[] = {{"clamp", "exposure, clip at 1, sRGB", Tonemap::clamp},
                                         {"reinhard", "x / (1 + x) first", Tonemap::reinhard}};
-enum class IntegratorKind { path, vpl };
+enum class IntegratorKind { path, vpl, sppm, photons };
 constexpr Choice<IntegratorKind> integrators[] = {
     {"path", "the path tracer (with --time-budget: passes of --spp samples per pixel)", IntegratorKind::path},
     {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, --direct and --sampler do not apply; "
-            "no passes)", IntegratorKind::vpl}};
+            "no passes)", IntegratorKind::vpl},
+    {"sppm", "stochastic progressive photon mapping (Hachisuka and Jensen 2009): --spp passes, or passes for "
+             "--time-budget", IntegratorKind::sppm}};
 constexpr Choice<bool> visibilities[] = {{"rays", "shadow rays", false},
                                          {"spheres", "occluder spheres from --insert-mesh or --mesh", true}};
 constexpr Choice<VplGather> gathers[] = {{"all", "every VPL, a shadow ray each", VplGather::all},
@@ -100,7 +103,9 @@ void usage() {
         choices("  --visibility NAME   vpl: visibility", std::span<const Choice<bool>>(visibilities)) +
         "  --spheres K         vpl: occluder spheres (default 100)\n"
         "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n" +
-        choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers));
+        choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers)) +
+        "  --photons N         sppm, photons: photons emitted per pass (default 100000)\n"
+        "  --radius R          sppm: initial gather radius; photons: largest kNN radius (default 0.05)\n";
     std::fputs(text.c_str(), stdout);
 }
 
@@ -203,6 +208,7 @@ struct Args {
     std::string integrator = "path";
     double time_budget = 0;  // --time-budget: seconds of passes, 0: one render
     VplCliOptions vpl;
+    PhotonCliOptions photons;
 };
 
 /// Every name the command line gives, checked against its table before any file is read.
@@ -263,6 +269,9 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--spheres") g.vpl.spheres = std::size_t(to_int(a, value(), 1, 1 << 20));
         else if (a == "--clamp") g.vpl.clamp = to_float(a, value(), 0.0f, 1e30f);
         else if (a == "--gather") g.vpl.gather = value();
+        else if (a == "--photons") g.photons.photons = std::size_t(to_int(a, value(), 1, 1ll << 32));
+        else if (a == "--radius") g.photons.radius = to_float(a, value(), 1e-6f, 1e6f);
+        else if (a == "--knn") g.photons.knn = int(to_int(a, value(), 1, 1 << 16));
         else throw Error("unknown option '" + a + "' (see --help)");
     }
     check_names(g, o);
@@ -351,6 +360,27 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
     return 0;
 }
 
+/// The render's EXR (no variance layer: progressive photon mapping keeps none) and PNG.
+void write_images(const Args& g, const Image<Rgb<float>>& image) {
+    const std::string stem = g.out.substr(0, g.out.size() - 4);
+    write_exr(stem + ".exr", image, {});
+    write_png(stem + ".png", image, g.exposure, g.tonemap == "reinhard");
+}
+
+/// --integrator sppm: --spp passes, or passes for --time-budget seconds.
+int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+    const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, o.image.spp};
+    const SppmResult r = render_sppm_cli(scene, g.photons, o.image, budget, o.seed);
+    write_images(g, r.image);
+    std::printf("rendered %s with SPPM in %.3f s (build 0 s): %d passes of %zu photons (%zu emitted), mean radius %.4g "
+                "(from %.4g), photon passes %.3f s; wrote %s\n",
+                scene.name.c_str(), r.seconds, r.passes, g.photons.photons, r.photons_emitted, r.mean_radius,
+                g.photons.radius, r.photon_seconds, g.out.c_str());
+    std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
+                g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -371,6 +401,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (g.integrator == "path") return render_path(g, o, scene);
+        if (g.integrator == "sppm") return render_sppm_main(g, o, scene);
         VplSettings st;
         st.seed = o.seed + 1;
         st.gather = find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather).make;
