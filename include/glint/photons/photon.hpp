@@ -1,12 +1,16 @@
 // glint/photons/photon.hpp: the compact photon of a photon map, Jensen 2001, §5.2 (the
 // layout Larsen 2004, §4 uses): position as three floats, power in Ward's shared-exponent
-// RGBE form (4 bytes), the incoming direction as two bytes of spherical angles, and a byte
-// for the split axis of the left-balanced kd-tree (photons/photon_map.hpp): 20 bytes.
+// RGBE form (4 bytes), the incoming direction and the surface normal on the side the photon
+// arrived from as two bytes of spherical angles each: 20 bytes. (Jensen's photon keeps the
+// kd-tree's split axis in its last two bytes; glint's tree, photons/photon_map.hpp, keeps
+// the axes beside the positions, so those bytes hold the normal, which the irradiance
+// estimate and its precomputation, Christensen 1999, use to reject photons of other surfaces.)
 //
 // RGBE here rounds each band's mantissa to nearest (Ward's original truncates and decodes
 // at the bin's centre): a band within 2^-9 of the largest band's value, relative, after a
 // round trip; bands below 2^-8 of the largest are flushed towards zero. The direction is
-// quantized to 256 steps of theta in [0, pi] and of phi in [0, 2 pi).
+// and the normal are quantized to 256 steps of theta in [0, pi] and of phi in [0, 2 pi):
+// within 0.02 rad.
 #pragma once
 
 #include <algorithm>
@@ -37,38 +41,44 @@ inline Rgb<float> decode_rgbe(const std::array<std::uint8_t, 4>& c) {
     return Rgb<float>(float(c[0]) * f, float(c[1]) * f, float(c[2]) * f);
 }
 
+namespace detail {
+
+/// A unit vector as two bytes of spherical angles, and back (the bins' centres).
+inline std::array<std::uint8_t, 2> encode_direction(const Vec3<float>& d) {
+    const float len = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    const float t = std::acos(len > 0.0f ? std::clamp(d.z / len, -1.0f, 1.0f) : 1.0f);
+    float f = std::atan2(d.y, d.x);
+    if (f < 0.0f) f += 2.0f * pi<float>;
+    return {std::uint8_t(std::min(255, int(t * (256.0f / pi<float>)))),
+            std::uint8_t(std::min(255, int(f * (256.0f / (2.0f * pi<float>)))))};
+}
+inline Vec3<float> decode_direction(const std::array<std::uint8_t, 2>& c) {
+    const float t = (float(c[0]) + 0.5f) * (pi<float> / 256.0f);
+    const float f = (float(c[1]) + 0.5f) * (2.0f * pi<float> / 256.0f);
+    return Vec3<float>(std::sin(t) * std::cos(f), std::sin(t) * std::sin(f), std::cos(t));
+}
+
+}  // namespace detail
+
 /// One stored photon (Jensen 2001, §5.2): 20 bytes.
 struct Photon {
     Vec3<float> position{0.0f};
     std::array<std::uint8_t, 4> rgbe{0, 0, 0, 0};  // power, Ward's RGBE
-    std::uint8_t theta = 0, phi = 0;                // incoming direction (travel direction), quantized
-    std::uint8_t plane = 0;                         // split axis in the balanced kd-tree (0, 1, 2; 3: leaf)
-    std::uint8_t flags = 0;                         // free for the user (glint leaves it 0)
+    std::array<std::uint8_t, 2> incoming{0, 0};    // direction it travelled in, quantized
+    std::array<std::uint8_t, 2> surface{0, 0};     // normal on the side it arrived from, quantized
 
     Photon() = default;
-    Photon(const Vec3<float>& p, const Rgb<float>& power, const Vec3<float>& direction) : position(p) {
-        set_power(power);
-        set_direction(direction);
-    }
+    Photon(const Vec3<float>& p, const Rgb<float>& power, const Vec3<float>& direction, const Vec3<float>& normal)
+        : position(p), rgbe(encode_rgbe(power[0], power[1], power[2])),
+          incoming(detail::encode_direction(direction)), surface(detail::encode_direction(normal)) {}
 
     Rgb<float> power() const { return decode_rgbe(rgbe); }
     void set_power(const Rgb<float>& p) { rgbe = encode_rgbe(p[0], p[1], p[2]); }
-
     /// The unit direction the photon travelled in when it arrived (towards the surface).
-    Vec3<float> direction() const {
-        const float t = (float(theta) + 0.5f) * (pi<float> / 256.0f);
-        const float f = (float(phi) + 0.5f) * (2.0f * pi<float> / 256.0f);
-        return Vec3<float>(std::sin(t) * std::cos(f), std::sin(t) * std::sin(f), std::cos(t));
-    }
-    void set_direction(const Vec3<float>& d) {
-        const float len = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-        const float z = len > 0.0f ? std::clamp(d.z / len, -1.0f, 1.0f) : 1.0f;
-        const float t = std::acos(z);
-        float f = std::atan2(d.y, d.x);
-        if (f < 0.0f) f += 2.0f * pi<float>;
-        theta = std::uint8_t(std::min(255, int(t * (256.0f / pi<float>))));
-        phi = std::uint8_t(std::min(255, int(f * (256.0f / (2.0f * pi<float>)))));
-    }
+    Vec3<float> direction() const { return detail::decode_direction(incoming); }
+    void set_direction(const Vec3<float>& d) { incoming = detail::encode_direction(d); }
+    /// The unit surface normal on the side the photon arrived from.
+    Vec3<float> normal() const { return detail::decode_direction(surface); }
 };
 
 static_assert(sizeof(Photon) == 20, "glint::Photon is Jensen's 20-byte photon");

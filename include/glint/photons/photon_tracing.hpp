@@ -41,8 +41,8 @@
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/warps.hpp>
 #include <glint/tracer/brdf.hpp>
+#include <glint/tracer/light_walk.hpp>
 #include <glint/tracer/scene.hpp>
-#include <glint/tracer/shading.hpp>
 #include <glint/trees/tree.hpp>
 
 namespace glint {
@@ -58,18 +58,10 @@ struct PhotonSettings {
 struct PhotonSet {
     std::vector<Photon> global, caustic;
     std::size_t emitted = 0;
+    /// The scene triangle each photon of `global` and `caustic` lies on (parallel arrays):
+    /// what one map per surface group (photons/surface_groups.hpp) sorts photons by.
+    std::vector<std::uint32_t> global_triangle, caustic_triangle;
 };
-
-namespace detail {
-
-/// A ray leaving surface point sp (normal n, either side) in direction d, its origin offset
-/// past the point's rounding error (tracer/shading.hpp).
-template <Scalar T>
-Ray<T> photon_ray(const SurfacePoint<T>& sp, const Vec3<T>& n, const Vec3<T>& d) {
-    return Ray<T>{offset_origin(sp.x, sp.err, n, d), d, T(0), infinity<T>};
-}
-
-}  // namespace detail
 
 /// The scene's emitters chosen by luminance power (emissive triangles, point lights).
 template <Scalar T>
@@ -107,11 +99,10 @@ public:
         }
         const auto& t = s.triangles[e.index];
         const Vec3<T> n = s.normal(e.index);
-        const Vec3<T> m = glm::max(glm::max(glm::abs(t[0]), glm::abs(t[1])), glm::abs(t[2]));
-        const SurfacePoint<T> x{sample_triangle(t[0], t[1], t[2], Vec2<T>(u[1], u[2])), coordinate_error(std::max({m.x, m.y, m.z}))};
+        const Vec3<T> x = sample_triangle(t[0], t[1], t[2], Vec2<T>(u[1], u[2]));
         const Vec3<T> d = Frame<T>::from_normal(n).to_world(square_to_cosine_hemisphere(Vec2<T>(u[3], u[4])));
         power = e.power / p;
-        return detail::photon_ray(x, n, d);
+        return detail::light_spawn(x, n, d);
     }
 
 private:
@@ -131,52 +122,24 @@ private:
 };
 
 /// Traces photon `index` of a set of `settings.photons` (its own stream), appending what it
-/// stores to `global` and `caustic`.
+/// stores to out's maps (and their triangles).
 template <RayAccelerator A, Scalar T = typename A::scalar_type>
 void trace_photon(const Scene<T>& s, const A& accel, const PhotonEmitters<T>& emitters, const PhotonSettings& settings,
-                  std::uint64_t index, std::vector<Photon>& global, std::vector<Photon>& caustic) {
+                  std::uint64_t index, PhotonSet& out) {
     Pcg32 rng = Pcg32::hashed(settings.seed, index);
     std::array<T, 5> u{};
     for (T& v : u) v = rng.uniform<T>();
     Rgb<T> power;
     Ray<T> ray = emitters.emit(s, u, power);
     power /= T(settings.photons);
-    const T scale = power.max();
-    if (!(scale > T(0))) return;
-    Rgb<T> beta = power / scale;  // what the roulette sees
-    const Roulette<T, 3> roulette = Roulette<T, 3>::classic();
-    bool specular_seen = false, diffuse_seen = false;
-    for (int depth = 0; depth < settings.max_depth; ++depth) {
-        StoreHit<T> hit;
-        if (!accel.closest_hit(ray, hit)) return;
-        const Material<T>& m = s.materials[s.material_of[hit.id]];
-        const Vec3<T> ng = s.normal(hit.id);
-        const Vec3<T> n = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
-        const SurfacePoint<T> sp = surface_point(s, hit);
-        if (m.specular()) {
-            const std::array<Rgb<T>, 1> lobe{specular_albedo(m)};
-            const auto sel = select_lobe(roulette, beta, std::span<const Rgb<T>>(lobe), rng.uniform<T>(), depth);
-            if (sel.terminated()) return;
-            beta *= lobe[0] / sel.probability[0];
-            specular_seen = true;
-            ray = detail::photon_ray(sp, n, specular_direction(m, ray.direction, ng, rng.uniform<T>()));
-            continue;
-        }
-        const Rgb<T> p = beta * scale;
-        const Photon photon{Vec3<float>(sp.x), Rgb<float>(float(p[0]), float(p[1]), float(p[2])), Vec3<float>(ray.direction)};
-        if (specular_seen && !diffuse_seen) caustic.push_back(photon);
-        else if (diffuse_seen || settings.store_direct) global.push_back(photon);
-        diffuse_seen = true;
-        const Frame<T> frame = Frame<T>::from_normal(n);
-        const SurfaceBrdf<T> brdf(m, frame.to_local(-safe_normalize(ray.direction)));
-        const T u_sel = rng.uniform<T>();
-        const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
-        const ScatterSample<T, 3> step = scatter(brdf, roulette, beta, u_sel, u_dir, depth);
-        if (step.terminated()) return;
-        beta *= step.weight;
-        if (!(beta.max() > T(0)) || !beta.is_finite()) return;
-        ray = detail::photon_ray(sp, n, frame.to_world(step.direction));
-    }
+    light_walk(s, accel, Roulette<T, 3>::classic(), ray, power, rng, settings.max_depth, 0, [&](const LightWalkVertex<T>& v) {
+        if (v.first && !v.via_specular && !settings.store_direct) return;
+        const Photon photon{Vec3<float>(v.x), Rgb<float>(float(v.power[0]), float(v.power[1]), float(v.power[2])),
+                            Vec3<float>(v.direction), Vec3<float>(v.n)};
+        const bool caustic = v.first && v.via_specular;
+        (caustic ? out.caustic : out.global).push_back(photon);
+        (caustic ? out.caustic_triangle : out.global_triangle).push_back(v.triangle);
+    });
 }
 
 /// Emits settings.photons photons and traces them (see the header comment), on
@@ -195,7 +158,7 @@ PhotonSet trace_photons(const Scene<T>& s, const A& accel, const PhotonSettings&
         for (int b = next++; b < int(blocks); b = next++) {
             const std::size_t end = std::min(settings.photons, std::size_t(b + 1) * block);
             for (std::size_t i = std::size_t(b) * block; i < end; ++i)
-                trace_photon(s, accel, emitters, settings, i, parts[std::size_t(b)].global, parts[std::size_t(b)].caustic);
+                trace_photon(s, accel, emitters, settings, i, parts[std::size_t(b)]);
         }
     });
     PhotonSet out;
@@ -203,6 +166,8 @@ PhotonSet trace_photons(const Scene<T>& s, const A& accel, const PhotonSettings&
     for (const PhotonSet& p : parts) {
         out.global.insert(out.global.end(), p.global.begin(), p.global.end());
         out.caustic.insert(out.caustic.end(), p.caustic.begin(), p.caustic.end());
+        out.global_triangle.insert(out.global_triangle.end(), p.global_triangle.begin(), p.global_triangle.end());
+        out.caustic_triangle.insert(out.caustic_triangle.end(), p.caustic_triangle.begin(), p.caustic_triangle.end());
     }
     return out;
 }

@@ -108,7 +108,7 @@ PixelPoint<T> surface_seen(const Scene<T>& s, RayQueries<A>& rays, Ray<T> ray, i
             return p;
         }
         p.weight *= specular_albedo(m);
-        ray = detail::vpl_spawn(x, n, specular_direction(m, d, ng, T(uniform())));
+        ray = detail::light_spawn(x, n, specular_direction(m, d, ng, T(uniform())));
     }
     return p;
 }
@@ -136,8 +136,8 @@ Rgb<T> direct_light(const Scene<T>& s, RayQueries<A>& rays, const EmitterSet<T>&
         if (!(cos_l > T(0)) || wl.z <= T(0) || !(pdf > T(0))) continue;
         const Rgb<T> f = brdf.f(wl);
         if (f.max() <= T(0)) continue;
-        const Ray<T> r0 = detail::vpl_spawn(p.x, p.n, wi);
-        const Vec3<T> y = point ? ls.position : detail::vpl_spawn(ls.position, ls.normal, -wi).origin;
+        const Ray<T> r0 = detail::light_spawn(p.x, p.n, wi);
+        const Vec3<T> y = point ? ls.position : detail::light_spawn(ls.position, ls.normal, -wi).origin;
         if (!rays.unoccluded(Ray<T>{r0.origin, y - r0.origin, T(0), T(1) - T(1e-4)})) continue;
         sum += ls.towards(-wi) * f * (wl.z * cos_l / (r2 * pdf));
     }

@@ -181,7 +181,7 @@ LightAnimation<T> shoot_light_animation(const Scene<T>& s, const A& accel, const
     for (std::size_t p = 0; p < a.paths.size(); ++p) {
         const AnimationPath<T>& path = a.paths[p];
         if (!path.reusable) continue;
-        const Vec3<T> end = detail::vpl_spawn(path.z1, path.n1, path.n1).origin;
+        const Vec3<T> end = detail::light_spawn(path.z1, path.n1, path.n1).origin;
         for (std::size_t j = 0; j < F; ++j) {
             const T q = point_source_density(positions[j], path.z1, path.n1);
             const bool own = j == path.frame;

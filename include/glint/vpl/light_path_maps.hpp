@@ -275,7 +275,7 @@ std::vector<Rgb<T>> entry_irradiance(const LightPathMap<T>& map, const Scene<T>&
             const T r2 = glm::dot(d, d), c1 = glm::dot(e.n, d) / std::sqrt(r2);
             const T cl = ls.normal == Vec3<T>(0) ? T(1) : -glm::dot(ls.normal, d) / std::sqrt(r2);
             if (!(c1 > T(0)) || !(cl > T(0)) || !(pdf > T(0))) continue;
-            const Ray<T> r0 = detail::vpl_spawn(e.x, e.n, d);
+            const Ray<T> r0 = detail::light_spawn(e.x, e.n, d);
             if (accel.any_hit(Ray<T>{r0.origin, ls.position - r0.origin, T(0), T(1) - T(1e-4)})) continue;
             out[k] += ls.towards(-d / std::sqrt(r2)) * (c1 * cl / (r2 * pdf * T(samples)));
         }

@@ -36,6 +36,7 @@
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/warps.hpp>
 #include <glint/tracer/brdf.hpp>
+#include <glint/tracer/light_walk.hpp>
 #include <glint/tracer/scene.hpp>
 #include <glint/trees/tree.hpp>
 
@@ -157,18 +158,6 @@ struct ShootingOptions {
     int branches = 1;      // continuations from the first hit (path splitting, Szécsi 2009, §7.2.1)
 };
 
-namespace detail {
-
-/// Ray origin offset off a surface of normal n towards dir, scaled to the coordinates.
-template <Scalar T>
-Ray<T> vpl_spawn(const Vec3<T>& x, const Vec3<T>& n, const Vec3<T>& dir) {
-    const T m = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), T(1)});
-    const T eps = m * T(sizeof(T) == 4 ? 2e-5 : 1e-9);
-    return Ray<T>{x + (glm::dot(dir, n) >= T(0) ? n : -n) * eps, dir, T(0), infinity<T>};
-}
-
-}  // namespace detail
-
 /// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
 /// appending a VPL at each non-specular hit; roulette decides on the normalized throughput.
 /// `first_depth` counts the scattering vertices before the ray (for the roulette).
@@ -176,37 +165,9 @@ template <RayAccelerator A, class R, Scalar T = typename A::scalar_type>
     requires ShootingRoulette<R, T>
 void trace_shooting_walk(const Scene<T>& s, const A& accel, const R& roulette, Ray<T> ray, const Rgb<T>& power,
                          Pcg32& rng, int max_depth, std::vector<Vpl<T>>& out, int first_depth = 0) {
-    const T scale = power.max();
-    if (!(scale > T(0)) || !power.is_finite()) return;
-    Rgb<T> beta = power / scale;  // colour of the power, max 1: what the roulette sees
-    for (int depth = first_depth; depth < max_depth; ++depth) {
-        StoreHit<T> hit;
-        if (!accel.closest_hit(ray, hit)) return;
-        const Material<T>& m = s.materials[s.material_of[hit.id]];
-        const Vec3<T> ng = s.normal(hit.id);
-        const Vec3<T> n = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
-        const Vec3<T> x = ray.at(hit.t);
-        if (m.specular()) {
-            const Rgb<T> a = specular_albedo(m);
-            const std::array<Rgb<T>, 1> lobes{a};
-            const auto sel = select_lobe(roulette, beta, std::span<const Rgb<T>>(lobes), rng.uniform<T>(), depth);
-            if (sel.terminated()) return;
-            beta *= a / sel.probability[0];
-            const Vec3<T> d = specular_direction(m, ray.direction, ng, rng.uniform<T>());
-            ray = detail::vpl_spawn(x, n, d);
-            continue;
-        }
-        if (m.kd.max() > T(0)) out.push_back({x, n, beta * scale, m.kd});
-        const Frame<T> frame = Frame<T>::from_normal(n);
-        const SurfaceBrdf<T> brdf(m, frame.to_local(-safe_normalize(ray.direction)));
-        const T u_sel = rng.uniform<T>();
-        const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
-        const ScatterSample<T, 3> step = scatter(brdf, roulette, beta, u_sel, u_dir, depth);
-        if (step.terminated()) return;
-        beta *= step.weight;
-        if (!(beta.max() > T(0)) || !beta.is_finite()) return;
-        ray = detail::vpl_spawn(x, n, frame.to_world(step.direction));
-    }
+    light_walk(s, accel, roulette, ray, power, rng, max_depth, first_depth, [&](const LightWalkVertex<T>& v) {
+        if (v.material->kd.max() > T(0)) out.push_back({v.x, v.n, v.power, v.material->kd});
+    });
 }
 
 /// A path tree from a Lambertian point z1 (normal n1 on the lit side, material m) that
@@ -227,7 +188,7 @@ void shoot_path_tree(const Scene<T>& s, const A& accel, const R& roulette, const
         const Vec2<T> u_dir(rng.uniform<T>(), rng.uniform<T>());
         const ScatterSample<T, 3> step = scatter(brdf, roulette, beta, u_sel, u_dir, 0);
         if (step.terminated()) continue;
-        trace_shooting_walk(s, accel, roulette, detail::vpl_spawn(z1, n1, frame.to_world(step.direction)),
+        trace_shooting_walk(s, accel, roulette, detail::light_spawn(z1, n1, frame.to_world(step.direction)),
                             power * step.weight / T(branches), rng, max_depth, out, 1);
     }
 }
@@ -248,7 +209,7 @@ std::vector<Vpl<T>> shoot_scene_vpls(const Scene<T>& s, const A& accel, const R&
         const Vec2<T> up(rng.uniform<T>(), rng.uniform<T>()), ud(rng.uniform<T>(), rng.uniform<T>());
         const LightSample<T> ls = emitters.sample(u, up, ud);
         const Ray<T> ray = ls.normal == Vec3<T>(0) ? Ray<T>{ls.position, ls.direction, T(0), infinity<T>}
-                                                   : detail::vpl_spawn(ls.position, ls.normal, ls.direction);
+                                                   : detail::light_spawn(ls.position, ls.normal, ls.direction);
         trace_shooting_walk(s, accel, roulette, ray, ls.power / T(walks), rng, opt.max_depth, out);
     }
     return out;
