@@ -52,7 +52,9 @@ constexpr Choice<IntegratorKind> integrators[] = {
     {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, --direct and --sampler do not apply; "
             "no passes)", IntegratorKind::vpl},
     {"sppm", "stochastic progressive photon mapping (Hachisuka and Jensen 2009): --spp passes, or passes for "
-             "--time-budget", IntegratorKind::sppm}};
+             "--time-budget", IntegratorKind::sppm},
+    {"photons", "photon mapping (Jensen 2001): direct light, caustic map, final gather from the global map; with "
+                "--time-budget, passes of new maps", IntegratorKind::photons}};
 constexpr Choice<bool> visibilities[] = {{"rays", "shadow rays", false},
                                          {"spheres", "occluder spheres from --insert-mesh or --mesh", true}};
 constexpr Choice<VplGather> gathers[] = {{"all", "every VPL, a shadow ray each", VplGather::all},
@@ -105,7 +107,9 @@ void usage() {
         "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n" +
         choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers)) +
         "  --photons N         sppm, photons: photons emitted per pass (default 100000)\n"
-        "  --radius R          sppm: initial gather radius; photons: largest kNN radius (default 0.05)\n";
+        "  --radius R          sppm: initial gather radius; photons: largest kNN radius (default 0.05)\n"
+        "  --knn K             photons: photons per radiance estimate (default 50)\n"
+        "  --final-gather N    photons: final gather rays per pixel sample (default 64)\n";
     std::fputs(text.c_str(), stdout);
 }
 
@@ -272,6 +276,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--photons") g.photons.photons = std::size_t(to_int(a, value(), 1, 1ll << 32));
         else if (a == "--radius") g.photons.radius = to_float(a, value(), 1e-6f, 1e6f);
         else if (a == "--knn") g.photons.knn = int(to_int(a, value(), 1, 1 << 16));
+        else if (a == "--final-gather") g.photons.gather_rays = int(to_int(a, value(), 0, 1 << 16));
         else throw Error("unknown option '" + a + "' (see --help)");
     }
     check_names(g, o);
@@ -381,6 +386,20 @@ int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<flo
     return 0;
 }
 
+/// --integrator photons: one render of --spp samples, or passes of new maps for --time-budget.
+int render_photons_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+    const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, 1};
+    const ProgressiveResult r = render_photons_cli(scene, g.photons, o.image, budget, o.seed);
+    write_images(g, r.image);
+    std::printf("rendered %s with photon maps in %.3f s (build 0 s): %zu + %zu photons per pass, k %d, radius %.4g, "
+                "%d gather rays, %d spp per pass; wrote %s\n",
+                scene.name.c_str(), r.seconds, g.photons.photons, 4 * g.photons.photons, g.photons.knn, g.photons.radius,
+                g.photons.gather_rays, o.image.spp, g.out.c_str());
+    std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
+                g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -402,6 +421,7 @@ int main(int argc, char** argv) {
         }
         if (g.integrator == "path") return render_path(g, o, scene);
         if (g.integrator == "sppm") return render_sppm_main(g, o, scene);
+        if (g.integrator == "photons") return render_photons_main(g, o, scene);
         VplSettings st;
         st.seed = o.seed + 1;
         st.gather = find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather).make;

@@ -245,6 +245,8 @@ def blender_settings(sc, job, scene_json):
     r.film_transparent = False
     c.pixel_filter_type, c.filter_width = 'BOX', 1.0
     c.samples = job['spp']
+    if job.get('time_limit'):  # equal-time runs: samples until the limit (tools/caustics_table.py)
+        c.time_limit = job['time_limit']
     c.seed = job['seed']
     c.use_animated_seed = False
     c.use_adaptive_sampling = False
@@ -332,9 +334,9 @@ class Runner:
         return run(self.pin + [self.a.blender, '-b', '--factory-startup', '-t', '1', '--python', os.path.abspath(__file__),
                                '--', '--job', job_path])
 
-    def cycles(self, scene_json, spp, seed, out):
+    def cycles(self, scene_json, spp, seed, out, time_limit=0):
         job = out + '.job.json'
-        json.dump({'scene': scene_json, 'spp': spp, 'seed': seed, 'out': out}, open(job, 'w'))
+        json.dump({'scene': scene_json, 'spp': spp, 'seed': seed, 'out': out, 'time_limit': time_limit}, open(job, 'w'))
         self.blender(job)
         t = json.load(open(out + '.json'))
         return read_rgb(out), {'cpu': t['cpu_seconds'], 'wall': t['seconds']}
