@@ -339,10 +339,10 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
     const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
     ProgressiveResult r;
     if (g.time_budget > 0) {
-        // Passes of --spp samples, each with its own seed, averaged.
+        // Passes of --spp samples continuing one sequence (pass k: samples k spp ..), averaged.
         r = render_passes(PassBudget{g.time_budget, 0}, [&](int k) {
             NamedRender<float> pass = o;
-            pass.seed = o.seed + std::uint64_t(k) * 0x9E3779B97F4A7C15ull;
+            pass.image.first_sample = std::uint64_t(k) * std::uint64_t(o.image.spp);
             return std::visit([&](const auto& a) { return render_named(scene, *a, pass); }, accel);
         });
     } else {

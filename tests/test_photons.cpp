@@ -444,8 +444,11 @@ TEST_CASE("progressive passes: the budget's pass count, the mean image and summe
     CHECK(r.image.at(0, 0)[0] == doctest::Approx(1.5));   // (0 + 1 + 2 + 3) / 4
     CHECK(r.variance.at(0, 0)[0] == doctest::Approx(0.25));  // 4 * 1 / 16
     CHECK(r.rays == 40);
-    // A time budget stops after the pass that spends it (at least one pass).
+    // A time budget runs the passes that fit (at least one).
     CHECK(render_passes(PassBudget{1e-9, 0}, pass).passes == 1);
+    CHECK(!PassBudget{1.0, 0}.stop(3, 0.70));  // a 4th pass of 0.23 s ends at 0.93 s: it runs
+    CHECK(PassBudget{1.0, 0}.stop(3, 0.76));   // one of 0.25 s would end at 1.01 s: stop
+    CHECK(PassBudget{0, 5}.stop(5, 0.0));
     CHECK_THROWS_AS(render_passes(PassBudget{0, 0}, pass), Error);
     CHECK_THROWS_AS(render_passes(PassBudget{-1, 0}, pass), Error);
 }

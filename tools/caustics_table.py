@@ -13,7 +13,9 @@ sharp, caustics on), every render on one thread pinned to --core.
 
 Errors: each renderer against its own long path-traced reference, rendered as two halves of
 --ref-spp / 2 spp (glint's path tracer; Cycles), as tools/peer_cycles.py measures its rows:
-RMSE = sqrt(MSE - mean((A - B)^2) / 4), the reference's own noise taken out. glint's photon
+RMSE = sqrt(MSE - mean((A - B)^2) / 4), the reference's own noise taken out; over the pixels
+away from the area light ("no light": its edge pixels' coverage error would swamp the rest) and
+over the whole image. glint's photon
 integrators are measured against glint's path-traced reference. Times: CPU seconds of the
 glint-render process (user + system: scene set-up, tree build, maps and render) and Cycles'
 process time around its render call (sync, BVH build and render), as peer_cycles.py does;
@@ -34,13 +36,37 @@ import peer_cycles as pc  # noqa: E402
 GLINT_METHODS = {
     'path': ['--integrator', 'path', '--spp', '1'],
     'sppm': ['--integrator', 'sppm', '--photons', '{photons}', '--radius', '{radius}'],
-    'photons': ['--integrator', 'photons', '--photons', '{photons}', '--radius', '{radius}', '--knn', '{knn}',
-                '--final-gather', '{gather}', '--spp', '1'],
+    'photons': ['--integrator', 'photons', '--photons', '{pm_photons}', '--radius', '{radius}', '--knn', '{knn}',
+                '--final-gather', '{gather}', '--spp', '4'],
 }
 
 
-def rmse(img, ref):
-    return math.sqrt(max(pc.mse(img, ref), 0.0))
+def rmse(img, ref, mask=None):
+    return math.sqrt(max(pc.mse(img, ref, mask), 0.0))
+
+
+def light_mask(scene_json, size):
+    """Pixels away from the area lights: everything but the bounding box of the emissive
+    triangles' projections (glint's camera), grown by one pixel. The light's edge pixels hold
+    emission (17 in red) times the pixel's coverage, an antialiasing error that would swamp
+    light transport's; the point-light scene keeps every pixel."""
+    np = pc.np
+    keep = np.ones((size, size), bool)
+    cam = scene_json['camera']
+    eye, wv, u, v, _ = pc.glint_camera_dirs(cam, size, size, np.zeros(1), np.zeros(1))
+    t = math.tan(cam['fov_y'] * 0.5)
+    tris = np.array(scene_json['triangles'], float).reshape(-1, 3, 3)
+    emissive = np.array([max(m['emission']) > 0 for m in scene_json['materials']])[np.array(scene_json['material_of'])]
+    if not emissive.any():
+        return keep
+    pts = tris[emissive].reshape(-1, 3) - eye
+    z = pts @ wv
+    sx = ((pts @ u) / z / t + 1) / 2 * size  # glint: d = w + u (2 sx - 1) t aspect + v (1 - 2 sy) t
+    sy = (1 - (pts @ v) / z / t) / 2 * size
+    x0, x1 = int(max(math.floor(sx.min()) - 1, 0)), int(min(math.ceil(sx.max()) + 1, size))
+    y0, y1 = int(max(math.floor(sy.min()) - 1, 0)), int(min(math.ceil(sy.max()) + 1, size))
+    keep[y0:y1, x0:x1] = False
+    return keep
 
 
 def main():
@@ -48,11 +74,12 @@ def main():
     p.add_argument('--scene', default='cornell-caustics')
     p.add_argument('--size', type=int, default=64)
     p.add_argument('--budgets', default='2,8', help='time budgets, seconds')
-    p.add_argument('--ref-spp', type=int, default=16384, help='reference spp (two halves)')
+    p.add_argument('--ref-spp', type=int, default=8192, help='reference spp (two halves)')
     p.add_argument('--photons', type=int, default=50000)
     p.add_argument('--radius', type=float, default=0.05)
     p.add_argument('--knn', type=int, default=50)
-    p.add_argument('--gather', type=int, default=32, help='photon map: final gather rays')
+    p.add_argument('--pm-photons', type=int, default=20000, help='photon map: global map photons (4x for caustics)')
+    p.add_argument('--gather', type=int, default=16, help='photon map: final gather rays')
     p.add_argument('--no-cycles', action='store_true', help='glint only')
     p.add_argument('--quick', action='store_true', help='32x32, budgets 1, reference 1024 spp')
     p.add_argument('--glint', default=os.path.join(pc.ROOT, 'build', 'examples', 'glint-render'))
@@ -81,24 +108,31 @@ def main():
     print('%s %dx%d, one thread on core %d; references %d spp (two halves)%s'
           % (a.scene, a.size, a.size, a.core, a.ref_spp, '' if cycles else '; no Cycles'), flush=True)
     refs = references(rn, a, sj, work, cycles)
+    keep = light_mask(json.load(open(sj)), a.size)
     rows = []
     for budget in [float(b) for b in a.budgets.split(',')]:
         for name, flags in GLINT_METHODS.items():
-            extra = [f.format(photons=a.photons, radius=a.radius, knn=a.knn, gather=a.gather) for f in flags]
+            extra = [f.format(photons=a.photons, pm_photons=a.pm_photons, radius=a.radius, knn=a.knn, gather=a.gather)
+                     for f in flags]
             path = os.path.join(work, 'glint_%s_%g.exr' % (name, budget))
             img, t = rn.glint(a.scene, 1, 1, path, extra + ['--time-budget', str(budget)])
-            rows.append({'budget': budget, 'method': 'glint ' + name, 'cpu': t['cpu'], 'rmse': rmse(img, refs['glint'])})
+            rows.append({'budget': budget, 'method': 'glint ' + name, 'cpu': t['cpu'], 'rmse': rmse(img, refs['glint'], keep),
+                         'rmse_image': rmse(img, refs['glint'])})
             print_row(rows[-1])
         if cycles:
             path = os.path.join(work, 'cycles_%g.exr' % budget)
             img, t = rn.cycles(sj, 1 << 20, 1, path, time_limit=budget)
-            rows.append({'budget': budget, 'method': 'Cycles 3.4 path', 'cpu': t['cpu'], 'rmse': rmse(img, refs['cycles'])})
+            rows.append({'budget': budget, 'method': 'Cycles 3.4 path', 'cpu': t['cpu'], 'rmse': rmse(img, refs['cycles'], keep),
+                         'rmse_image': rmse(img, refs['cycles'])})
             print_row(rows[-1])
-    print('\n| budget s | method | CPU s | RMSE | RMSE / glint path |')
-    print('|---|---|---|---|---|')
+    print('\n| budget s | method | CPU s | RMSE (no light) | / glint path | / Cycles | RMSE (image) |')
+    print('|---|---|---|---|---|---|---|')
     for r in rows:
         base = next(x for x in rows if x['budget'] == r['budget'] and x['method'] == 'glint path')
-        print('| %g | %s | %.2f | %.4f | %.2f |' % (r['budget'], r['method'], r['cpu'], r['rmse'], r['rmse'] / base['rmse']))
+        cyc = next((x for x in rows if x['budget'] == r['budget'] and x['method'].startswith('Cycles')), None)
+        print('| %g | %s | %.2f | %.4f | %.2f | %s | %.4f |'
+              % (r['budget'], r['method'], r['cpu'], r['rmse'], r['rmse'] / base['rmse'],
+                 '%.2f' % (r['rmse'] / cyc['rmse']) if cyc else '-', r['rmse_image']))
     if a.json:
         json.dump({'scene': a.scene, 'size': a.size, 'ref_spp': a.ref_spp, 'rows': rows}, open(a.json, 'w'), indent=1)
     return 0
@@ -124,7 +158,8 @@ def references(rn, a, sj, work, cycles):
 
 
 def print_row(r):
-    print('  %4g s  %-16s CPU %6.2f s  RMSE %.4f' % (r['budget'], r['method'], r['cpu'], r['rmse']), flush=True)
+    print('  %4g s  %-16s CPU %6.2f s  RMSE %.4f (image %.4f)' % (r['budget'], r['method'], r['cpu'], r['rmse'], r['rmse_image']),
+          flush=True)
 
 
 if __name__ == '__main__':

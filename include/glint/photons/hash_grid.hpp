@@ -29,11 +29,11 @@ public:
     SphereHashGrid(std::span<const Vec3<T>> centres, std::span<const T> radii) {
         if (centres.size() != radii.size()) throw Error("SphereHashGrid: centres and radii differ in count");
         centres_.assign(centres.begin(), centres.end());
-        r2_.resize(radii.size());
+        r2_.reserve(radii.size());
         T rmax = T(0);
-        for (std::size_t i = 0; i < radii.size(); ++i) {
-            r2_[i] = radii[i] > T(0) ? radii[i] * radii[i] : T(-1);
-            rmax = std::max(rmax, radii[i]);
+        for (const T r : radii) {
+            r2_.push_back(r > T(0) ? r * r : T(-1));
+            rmax = std::max(rmax, r);
         }
         if (!(rmax > T(0))) return;
         cell_ = rmax;

@@ -3,12 +3,15 @@
 // photon mapping's passes of camera points and photons, the photon map's re-traced maps)
 // renders pass after pass until the budget is spent or a pass count is reached, and its
 // passes' images are averaged: what makes equal-time comparisons one command
-// (glint-render --time-budget SECONDS).
+// (glint-render --time-budget SECONDS: the path tracer's pass k renders samples k spp to
+// (k + 1) spp - 1 of each pixel, so its passes are one render cut into pieces).
 //
 // A pass is a callable pass(k) -> RenderResult for k = 0, 1, ...; passes must be independent
-// estimates (a different seed per pass), so that the mean image's variance is the sum of the
-// passes' variances over K^2. The budget is checked between passes: the last pass may end
-// after it, and the result says how long the passes took.
+// estimates (a different seed, or the next samples of one sequence: RenderSettings::
+// first_sample), so that the mean image's variance is the sum of the passes' variances over
+// K^2. The budget is checked between passes: a pass starts only if,
+// as long as the mean pass so far, it ends within the budget (the first always runs, and a
+// slower pass may still end after it); the result says how long the passes took.
 #pragma once
 
 #include <chrono>
@@ -34,9 +37,10 @@ struct PassBudget {
         if (passes < 0) throw Error("pass count must be >= 0, got " + std::to_string(passes));
         if (seconds == 0 && passes == 0) throw Error("a progressive render needs a time budget or a pass count");
     }
-    /// Whether to stop after `done` passes that took `elapsed` seconds.
+    /// Whether to stop after `done` passes that took `elapsed` seconds: at the pass count, or
+    /// when one more pass, as long as the mean pass so far, would end after the budget.
     bool stop(int done, double elapsed) const {
-        return (passes > 0 && done >= passes) || (seconds > 0 && elapsed >= seconds);
+        return (passes > 0 && done >= passes) || (seconds > 0 && elapsed * double(done + 1) / double(done) > seconds);
     }
 };
 
