@@ -1,9 +1,9 @@
-// glint/photons/final_gather.hpp: the final gather of photon mapping (Jensen 2001, §9.3.4;
-// Larsen 2004, §4: 500 to 2000 rays): indirect radiance at a shading point estimated by rays
+// glint/photons/final_gather.hpp: the final gather of photon mapping (Jensen 2001, ch. 9;
+// Larsen 2004, §4.5: 500 to 2000 rays): indirect radiance at a shading point estimated by rays
 // sampled from its BRDF, each returning the radiance that the photon maps give at the
 // surface it hits (typically kd / pi times the precomputed irradiance there):
 //   L_ind(x, w) ~ (1 / N) sum_j f(w_j) cos(theta_j) / p(w_j) L(hit_j, -w_j).
-// The directions are stratified (Jensen 2001, §9.3.4): the first m^2 of N rays, m =
+// The directions are stratified (Jensen 2001, ch. 9): the first m^2 of N rays, m =
 // floor(sqrt(N)), take one jittered point in each cell of an m x m grid over the BRDF
 // sample's unit square; the rest are independent.
 #pragma once

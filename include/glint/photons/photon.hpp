@@ -1,5 +1,5 @@
-// glint/photons/photon.hpp: the compact photon of a photon map, Jensen 2001, §5.2 (the
-// layout Larsen 2004, §4 uses): position as three floats, power in Ward's shared-exponent
+// glint/photons/photon.hpp: the compact photon of a photon map, as Jensen 2001, ch. 5 lays it
+// out (Larsen 2004, §8.2 used 40 bytes a photon): position as three floats, power in Ward's shared-exponent
 // RGBE form (4 bytes), the incoming direction and the surface normal on the side the photon
 // arrived from as two bytes of spherical angles each: 20 bytes. (Jensen's photon keeps the
 // kd-tree's split axis in its last two bytes; glint's tree, photons/photon_map.hpp, keeps
@@ -60,7 +60,7 @@ inline Vec3<float> decode_direction(const std::array<std::uint8_t, 2>& c) {
 
 }  // namespace detail
 
-/// One stored photon (Jensen 2001, §5.2): 20 bytes.
+/// One stored photon (Jensen 2001, ch. 5): 20 bytes.
 struct Photon {
     Vec3<float> position{0.0f};
     std::array<std::uint8_t, 4> rgbe{0, 0, 0, 0};  // power, Ward's RGBE

@@ -1,15 +1,17 @@
-// glint/photons/photon_map.hpp: the photon map as a left-balanced kd-tree (Jensen 2001, §6.3;
-// Larsen 2004, §4): a complete binary tree stored in heap order (node i's children are
+// glint/photons/photon_map.hpp: the photon map as a left-balanced kd-tree (Jensen 2001, ch. 6;
+// Larsen 2004, §4.3): a complete binary tree stored in heap order (node i's children are
 // 2i + 1 and 2i + 2), so it needs no pointers; each node is a photon.
 //
-// Balancing (Jensen 2001, §6.3.1): each subtree splits its photons on the axis of their
+// Balancing (Jensen 2001, ch. 6): each subtree splits its photons on the axis of their
 // bounding box's largest extent, at the element that makes the left subtree exactly as large
 // as a left-balanced tree's (found by std::nth_element), and recurses: O(n log n).
 //
-// Query (Jensen 2001, §6.4): the k nearest photons within a maximum radius R (distance <= R),
+// Query (Jensen 2001, ch. 6): the k nearest photons within a maximum radius R (distance <= R),
 // found by a depth-first descent to the query's side with an explicit stack of the far
-// sides still to visit, each with the squared distance to its splitting plane, skipped once
-// that exceeds the current bound. The found photons are collected unordered until k are
+// sides still to visit, each with the squared distance from the query to its cell (Arya and
+// Mount 1993's incremental distance: tighter than the distance to the splitting plane alone),
+// skipped once that exceeds the current bound; a subtree of three levels or fewer is tested
+// whole, without the stack. The found photons are collected unordered until k are
 // there, then kept as a max-heap on squared distance, whose top bounds the search. Nodes are
 // 16 bytes (position and split axis), kept apart from the photons' payload so that a query
 // reads four nodes per cache line.
@@ -25,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include <glint/core/cache_line_allocator.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/photons/photon.hpp>
@@ -46,19 +49,20 @@ public:
             throw Error("glint::PhotonMap: " + std::to_string(photons.size()) + " photons exceed 2^32 - 1");
         std::vector<Entry> work(photons.size());
         for (std::size_t i = 0; i < photons.size(); ++i) work[i] = {photons[i].position, std::uint32_t(i)};
-        nodes_.resize(photons.size());
+        nodes_.resize(photons.size() + 1);  // node j = photon j - 1: heap indices from 1
         photons_.resize(photons.size());
         if (!work.empty()) balance(work.data(), work.size(), 0, bounds(work), photons);
     }
 
-    std::size_t size() const { return nodes_.size(); }
-    bool empty() const { return nodes_.empty(); }
+    std::size_t size() const { return photons_.size(); }
+    bool empty() const { return photons_.empty(); }
     /// The photons in heap order: index i of a PhotonNeighbour.
     std::span<const Photon> photons() const { return photons_; }
     const Photon& photon(std::size_t i) const { return photons_[i]; }
 
     /// The k nearest photons to x within distance max_radius (<= max_radius), into `out`
-    /// (cleared first) as a max-heap on d2 when k were found (out.front(): the farthest),
+    /// (overwritten; its storage is reused, so a caller's vector makes queries allocation-free)
+    /// as a max-heap on d2 when min(k, size()) were found (out.front(): the farthest),
     /// unordered when fewer were. Ties at the k-th distance are broken arbitrarily.
     void knn(const Vec3<float>& x, std::size_t k, float max_radius, std::vector<PhotonNeighbour>& out) const {
         nearest(x, k, max_radius, out, [](std::uint32_t) { return true; });
@@ -68,11 +72,13 @@ public:
     template <class Accept>
     void nearest(const Vec3<float>& x, std::size_t k, float max_radius, std::vector<PhotonNeighbour>& out,
                  const Accept& accept) const {
-        out.clear();
         if (!(max_radius >= 0.0f)) throw Error("glint::PhotonMap::knn: max_radius must be >= 0 (got " + std::to_string(max_radius) + ")");
-        if (k == 0 || nodes_.empty()) return;
-        Bound b{std::nextafter(max_radius * max_radius, std::numeric_limits<float>::infinity()), k, out};
+        if (k == 0 || photons_.empty()) return out.clear();
+        k = std::min(k, photons_.size());
+        if (out.size() < k) out.resize(k);  // written in place; shrunk to what was found below
+        Bound b{std::nextafter(max_radius * max_radius, std::numeric_limits<float>::infinity()), k, out.data()};
         search(x, b, accept);
+        out.resize(b.count);
     }
 
 private:
@@ -87,38 +93,38 @@ private:
     struct Box {
         Vec3<float> lo, hi;
     };
-    /// The found set and its bound: all photons closer than `r2` until k are found.
+    /// The found set and its bound: all photons closer than `r2` until k are found, then a
+    /// max-heap of k whose top is the bound.
     struct Bound {
         float r2;
         std::size_t k;
-        std::vector<PhotonNeighbour>& out;
+        PhotonNeighbour* heap;
+        std::size_t count = 0;
 
         void add(float d2, std::uint32_t i) {
-            if (out.size() < k) {
-                out.push_back({d2, i});
-                if (out.size() == k) {
-                    std::make_heap(out.begin(), out.end(), less);
-                    r2 = out.front().d2;
+            if (count < k) {
+                heap[count++] = {d2, i};
+                if (count == k) {
+                    std::make_heap(heap, heap + k, [](const PhotonNeighbour& a, const PhotonNeighbour& b) { return a.d2 < b.d2; });
+                    r2 = heap[0].d2;
                 }
                 return;
             }
             sift_down({d2, i});
-            r2 = out.front().d2;
+            r2 = heap[0].d2;
         }
-        static bool less(const PhotonNeighbour& a, const PhotonNeighbour& b) { return a.d2 < b.d2; }
         /// Replaces the heap's top by e and restores the heap.
         void sift_down(PhotonNeighbour e) {
-            const std::size_t n = out.size();
             std::size_t i = 0;
             for (;;) {
                 std::size_t c = 2 * i + 1;
-                if (c >= n) break;
-                if (c + 1 < n && out[c + 1].d2 > out[c].d2) ++c;
-                if (out[c].d2 <= e.d2) break;
-                out[i] = out[c];
+                if (c >= k) break;
+                if (c + 1 < k && heap[c + 1].d2 > heap[c].d2) ++c;
+                if (heap[c].d2 <= e.d2) break;
+                heap[i] = heap[c];
                 i = c;
             }
-            out[i] = e;
+            heap[i] = e;
         }
     };
 
@@ -126,30 +132,55 @@ private:
     void search(const Vec3<float>& x, Bound& b, const Accept& accept) const {
         struct Pending {
             std::uint32_t node;
-            float d2;
+            float d2;         // squared distance from x to the subtree's cell
+            Vec3<float> off;  // its per-axis offsets
         };
         std::array<Pending, 64> stack;  // one far side per level: depth <= 32
         int top = 0;
-        const auto n = std::uint32_t(nodes_.size());
+        const auto end = std::uint32_t(nodes_.size());  // nodes 1 .. end - 1
         const Node* nodes = nodes_.data();
-        std::uint32_t i = 0;
+        std::uint32_t j = 1;
+        float cell = 0.0f;           // squared distance from x to node j's cell
+        Vec3<float> off(0.0f);       // per-axis distance from x to that cell
         for (;;) {
-            while (i < n) {
-                const Node& nd = nodes[i];
+            while (j < end) {
+                if (8 * j >= end) {  // at most two levels below: test them all, no stack
+                    for (const std::uint32_t lo : {j, 2 * j, 4 * j})
+                        for (std::uint32_t c = lo; c < std::min(end, lo + lo / j); ++c) {
+                            const float dx = x.x - nodes[c].p[0], dy = x.y - nodes[c].p[1], dz = x.z - nodes[c].p[2];
+                            const float d2 = dx * dx + dy * dy + dz * dz;
+                            if (d2 < b.r2 && accept(c - 1)) b.add(d2, c - 1);
+                        }
+                    break;
+                }
+                const Node& nd = nodes[j];
+                // With 64-byte aligned nodes of 16 bytes, node j's four grandchildren 4j ..
+                // 4j + 3 fill one cache line: fetch it while this level is worked on.
+                __builtin_prefetch(nodes + std::min(4 * j, end - 1));
                 const float dx = x.x - nd.p[0], dy = x.y - nd.p[1], dz = x.z - nd.p[2];
                 const float d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 < b.r2 && accept(i)) b.add(d2, i);
-                const float delta = x[int(nd.axis)] - nd.p[nd.axis];
-                const std::uint32_t left = 2 * i + 1;
-                const std::uint32_t near = delta > 0.0f ? left + 1 : left, far = delta > 0.0f ? left : left + 1;
-                if (far < n && delta * delta < b.r2) stack[std::size_t(top++)] = {far, delta * delta};
-                i = near;
+                if (d2 < b.r2 && accept(j - 1)) b.add(d2, j - 1);
+                const auto a = int(nd.axis);
+                const float delta = x[a] - nd.p[a];
+                const std::uint32_t near = 2 * j + (delta > 0.0f), far = 2 * j + (delta <= 0.0f);
+                if (far < end) {
+                    // Arya and Mount 1993's incremental distance: the far cell differs from
+                    // this one on axis a only, where it lies |delta| away.
+                    const float far_d2 = cell - off[a] * off[a] + delta * delta;
+                    if (far_d2 < b.r2) {
+                        Pending& p = stack[std::size_t(top++)];
+                        p = {far, far_d2, off};
+                        p.off[a] = delta;
+                    }
+                }
+                j = near;
             }
             do {
                 if (top == 0) return;
                 --top;
             } while (stack[std::size_t(top)].d2 >= b.r2);
-            i = stack[std::size_t(top)].node;
+            const Pending& p = stack[std::size_t(top)];
+            j = p.node, cell = p.d2, off = p.off;
         }
     }
 
@@ -172,7 +203,7 @@ private:
         const std::size_t m = left_size(n);
         std::nth_element(e, e + m, e + n, [axis](const Entry& a, const Entry& b) { return a.p[axis] < b.p[axis]; });
         const Entry& med = e[m];
-        nodes_[heap] = {{med.p.x, med.p.y, med.p.z}, std::uint32_t(axis)};
+        nodes_[heap + 1] = {{med.p.x, med.p.y, med.p.z}, std::uint32_t(axis)};
         photons_[heap] = src[med.index];
         const float split = med.p[axis];
         if (m > 0) {
@@ -187,7 +218,7 @@ private:
         }
     }
 
-    std::vector<Node> nodes_;
+    std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
     std::vector<Photon> photons_;
 };
 

@@ -1,5 +1,5 @@
 // glint/photons/photon_tracing.hpp: the first pass of photon mapping (Jensen 2001, ch. 5;
-// Larsen 2004, §4.1): photons emitted from the scene's lights in proportion to their power,
+// Larsen 2004, §4.2): photons emitted from the scene's lights in proportion to their power,
 // traced through every material, stored where they hit a non-specular surface.
 //
 // Emission: an emitter (an emissive triangle, Phi = pi Le A, or a point light, Phi =
@@ -13,14 +13,14 @@
 // Transport: at a mirror or dielectric the photon follows specular_direction (Fresnel choice
 // for a dielectric); at any other surface it is stored and then scattered by the material's
 // own BRDF (SurfaceBrdf: Lambertian and Phong lobes). Russian roulette on the albedo
-// (Jensen 2001, §5.1.5; the classic rule of sampling/roulette.hpp: continue with probability
+// (Jensen 2001, ch. 5; the classic rule of sampling/roulette.hpp: continue with probability
 // luminance(albedo), power times albedo / probability), so that in a grey scene every photon
 // keeps the power it was emitted with.
 //
 // Maps: a photon whose path is L S+ D (one or more specular vertices, then the first
 // non-specular one) goes to `caustic`; every other stored photon to `global`, including,
 // when PhotonSettings::store_direct is set (the default), the first hit of direct light
-// (Jensen 2001, §9.1: the global map is what a final gather reads at its secondary hits).
+// (Jensen 2001, ch. 9: the global map is what a final gather reads at its secondary hits).
 #pragma once
 
 #include <algorithm>

@@ -1,12 +1,12 @@
-// glint/photons/radiance_estimate.hpp: the photon map's density estimate (Jensen 2001, §7.1,
-// eq. 7.6; Larsen 2004, §4, eq. 4.2) and its precomputed form at every 4th photon
-// (Christensen 1999; Larsen 2004, §4).
+// glint/photons/radiance_estimate.hpp: the photon map's density estimate (Jensen 2001, ch. 7,
+// Larsen 2004, §4.3, eq. 4.2) and its precomputed form at every 4th photon
+// (Christensen 1999; Larsen 2004, §4.6.1).
 //
 // Reflected radiance at x (normal n) towards the viewer, from the k nearest photons p:
 //   L(x, w) ~ sum_p f_r(x, w_p, w) Phi_p w_p / (c pi r^2),
 // r the distance to the farthest photon found (max_radius when fewer than k were found: the
 // disc the search covered), w_p = -(the photon's direction) and only photons arriving from
-// n's side counted. Filters (Jensen 2001, §7.2.1): `none` (w_p = c = 1) or `cone`, w_p = 1 -
+// n's side counted. Filters (Jensen 2001, ch. 7): `none` (w_p = c = 1) or `cone`, w_p = 1 -
 // d_p / (k_c r), c = 1 - 2 / (3 k_c) (k_c >= 1), which weights near photons more and blurs
 // less at edges. The estimate is biased (it averages over the disc, and r is set by the
 // photons themselves); it is consistent as the photons grow and r shrinks.
