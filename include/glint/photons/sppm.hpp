@@ -114,6 +114,40 @@ void splat_photons(const Scene<T>& s, std::span<const Photon> photons, const Sph
         }
 }
 
+/// SPPM's photon pass `pass` over the visible points of `film`: the hash grid over them with
+/// their current radii, the photons traced without direct hits and splatted, and each pixel's
+/// statistics updated. Returns the photons emitted.
+template <RayAccelerator A, Scalar T>
+std::size_t sppm_photon_pass(const Scene<T>& s, const A& accel, const VisiblePointFilm<T>& film, const SppmSettings& st,
+                             int pass, int threads, std::vector<SppmStatistics>& stats) {
+    std::vector<Vec3<T>> centres;
+    std::vector<T> radii;
+    std::vector<VisiblePoint<T>> points;
+    std::vector<std::uint32_t> pixel_of;
+    for (std::size_t p = 0; p < stats.size(); ++p) {
+        if (!film.points[p].valid) continue;
+        centres.push_back(film.points[p].x);
+        radii.push_back(T(std::sqrt(stats[p].r2)));
+        points.push_back(film.points[p]);
+        pixel_of.push_back(std::uint32_t(p));
+    }
+    const SphereHashGrid<T> grid{std::span<const Vec3<T>>(centres), std::span<const T>(radii)};
+    PhotonSettings ps;
+    ps.photons = st.photons;
+    ps.seed = pass_seed(st.seed, pass, 2);
+    ps.max_depth = st.photon_depth;
+    ps.threads = threads;
+    ps.store_direct = false;  // direct light is the lighting policy's
+    const PhotonSet set = trace_photons(s, accel, ps);
+    std::vector<double> m(stats.size(), 0.0);
+    std::vector<Rgb<double>> phi(stats.size(), Rgb<double>(0.0));
+    for (const auto* map : {&set.global, &set.caustic})
+        splat_photons(s, std::span<const Photon>(*map), grid, std::span<const VisiblePoint<T>>(points),
+                      std::span<const std::uint32_t>(pixel_of), threads, m, phi);
+    for (std::size_t p = 0; p < stats.size(); ++p) stats[p].update(m[p], phi[p], st.alpha);
+    return set.emitted;
+}
+
 }  // namespace detail
 
 /// Stochastic progressive photon mapping of `s` through accelerator `accel` with the image
@@ -141,33 +175,9 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
         out.rays += rs.rays;
         out.paths += rs.paths;
         const auto photon_start = clock::now();
-        std::vector<Vec3<T>> centres;
-        std::vector<T> radii;
-        std::vector<VisiblePoint<T>> points;
-        std::vector<std::uint32_t> pixel_of;
-        for (std::size_t p = 0; p < pixels; ++p) {
+        for (std::size_t p = 0; p < pixels; ++p)
             lit[p] += Rgb<double>(double(film.radiance[p][0]), double(film.radiance[p][1]), double(film.radiance[p][2]));
-            if (!film.points[p].valid) continue;
-            centres.push_back(film.points[p].x);
-            radii.push_back(T(std::sqrt(stats[p].r2)));
-            points.push_back(film.points[p]);
-            pixel_of.push_back(std::uint32_t(p));
-        }
-        const SphereHashGrid<T> grid{std::span<const Vec3<T>>(centres), std::span<const T>(radii)};
-        PhotonSettings ps;
-        ps.photons = st.photons;
-        ps.seed = detail::pass_seed(st.seed, pass, 2);
-        ps.max_depth = st.photon_depth;
-        ps.threads = image.threads;
-        ps.store_direct = false;  // direct light is the lighting policy's
-        const PhotonSet set = trace_photons(s, accel, ps);
-        out.photons_emitted += set.emitted;
-        std::vector<double> m(pixels, 0.0);
-        std::vector<Rgb<double>> phi(pixels, Rgb<double>(0.0));
-        for (const auto* map : {&set.global, &set.caustic})
-            detail::splat_photons(s, std::span<const Photon>(*map), grid, std::span<const VisiblePoint<T>>(points),
-                                  std::span<const std::uint32_t>(pixel_of), image.threads, m, phi);
-        for (std::size_t p = 0; p < pixels; ++p) stats[p].update(m[p], phi[p], st.alpha);
+        out.photons_emitted += detail::sppm_photon_pass(s, accel, film, st, pass, image.threads, stats);
         out.photon_seconds += std::chrono::duration<double>(clock::now() - photon_start).count();
         out.passes = pass + 1;
         if (budget.stop(out.passes, std::chrono::duration<double>(clock::now() - start).count())) break;

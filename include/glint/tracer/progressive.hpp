@@ -18,6 +18,7 @@
 #include <cmath>
 #include <concepts>
 #include <string>
+#include <type_traits>
 
 #include <glint/core/error.hpp>
 #include <glint/core/image.hpp>
