@@ -13,6 +13,8 @@
 //                          4 N for the caustic map (default 100000)
 //   --radius R             sppm: initial gather radius; photons: largest kNN radius (scene
 //                          units, default 0.05)
+//   --camera-samples N     sppm: camera rays per pixel and pass for emission and direct light
+//                          (the last one's visible point gathers the photons; default 1)
 //   --knn K                photons: photons per radiance estimate (default 50)
 //   --final-gather N       photons: final gather rays per pixel sample (default 64)
 #pragma once
@@ -34,6 +36,7 @@ struct PhotonCliOptions {
     double radius = 0.05;
     int knn = 50;
     int gather_rays = 64;
+    int camera_samples = 1;
 };
 
 using PhotonCliAccel = MeshBvh<MollerTrumbore<float>, 8>;
@@ -45,6 +48,7 @@ inline SppmResult render_sppm_cli(const Scene<float>& scene, const PhotonCliOpti
     SppmSettings st;
     st.photons = p.photons;
     st.radius = p.radius;
+    st.camera_samples = p.camera_samples;
     st.seed = seed;
     return render_sppm(scene, accel, MisDirect<float>(scene, PathTracerSettings<float>{}), image, st, budget);
 }

@@ -108,6 +108,7 @@ void usage() {
         choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers)) +
         "  --photons N         sppm, photons: photons emitted per pass (default 100000)\n"
         "  --radius R          sppm: initial gather radius; photons: largest kNN radius (default 0.05)\n"
+        "  --camera-samples N  sppm: camera rays per pixel and pass for emission and direct light (default 1)\n"
         "  --knn K             photons: photons per radiance estimate (default 50)\n"
         "  --final-gather N    photons: final gather rays per pixel sample (default 64)\n";
     std::fputs(text.c_str(), stdout);
@@ -277,6 +278,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--radius") g.photons.radius = to_float(a, value(), 1e-6f, 1e6f);
         else if (a == "--knn") g.photons.knn = int(to_int(a, value(), 1, 1 << 16));
         else if (a == "--final-gather") g.photons.gather_rays = int(to_int(a, value(), 0, 1 << 16));
+        else if (a == "--camera-samples") g.photons.camera_samples = int(to_int(a, value(), 1, 1 << 16));
         else throw Error("unknown option '" + a + "' (see --help)");
     }
     check_names(g, o);

@@ -558,6 +558,7 @@ TEST_CASE("SPPM: the same image for any thread count; bad settings are refused b
     const MisDirect<float> direct(s, PathTracerSettings<float>{});
     SppmSettings st;
     st.photons = 3000;
+    st.camera_samples = 2;
     image.threads = 1;
     const SppmResult one = render_sppm(s, accel, direct, image, st, PassBudget{0, 2});
     image.threads = 3;
@@ -572,6 +573,9 @@ TEST_CASE("SPPM: the same image for any thread count; bad settings are refused b
     CHECK_THROWS_AS(render_sppm(s, accel, direct, image, bad, PassBudget{0, 1}), Error);
     bad = st;
     bad.alpha = 0;
+    CHECK_THROWS_AS(render_sppm(s, accel, direct, image, bad, PassBudget{0, 1}), Error);
+    bad = st;
+    bad.camera_samples = 0;
     CHECK_THROWS_AS(render_sppm(s, accel, direct, image, bad, PassBudget{0, 1}), Error);
 }
 

@@ -35,7 +35,7 @@ import peer_cycles as pc  # noqa: E402
 
 GLINT_METHODS = {
     'path': ['--integrator', 'path', '--spp', '1'],
-    'sppm': ['--integrator', 'sppm', '--photons', '{photons}', '--radius', '{radius}'],
+    'sppm': ['--integrator', 'sppm', '--photons', '{photons}', '--radius', '{radius}', '--camera-samples', '{camera}'],
     'photons': ['--integrator', 'photons', '--photons', '{pm_photons}', '--radius', '{radius}', '--knn', '{knn}',
                 '--final-gather', '{gather}', '--spp', '4'],
 }
@@ -78,6 +78,7 @@ def main():
     p.add_argument('--photons', type=int, default=50000)
     p.add_argument('--radius', type=float, default=0.05)
     p.add_argument('--knn', type=int, default=50)
+    p.add_argument('--camera-samples', type=int, default=16, help='SPPM: camera rays per pixel and pass')
     p.add_argument('--pm-photons', type=int, default=20000, help='photon map: global map photons (4x for caustics)')
     p.add_argument('--gather', type=int, default=16, help='photon map: final gather rays')
     p.add_argument('--no-cycles', action='store_true', help='glint only')
@@ -112,7 +113,8 @@ def main():
     rows = []
     for budget in [float(b) for b in a.budgets.split(',')]:
         for name, flags in GLINT_METHODS.items():
-            extra = [f.format(photons=a.photons, pm_photons=a.pm_photons, radius=a.radius, knn=a.knn, gather=a.gather)
+            extra = [f.format(photons=a.photons, pm_photons=a.pm_photons, radius=a.radius, knn=a.knn, gather=a.gather,
+                              camera=a.camera_samples)
                      for f in flags]
             path = os.path.join(work, 'glint_%s_%g.exr' % (name, budget))
             img, t = rn.glint(a.scene, 1, 1, path, extra + ['--time-budget', str(budget)])

@@ -15,7 +15,11 @@
 // caller's; glint-render uses MisDirect: light samples and a BRDF sample by the balance
 // heuristic), as pbrt-v4's SPPMIntegrator does, and photons bring the rest (caustics and
 // indirect light); emission the camera path meets counts whole. The image after K passes is
-// (emission + direct) / K + tau / (pi R^2 K).
+// (emission + direct) / K + tau / (pi R^2 K). A pass may take several camera rays per pixel
+// for emission and direct light (SppmSettings::camera_samples), the last one's visible point
+// gathering the photons: the light's edges and direct light's noise then get more samples than
+// the photon pass's points, at the cost of a few rays (each part stays an unbiased pixel
+// average).
 //
 // Deterministic for a seed whatever the thread count: the camera pass draws from per-pixel
 // streams, photon tracing is deterministic, and the photon pass splits the photons into
@@ -49,6 +53,7 @@ struct SppmSettings {
     double radius = 0.05;          // initial gather radius (scene units)
     double alpha = 2.0 / 3.0;      // the fraction of a pass's photons kept (radius reduction)
     int max_specular = 32;         // camera paths: specular vertices before the visible point
+    int camera_samples = 1;        // camera rays per pixel and pass for emission and direct light
     int photon_depth = 32;         // photon paths: bounces (PhotonSettings::max_depth)
     std::uint64_t seed = 0;
 
@@ -57,6 +62,7 @@ struct SppmSettings {
         if (!(radius > 0.0) || !std::isfinite(radius)) throw Error("SPPM radius must be positive, got " + std::to_string(radius));
         check_sppm_alpha(alpha);
         if (max_specular < 0 || photon_depth < 1) throw Error("SPPM depths must be >= 0 (camera) and >= 1 (photons)");
+        if (camera_samples < 1) throw Error("SPPM camera samples must be >= 1, got " + std::to_string(camera_samples));
     }
 };
 
@@ -151,7 +157,7 @@ std::size_t sppm_photon_pass(const Scene<T>& s, const A& accel, const VisiblePoi
 }  // namespace detail
 
 /// Stochastic progressive photon mapping of `s` through accelerator `accel` with the image
-/// settings `image` (spp is ignored: one camera ray per pixel and pass), passes until
+/// settings `image` (spp is ignored: st.camera_samples camera rays per pixel and pass), passes until
 /// `budget` says stop.
 template <RayAccelerator A, class D, Scalar T = typename A::scalar_type>
     requires DirectLighting<D, T, RayQueries<A>, RandomSampler<T>>
@@ -168,6 +174,7 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
     SppmResult out;
     RenderSettings camera = image;
     camera.progress = false;
+    camera.spp = st.camera_samples;
     for (int pass = 0;; ++pass) {
         VisiblePointFilm<T> film;
         const RenderStats rs =

@@ -124,8 +124,9 @@ struct VisiblePointFilm {
     }
 };
 
-/// The camera pass: one visible point per pixel sample (render with spp = 1), and the
-/// emission met plus the direct light there by lighting policy D.
+/// The camera pass: per pixel sample, the emission met plus the direct light at its visible
+/// point by lighting policy D (the film's radiance: their mean over the pixel's samples); the
+/// pixel keeps its last sample's visible point (a uniformly jittered one, like any other).
 template <RayAccelerator A, class D, Scalar T = typename A::scalar_type>
 class VisiblePointIntegrator {
 public:
@@ -155,13 +156,12 @@ private:
     int max_specular_;
 };
 
-/// The visible points of one pass: the camera rays of `image` (one sample per pixel) with the
+/// The visible points of one pass: the camera rays of `image` (image.spp per pixel) with the
 /// streams of `sampler`, direct light by `direct`.
 template <RayAccelerator A, class D, class S, Scalar T = typename A::scalar_type>
     requires Sampler<S, T> && DirectLighting<D, T, RayQueries<A>, S>
-RenderStats visible_points(const Scene<T>& s, const A& accel, const D& direct, RenderSettings image, int max_specular,
-                           const S& sampler, VisiblePointFilm<T>& film) {
-    image.spp = 1;
+RenderStats visible_points(const Scene<T>& s, const A& accel, const D& direct, const RenderSettings& image,
+                           int max_specular, const S& sampler, VisiblePointFilm<T>& film) {
     return render_image(s, image, VisiblePointIntegrator<A, D, T>(s, accel, direct, max_specular), sampler, film);
 }
 
