@@ -17,11 +17,16 @@
 // microseconds per query and glint's speed / nanoflann's; the sums of the found squared
 // distances must agree.
 //
-// Usage: bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only]
+// Emission: random against Halton emission (PhotonEmission), the RMS error of a closed-form
+// quantity (a point light's direct power onto a floor) over 16 seeds.
+//
+// Usage: bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only] [--emission-only]
 // --quick: 20 000 photons, M = 1 and 10, 5 000 scene photons, 200 queries, 1 pass.
-// --photons N: N photons for Table 8.1 and the kNN comparison; --knn-only: the comparison alone.
+// --photons N: N photons for Table 8.1 and the kNN comparison; --knn-only, --emission-only:
+// that section alone.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -56,6 +61,7 @@ struct Options {
     std::size_t photons = 1000000, scene_photons = 50000, queries = 20000;
     std::vector<std::size_t> maps{1, 10, 100, 1000};
     std::vector<std::size_t> knn_sizes{10000, 100000, 1000000};
+    std::vector<std::size_t> emission_photons{1000, 10000, 100000};
     int passes = 5;
     std::uint64_t seed = 1;
 };
@@ -64,13 +70,14 @@ Options parse(int argc, char** argv) {
     Options o;
     bench::Args a(argc, argv);
     while (a.next()) {
-        if (a.flag() == "--quick") o.photons = 20000, o.scene_photons = 5000, o.queries = 200, o.maps = {1, 10}, o.passes = 1, o.knn_sizes = {20000};
+        if (a.flag() == "--quick") o.photons = 20000, o.scene_photons = 5000, o.queries = 200, o.maps = {1, 10}, o.passes = 1, o.knn_sizes = {20000}, o.emission_photons = {1000};
         else if (a.flag() == "--photons") o.photons = a.number<std::size_t>(1000, 100000000), o.knn_sizes = {o.photons};
-        else if (a.flag() == "--knn-only") o.maps.clear(), o.scene_photons = 0;
+        else if (a.flag() == "--knn-only") o.maps.clear(), o.scene_photons = 0, o.emission_photons.clear();
+        else if (a.flag() == "--emission-only") o.maps.clear(), o.scene_photons = 0, o.knn_sizes.clear();
         else if (a.flag() == "--queries") o.queries = a.number<std::size_t>(1, 100000000);
         else if (a.flag() == "--passes") o.passes = a.number<int>(1, 1000);
         else if (a.flag() == "--seed") o.seed = a.number<std::uint64_t>();
-        else a.unknown("bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only]");
+        else a.unknown("bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only] [--emission-only]");
     }
     return o;
 }
@@ -160,6 +167,44 @@ void table_8_2(const Options& o) {
     std::printf("%12s %12.4f %12.4f %10.3f %10.3f\n", "irradiance", i1, im, im / i1, 5.88 / 13.80);
 }
 
+/// Quasi-random emission: the direct power a point light sends onto the floor of a closed
+/// black cube (closed form: I times the floor's solid angle, four corner rectangles of
+/// sides a, b at distance d, atan(a b / (d sqrt(d^2 + a^2 + b^2))) each), estimated from the
+/// photons stored on the floor; RMS relative error over 16 seeds, random against Halton.
+void emission_error(const Options& o) {
+    Scene<float> s;
+    const auto black = s.add_material(Material<float>::lambertian(Rgb<float>(0.0f)));
+    using V = Vec3<float>;
+    const V c(0);
+    detail::add_quad_facing(s, V(-1, -1, -1), V(1, -1, -1), V(1, -1, 1), V(-1, -1, 1), c, black);  // floor: triangles 0, 1
+    detail::add_quad_facing(s, V(-1, 1, -1), V(-1, 1, 1), V(1, 1, 1), V(1, 1, -1), c, black);
+    detail::add_quad_facing(s, V(-1, -1, -1), V(-1, 1, -1), V(1, 1, -1), V(1, -1, -1), c, black);
+    detail::add_quad_facing(s, V(-1, -1, 1), V(1, -1, 1), V(1, 1, 1), V(-1, 1, 1), c, black);
+    detail::add_quad_facing(s, V(-1, -1, -1), V(-1, -1, 1), V(-1, 1, 1), V(-1, 1, -1), c, black);
+    detail::add_quad_facing(s, V(1, -1, -1), V(1, 1, -1), V(1, 1, 1), V(1, -1, 1), c, black);
+    s.point_lights.push_back(PointLight<float>::isotropic(V(0.1f, 0.5f, -0.2f), Rgb<float>(1.0f)));
+    const MeshBvh<MollerTrumbore<float>, 8> accel(s.triangles);
+    const double d = 1.5;
+    double omega = 0;
+    for (const double a : {1.1, 0.9})
+        for (const double b : {0.8, 1.2}) omega += std::atan(a * b / (d * std::sqrt(d * d + a * a + b * b)));
+    std::printf("\n# Emission: a point light's direct power onto a closed black cube's floor (exact %.6f), RMS relative error over 16 seeds\n", omega);
+    std::printf("%9s %12s %12s %14s\n", "photons", "random", "halton", "random/halton");
+    for (const std::size_t n : o.emission_photons) {
+        double e2[2] = {0, 0};
+        for (std::uint64_t seed = 1; seed <= 16; ++seed)
+            for (int m = 0; m < 2; ++m) {
+                const PhotonSet set = trace_photons(s, accel, PhotonSettings{.photons = n, .seed = seed, .threads = 1,
+                    .emission = m ? PhotonEmission::halton : PhotonEmission::random});
+                double floor = 0;
+                for (std::size_t i = 0; i < set.global.size(); ++i)
+                    if (set.global_triangle[i] < 2) floor += set.global[i].power()[0];
+                e2[m] += (floor / omega - 1) * (floor / omega - 1) / 16;
+            }
+        std::printf("%9zu %12.5f %12.5f %14.2f\n", n, std::sqrt(e2[0]), std::sqrt(e2[1]), std::sqrt(e2[0] / e2[1]));
+    }
+}
+
 #ifdef GLINT_HAVE_NANOFLANN
 /// nanoflann's view of the photons: positions through the adaptor interface it asks for.
 struct PhotonCloud {
@@ -217,6 +262,7 @@ int main(int argc, char** argv) {
         std::printf("# bench_photons (timings single-threaded; ratios from the same run)\n");
         if (!o.maps.empty()) table_8_1(o);
         if (o.scene_photons > 0) table_8_2(o);
+        if (!o.emission_photons.empty()) emission_error(o);
 #ifdef GLINT_HAVE_NANOFLANN
         for (const std::size_t size : o.knn_sizes) versus_nanoflann(o, size);
 #else

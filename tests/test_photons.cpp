@@ -76,9 +76,11 @@ std::vector<double> stored_per_photon(const Scene<float>& s, const Accel& accel,
 /// The sum of stored power equals the emitted power times sum_k a^k (k from 0 with the
 /// direct hit stored, from 1 without), within 4 standard errors from the measured per-photon
 /// variance plus RGBE's rounding bound (2^-8 relative).
-void check_conservation(const Scene<float>& s, float a, bool store_direct) {
+void check_conservation(const Scene<float>& s, float a, bool store_direct,
+                        PhotonEmission emission = PhotonEmission::random) {
     const Accel accel(s.triangles);
-    const PhotonSettings st{.photons = 20000, .seed = 7, .max_depth = 200, .threads = 1, .store_direct = store_direct};
+    const PhotonSettings st{.photons = 20000, .seed = 7, .max_depth = 200, .threads = 1, .store_direct = store_direct,
+                            .emission = emission};
     const std::vector<double> x = stored_per_photon(s, accel, st);
     double sum = 0, sq = 0;
     for (double v : x) sum += v, sq += v * v;
@@ -116,6 +118,9 @@ TEST_CASE("photon tracing: stored power is conserved on closed grey boxes") {
     SUBCASE("point light, direct hits stored") { check_conservation(closed_box(0.5f, false, false), 0.5f, true); }
     SUBCASE("point light, direct hits not stored") { check_conservation(closed_box(0.6f, false, false), 0.6f, false); }
     SUBCASE("area light, glass sphere and mirror box") { check_conservation(closed_box(0.5f, true, true), 0.5f, true); }
+    SUBCASE("Halton emission (the per-photon variance bounds a quasi-random sum's error too)") {
+        check_conservation(closed_box(0.5f, true, true), 0.5f, true, PhotonEmission::halton);
+    }
 }
 
 TEST_CASE("photon tracing: L S+ D paths go to the caustic map, independent of the thread count") {
@@ -137,6 +142,12 @@ TEST_CASE("photon tracing: L S+ D paths go to the caustic map, independent of th
     CHECK(!one.caustic.empty());
     const PhotonSet plain = trace_photons(closed_box(0.5f, false, false), Accel(closed_box(0.5f, false, false).triangles), st);
     CHECK(plain.caustic.empty());
+    st.emission = PhotonEmission::halton;
+    const PhotonSet h3 = trace_photons(s, accel, st);
+    st.threads = 1;
+    const PhotonSet h1 = trace_photons(s, accel, st);
+    CHECK(h1.global_triangle == h3.global_triangle);
+    CHECK(h1.global.size() != one.global.size());  // a different photon set from the random one
 }
 
 TEST_CASE("photon tracing: bad settings and dark scenes are refused") {
@@ -345,6 +356,28 @@ TEST_CASE("surface groups: a corner's two walls are two groups below 90 degrees,
     }
     CHECK(leaked_single > 100);  // one map for both walls gathers the wall's photons on the floor
     CHECK_THROWS_WITH_AS(GroupedPhotonMaps(set.global, std::span<const std::uint32_t>(), groups), doctest::Contains("triangle indices"), Error);
+}
+
+TEST_CASE("photon map stress: NaN and infinite queries find nothing, far coordinates and equal points work") {
+    std::vector<PhotonNeighbour> out;
+    std::vector<Photon> ps = random_photons(300, 4, false);
+    for (Photon& p : ps) p.position = p.position * 1e-3f + Vec3<float>(1e6f, -1e6f, 1e6f);  // far from the origin
+    const PhotonMap far(ps);
+    far.knn(Vec3<float>(std::nanf(""), 0, 0), 10, 1.0f, out);
+    CHECK(out.empty());
+    far.knn(Vec3<float>(std::numeric_limits<float>::infinity(), 0, 0), 10, std::numeric_limits<float>::infinity(), out);
+    CHECK(out.empty());
+    const Vec3<float> x = ps[7].position;
+    far.knn(x, 10, std::numeric_limits<float>::infinity(), out);
+    std::vector<float> got;
+    for (const PhotonNeighbour& q : out) got.push_back(q.d2);
+    std::sort(got.begin(), got.end());
+    CHECK(got == brute_knn(ps, x, 10, std::numeric_limits<float>::infinity()));
+    const PhotonMap same(std::vector<Photon>(100, ps[0]));  // every photon at one point
+    same.knn(ps[0].position, 30, 0.0f, out);
+    CHECK(out.size() == 30);
+    same.knn(ps[0].position, 300, 0.0f, out);
+    CHECK(out.size() == 100);
 }
 
 // ---- the integrators' structures and scenes (photons-render) ----

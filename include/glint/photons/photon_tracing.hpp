@@ -7,7 +7,11 @@
 // power; an area light's photon leaves a uniform point in a cosine-distributed direction, a
 // point light's in a uniform direction through the light's profile (power 4 pi I(w) / P_k).
 // Photon i draws its numbers from its own PCG stream Pcg32::hashed(seed, i), so a photon set
-// is the same for any thread count. Stored powers already carry the 1 / emitted of the
+// is the same for any thread count; with PhotonEmission::halton its five emission numbers
+// (emitter, position, direction) are instead point i + 1 of the Halton sequence in bases 2,
+// 3, 5, 7, 11 (Larsen 2004, ch. 6: quasi-random emission), rotated by one random shift per
+// dimension drawn from the seed (Cranley-Patterson), and only the walk after emission uses
+// the PCG stream. Stored powers already carry the 1 / emitted of the
 // estimator: their sum estimates the power arriving at the scene's surfaces.
 //
 // Transport: at a mirror or dielectric the photon follows specular_direction (Fresnel choice
@@ -38,6 +42,8 @@
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/photons/photon.hpp>
+#include <glint/sampling/primes.hpp>
+#include <glint/sampling/radical_inverse.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/warps.hpp>
 #include <glint/tracer/brdf.hpp>
@@ -47,12 +53,16 @@
 
 namespace glint {
 
+/// Where a photon's emission numbers come from (see the header comment).
+enum class PhotonEmission : std::uint8_t { random, halton };
+
 struct PhotonSettings {
     std::size_t photons = 100000;  // emitted photons
     std::uint64_t seed = 1;
     int max_depth = 64;            // cap on a photon's vertices (roulette ends walks long before)
     int threads = 0;               // 0: hardware concurrency
     bool store_direct = true;      // the first hit of direct light goes to the global map
+    PhotonEmission emission = PhotonEmission::random;
 };
 
 struct PhotonSet {
@@ -128,7 +138,13 @@ void trace_photon(const Scene<T>& s, const A& accel, const PhotonEmitters<T>& em
                   std::uint64_t index, PhotonSet& out) {
     Pcg32 rng = Pcg32::hashed(settings.seed, index);
     std::array<T, 5> u{};
-    for (T& v : u) v = rng.uniform<T>();
+    if (settings.emission == PhotonEmission::halton) {
+        Pcg32 shifts = Pcg32::hashed(settings.seed, ~std::uint64_t(0));  // the same for every photon
+        for (std::size_t k = 0; k < u.size(); ++k)
+            u[k] = fraction_to_unit<T>(radical_inverse_bits(primes[k], index + 1) + shifts.next_u64());
+    } else {
+        for (T& v : u) v = rng.uniform<T>();
+    }
     Rgb<T> power;
     Ray<T> ray = emitters.emit(s, u, power);
     power /= T(settings.photons);

@@ -112,8 +112,8 @@ public:
         build(parts, threads);
     }
 
-    /// Maps already split by group (parts[g]: the photons of group g), for callers that
-    /// group photons themselves; group_of: the group of every triangle.
+    /// Maps already split by group (parts[g]: the photons of group g, moved from), for callers
+    /// that group photons themselves; group_of: the group of every triangle.
     GroupedPhotonMaps(std::vector<std::vector<Photon>>& parts, std::vector<std::uint32_t> group_of, int threads = 0)
         : group_of_(std::move(group_of)), maps_(parts.size()) {
         build(parts, threads);
