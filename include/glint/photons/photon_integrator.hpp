@@ -1,4 +1,4 @@
-// glint/photons/photon_integrator.hpp: photon mapping's rendering pass (Jensen 2001, §9; Larsen
+// glint/photons/photon_integrator.hpp: photon mapping's rendering pass (Jensen 2001, ch. 9; Larsen
 // 2004, §4) as an integrator of tracer/renderer.hpp. A camera ray is followed through mirrors
 // and dielectrics to its visible point (photons/visible_points.hpp), where the radiance is
 // split into

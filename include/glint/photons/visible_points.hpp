@@ -2,7 +2,7 @@
 // radiance: a camera ray followed through mirrors and dielectrics (the Fresnel choice drawn
 // from the pixel sample's stream) to its first diffuse or glossy vertex, which keeps the
 // path's throughput, its outgoing direction and its material (Hachisuka and Jensen 2009's
-// visible points; Jensen 2001, §9.1's first diffuse surface of the eye ray). Emission met on
+// visible points; the first diffuse surface of Jensen 2001, ch. 9's eye ray). Emission met on
 // the way (at the camera vertex, after specular bounces and at the point itself) is the
 // path's own radiance, counted whole.
 //

@@ -18,7 +18,7 @@
 //   cornell-caustics        the Cornell box's walls with a glass sphere (dielectric, ior 1.5,
 //                           96 x 192 quads) and a mirror cube instead of the two boxes, lit by
 //                           the same small area light: the caustic scene of photon mapping
-//                           (Jensen 2001, §9; Larsen 2004, ch. 4);
+//                           (Jensen 2001, ch. 9; Larsen 2004, ch. 4);
 //   cornell-caustics-point  the same lit by an isotropic point light just below the ceiling
 //                           (intensity Le A of the area light: the same irradiance straight
 //                           below), whose caustics a path tracer cannot sample at all;
