@@ -132,6 +132,22 @@ def parse_bench_cones(text):
     return need(out, 'per-count ratio lines')
 
 
+def parse_bench_photons(text):
+    """bench_photons' kNN tables: {(photons, k): (glint / nanoflann speed, same distances)}."""
+    out, photons = {}, None
+    for line in text.splitlines():
+        m = re.match(r'# kNN against nanoflann [\d.]+: (\d+) photons', line)
+        if m:
+            photons = int(m.group(1))
+            continue
+        m = re.match(r'\s+(\d+)\s+[\d.]+\s+[\d.]+\s+([\d.]+)\s+(yes|no)\s*$', line)
+        if m and photons:
+            out[(photons, int(m.group(1)))] = (float(m.group(2)), m.group(3) == 'yes')
+    if not out:
+        raise ParseError('no kNN table in bench_photons output')
+    return out
+
+
 def parse_bench_lights(csv_path):
     """bench_lights --csv: {scene: {method: [row dict of floats, one per repetition]}}."""
     out = {}
@@ -318,6 +334,11 @@ def job_lights(c, rep):
     return parse_bench_lights(out)
 
 
+def job_photons(c, rep):
+    argv = [c.exe('bench_photons'), '--knn-only'] + (['--quick'] if c.a.quick else [])
+    return parse_bench_photons(c.run('bench_photons', argv, rep))
+
+
 def job_cycles(c, rep):
     return peer_cycles(c, rep, 'cornell,cornell-bunny', 'peer_cycles', [])
 
@@ -350,6 +371,23 @@ def peer_cycles(c, rep, scenes, name, extra):
 
 class Skip(Exception):
     pass
+
+
+def job_caustics(c, rep):
+    """tools/caustics_table.py: {(budget, method): row} (RMSE against each renderer's own reference)."""
+    if c.a.quick:
+        raise Skip('--quick does not run Blender (a reference takes minutes)')
+    if not shutil.which('blender'):
+        raise Skip('Blender is not installed (Debian: apt-get install blender)')
+    render = os.path.join(c.a.build_dir, 'examples', 'glint-render')
+    if not os.path.exists(render):
+        raise Skip('glint-render is not built')
+    out = os.path.join(c.logs, 'caustics_table.%d.json' % rep)
+    argv = [sys.executable, os.path.join(ROOT, 'tools', 'caustics_table.py'), '--glint', render, '--core', str(c.a.core),
+            '--json', out, '--work', os.path.join(c.a.build_dir, 'caustics_table')]
+    c.run('caustics_table', argv, rep)  # the script pins its own renders
+    with open(out) as f:
+        return {(r['budget'], r['method']): r for r in json.load(f)['rows']}
 
 
 # ----------------------------------------------------------------------------- rows
@@ -707,6 +745,60 @@ row('lights-tree', 'stochastic light tree (Conty Estevez and Kulla 2018) in the 
      Check('kitchen, tree / power MSE·time', '1.0', lights_tree_vs_power('kitchen'), '%.1f', '×')],
     lambda m: '**%s×** on the 800-light hall, **%s×** on the 72-light kitchen ([lights.md](docs/lights.md#measured))' % (
         m('hall, tree / power MSE·time'), m('kitchen, tree / power MSE·time')), 0)
+
+
+def photons_knn(size, k):
+    """glint's kNN speed over nanoflann's on the smallest or largest photon count bench_photons ran."""
+    def get(c, r):
+        d = job_photons(c, r)
+        counts = sorted({p for p, kk in d if kk == k})
+        if not counts:
+            raise ParseError('no k = %d row in bench_photons' % k)
+        ratio, same = d[(counts[0] if size == 'smallest' else counts[-1], k)]
+        if not same:
+            raise ParseError('glint and nanoflann found different neighbours (k = %d)' % k)
+        return ratio
+    return get
+
+
+row('photons-knn', 'photon map k nearest neighbours: the left-balanced kd-tree (Jensen 2001; Larsen 2004, §4.3)',
+    'nanoflann 1.4.2, the same photons and queries, one thread',
+    '**1.46× / 2.85×** nanoflann\'s speed at k = 50 (10⁴ / 10⁶ photons), **6.2×** at k = 500 (10⁶); the same '
+    'neighbours ([photons.md](docs/photons.md#bench_photons))', 1,
+    [Check('k = 50, 10^4 photons', '1.46', photons_knn('smallest', 50), '%.2f', '×'),
+     Check('k = 50, 10^6 photons', '2.85', photons_knn('largest', 50), '%.2f', '×'),
+     Check('k = 500, 10^6 photons', '6.2', photons_knn('largest', 500), '%.1f', '×')],
+    lambda m: '**%s× / %s×** nanoflann\'s speed at k = 50 (10⁴ / 10⁶ photons), **%s×** at k = 500 (10⁶); the same '
+              'neighbours ([photons.md](docs/photons.md#bench_photons))' % (
+                  m('k = 50, 10^4 photons'), m('k = 50, 10^6 photons'), m('k = 500, 10^6 photons')), 3)
+
+
+def caustics_ratio(budget, method, against, key='rmse'):
+    """RMSE of `method` over `against`'s at equal time `budget` on cornell-caustics."""
+    def get(c, r):
+        d = job_caustics(c, r)
+        return d[(budget, method)][key] / d[(budget, against)][key]
+    return get
+
+
+row('caustics', 'caustics at equal time on the Cornell box with a glass sphere and a mirror cube: SPPM (Hachisuka and '
+    'Jensen 2009), RMSE at 2 / 8 s, pixels away from the light',
+    'glint\'s path tracer; Cycles 3.4 (Glass BSDF sharp, caustics on), same scene exported',
+    '**0.55 / 0.58** of glint path\'s RMSE, **0.29 / 0.40** of Cycles\'; over the whole image 0.66 / 1.00 of Cycles\', '
+    '1.3 / 1.4 of glint path\'s ([photons.md](docs/photons.md#caustics-at-equal-time))', 1,
+    [Check('2 s, sppm / glint path', '0.55', caustics_ratio(2.0, 'glint sppm', 'glint path')),
+     Check('8 s, sppm / glint path', '0.58', caustics_ratio(8.0, 'glint sppm', 'glint path')),
+     Check('2 s, sppm / Cycles', '0.29', caustics_ratio(2.0, 'glint sppm', 'Cycles 3.4 path')),
+     Check('8 s, sppm / Cycles', '0.40', caustics_ratio(8.0, 'glint sppm', 'Cycles 3.4 path')),
+     Check('2 s, image, sppm / Cycles', '0.66', caustics_ratio(2.0, 'glint sppm', 'Cycles 3.4 path', 'rmse_image')),
+     Check('8 s, image, sppm / Cycles', '1.00', caustics_ratio(8.0, 'glint sppm', 'Cycles 3.4 path', 'rmse_image')),
+     Check('2 s, image, sppm / glint path', '1.3', caustics_ratio(2.0, 'glint sppm', 'glint path', 'rmse_image'), '%.1f'),
+     Check('8 s, image, sppm / glint path', '1.4', caustics_ratio(8.0, 'glint sppm', 'glint path', 'rmse_image'), '%.1f')],
+    lambda m: '**%s / %s** of glint path\'s RMSE, **%s / %s** of Cycles\'; over the whole image %s / %s of Cycles\', '
+              '%s / %s of glint path\'s ([photons.md](docs/photons.md#caustics-at-equal-time))' % (
+                  m('2 s, sppm / glint path'), m('8 s, sppm / glint path'), m('2 s, sppm / Cycles'), m('8 s, sppm / Cycles'),
+                  m('2 s, image, sppm / Cycles'), m('8 s, image, sppm / Cycles'), m('2 s, image, sppm / glint path'),
+                  m('8 s, image, sppm / glint path')), 10)
 
 
 # The rows README marked stale run first, the slowest per value (lambda, Cycles) last.
