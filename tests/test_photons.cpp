@@ -15,6 +15,7 @@
 #include <glint/photons/photon_map.hpp>
 #include <glint/photons/photon_tracing.hpp>
 #include <glint/photons/radiance_estimate.hpp>
+#include <glint/photons/selective_tracing.hpp>
 #include <glint/photons/surface_groups.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
@@ -369,4 +370,75 @@ TEST_CASE("photon map stress: NaN and infinite queries find nothing, far coordin
     CHECK(out.size() == 30);
     same.knn(ps[0].position, 300, 0.0f, out);
     CHECK(out.size() == 100);
+}
+
+namespace {
+
+/// The closed grey cube of closed_box (its ceiling the light) with a box inside at x offset
+/// `lit`, beside a second closed cube, [3, 5] x [-1, 1] x [-1, 1], that no light reaches, with a
+/// box inside at x offset `dark`. Triangle count and order do not depend on the offsets.
+Scene<float> two_rooms(float lit, float dark) {
+    Scene<float> s = closed_box(0.5f, true, false);
+    using V = Vec3<float>;
+    const auto wall = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    const V o(4, 0, 0);
+    detail::add_quad_facing(s, V(3, -1, -1), V(5, -1, -1), V(5, -1, 1), V(3, -1, 1), o, wall);
+    detail::add_quad_facing(s, V(3, 1, -1), V(3, 1, 1), V(5, 1, 1), V(5, 1, -1), o, wall);
+    detail::add_quad_facing(s, V(3, -1, -1), V(3, 1, -1), V(5, 1, -1), V(5, -1, -1), o, wall);
+    detail::add_quad_facing(s, V(3, -1, 1), V(5, -1, 1), V(5, 1, 1), V(3, 1, 1), o, wall);
+    detail::add_quad_facing(s, V(3, -1, -1), V(3, -1, 1), V(3, 1, 1), V(3, 1, -1), o, wall);
+    detail::add_quad_facing(s, V(5, -1, -1), V(5, 1, -1), V(5, 1, 1), V(5, -1, 1), o, wall);
+    const auto grey = s.add_material(Material<float>::lambertian(Rgb<float>(0.7f)));
+    detail::add_box(s, V(-0.3f + lit, -1.0f, -0.3f), V(0.3f + lit, -0.2f, 0.3f), 0.3f, grey);
+    detail::add_box(s, V(3.7f + dark, -1.0f, -0.3f), V(4.3f + dark, -0.2f, 0.3f), 0.3f, grey);
+    return s;
+}
+
+/// Photons of a and b that differ (triangle, or position beyond 1e-4), plus the size difference.
+std::size_t photon_mismatches(const PhotonSet& a, const PhotonSet& b) {
+    auto count = [](const std::vector<Photon>& x, const std::vector<std::uint32_t>& tx, const std::vector<Photon>& y,
+                    const std::vector<std::uint32_t>& ty) {
+        std::size_t bad = x.size() > y.size() ? x.size() - y.size() : y.size() - x.size();
+        for (std::size_t k = 0; k < std::min(x.size(), y.size()); ++k)
+            bad += tx[k] != ty[k] || glm::length(x[k].position - y[k].position) > 1e-4f || x[k].rgbe != y[k].rgbe;
+        return bad;
+    };
+    return count(a.global, a.global_triangle, b.global, b.global_triangle) +
+           count(a.caustic, a.caustic_triangle, b.caustic, b.caustic_triangle);
+}
+
+}  // namespace
+
+TEST_CASE("selective tracing: an unlit room's changes emit nothing; the maintained set converges to a full re-trace") {
+    SelectiveTracingSettings st;
+    st.photons.photons = 20000;
+    st.photons.seed = 11;
+    st.photons.emission = PhotonEmission::halton;
+    st.photons.threads = 2;
+    st.groups = 210;  // 2 * 3 * 5 * 7
+    Scene<float> s = two_rooms(0.0f, 0.0f);
+    SelectivePhotons<float> sel(s, Accel(s.triangles), st);
+    CHECK(photon_mismatches(sel.photons(), trace_photons(s, Accel(s.triangles), st.photons)) == 0);
+    for (int f = 1; f <= 5; ++f) {  // the box in the unlit room moves: pilots only
+        s = two_rooms(0.0f, 0.1f * float(f));
+        const SelectiveFrame frame = sel.update(s, Accel(s.triangles));
+        CHECK(frame.pilots == 210);
+        CHECK(frame.reemitted == 0);
+        CHECK(frame.added.empty());
+    }
+    s = two_rooms(0.4f, 0.5f);  // the lit room's box moves
+    const Accel accel(s.triangles);
+    const PhotonSet full = trace_photons(s, accel, st.photons);
+    const SelectiveFrame first = sel.update(s, accel);
+    CHECK(first.reemitted > 0);
+    CHECK(first.reemitted >= first.groups_changed * (20000 / 210));  // whole groups of 95 or 96
+    CHECK(first.reemitted <= first.groups_changed * (20000 / 210 + 1));
+    CHECK(first.removed.size() > 0);
+    CHECK(photon_mismatches(sel.photons(), full) > 0);  // one pilot per group does not see every change
+    std::size_t frames = 1, reemitted = first.reemitted;
+    for (; frames < sel.group_size(0); ++frames) reemitted += sel.update(s, accel).reemitted;
+    CHECK(photon_mismatches(sel.photons(), full) == 0);
+    CHECK(reemitted <= 20000);
+    CHECK(sel.update(s, accel).reemitted == 0);  // nothing moves: nothing is emitted
+    CHECK_THROWS_AS(SelectivePhotons<float>(s, accel, SelectiveTracingSettings{st.photons, 0}), Error);
 }
