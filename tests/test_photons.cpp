@@ -11,12 +11,14 @@
 
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/photons/final_gather.hpp>
+#include <glint/photons/hemiplane.hpp>
 #include <glint/photons/photon.hpp>
 #include <glint/photons/photon_map.hpp>
 #include <glint/photons/photon_tracing.hpp>
 #include <glint/photons/radiance_estimate.hpp>
 #include <glint/photons/selective_tracing.hpp>
 #include <glint/photons/surface_groups.hpp>
+#include <glint/photons/texel_cache.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
@@ -441,4 +443,74 @@ TEST_CASE("selective tracing: an unlit room's changes emit nothing; the maintain
     CHECK(reemitted <= 20000);
     CHECK(sel.update(s, accel).reemitted == 0);  // nothing moves: nothing is emitted
     CHECK_THROWS_AS(SelectivePhotons<float>(s, accel, SelectiveTracingSettings{st.photons, 0}), Error);
+}
+
+TEST_CASE("hemiplane: the weights sum to the closed-form covered fraction; uniform radiance gathers pi L") {
+    CHECK(hemiplane_fraction(1.0) == doctest::Approx(0.55408).epsilon(1e-4));  // the hemicube's front face
+    CHECK(hemiplane_fraction(2.0) == doctest::Approx(0.83103).epsilon(1e-4));  // enlarged to twice its side
+    for (const double a : {1.0, 2.0}) {
+        // Midpoint rule: the error falls as h^2, so 4x the resolution cuts it about 16x.
+        const double e64 = std::abs(HemiPlane<double>(64, a).fraction() - hemiplane_fraction(a));
+        const double e256 = std::abs(HemiPlane<double>(256, a).fraction() - hemiplane_fraction(a));
+        CHECK(e64 < 2e-4);
+        CHECK(e256 < e64 / 10);
+    }
+    const Scene<float> s = closed_box(0.5f, true, false);
+    const Accel accel(s.triangles);
+    const HemiPlane<float> plane(64, 2.0f);
+    const Vec3<float> x(0.1f, -1.0f, 0.2f), up(0, 1, 0);
+    const Rgb<float> L(0.3f, 1.0f, 2.0f);
+    const Rgb<float> e = plane.gather(accel, x, up, [&](const Ray<float>&, const StoreHit<float>&) { return L; });
+    for (int c = 0; c < 3; ++c) CHECK(e[c] == doctest::Approx(pi<float> * L[c]).epsilon(1e-4));
+    // Radiance from the ceiling only, seen from the floor's centre: within the plane (a = 0.5
+    // there), so it is overestimated by exactly 1 / fraction: pi L F(0.5) / F_plane.
+    const auto ceiling = [&](const Ray<float>& r, const StoreHit<float>& h) {
+        return r.at(h.t).y > 0.99f ? Rgb<float>(1.0f) : Rgb<float>(0.0f);
+    };
+    const HemiPlane<float> fine(256, 2.0f);
+    const float got = fine.gather(accel, Vec3<float>(0, -1, 0), up, ceiling)[0];
+    const float expected = pi<float> * hemiplane_fraction(0.5f) / fine.fraction();
+    CHECK(got == doctest::Approx(expected).epsilon(0.01));
+    CHECK(std::abs(got - pi<float> * hemiplane_fraction(0.5f)) > 0.1f * got);  // the renormalization's bias is resolved
+    CHECK_THROWS_AS(HemiPlane<float>(0, 2.0f), Error);
+    CHECK_THROWS_AS(HemiPlane<float>(8, -1.0f), Error);
+}
+
+TEST_CASE("texel cache: texels follow their triangles; updates go by priority within the budget") {
+    const Scene<float> s = closed_box(0.5f, true, false);
+    const Accel accel(s.triangles);
+    PhotonSettings ps;
+    ps.photons = 20000;
+    ps.seed = 3;
+    const PhotonSet photons = trace_photons(s, accel, ps);
+    TexelCacheSettings ts;
+    ts.texel_size = 0.5f;
+    ts.hemiplane_resolution = 8;
+    ts.estimate = {50, 1.0f};
+    TexelCache<float> cache(s, surface_groups<float>(s.triangles, 0.5f), ts);
+    CHECK(cache.texels() == 12 * 6 * 6);  // longest edge 2 sqrt 2: n = ceil(2.83 / 0.5) = 6, n^2 texels a triangle
+    cache.update_all(s, accel, photons);
+    // Closed grey cube: the floor's reflected radiance (AIM) is a / pi times the irradiance
+    // from all walls; its IIM (everything but the ceiling's emission) is positive.
+    const Rgb<float> aim = cache.approximated(s, 0, Vec3<float>(0.1f, -1.0f, 0.1f));
+    const Rgb<float> iim = cache.indirect(s, 0, Vec3<float>(0.1f, -1.0f, 0.1f));
+    CHECK(aim[0] > 0.0f);
+    CHECK(iim[0] > 0.0f);
+    CHECK(std::isfinite(iim[0]));
+    Scene<float> moved = s;  // texels are named by triangle and barycentrics: they move along
+    for (auto& t : moved.triangles)
+        for (auto& v : t) v += Vec3<float>(10, 0, 0);
+    CHECK(cache.indirect(moved, 0, Vec3<float>(10.1f, -1.0f, 0.1f))[0] == iim[0]);
+    CHECK(cache.indirect(s, 0, Vec3<float>(-0.9f, -1.0f, 0.9f))[0] != iim[0]);  // another texel
+    // Changes on the floor (triangles 0 and 1) only: its group alone is refreshed, 20 texels a frame.
+    SelectiveFrame f;
+    f.added.push_back({0, 0.01f, true});
+    cache.record(f);
+    const TexelUpdate u = cache.update(s, accel, photons);
+    CHECK(u.aim_groups == 1);
+    CHECK(u.iim_texels == 20);
+    std::size_t frames = 1;
+    while (cache.update(s, accel, photons).iim_texels > 0) ++frames;
+    CHECK(frames >= 2);
+    CHECK(cache.update(s, accel, photons).aim_groups == 0);
 }
