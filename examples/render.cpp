@@ -33,8 +33,10 @@
 #include <glint/io/scene_json.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
+#include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
 
+#include "photon_cli.hpp"
 #include "vpl_cli.hpp"
 
 using namespace glint;
@@ -44,9 +46,15 @@ namespace {
 enum class Tonemap { clamp, reinhard };
 constexpr Choice<Tonemap> tonemaps[] = {{"clamp", "exposure, clip at 1, sRGB", Tonemap::clamp},
                                         {"reinhard", "x / (1 + x) first", Tonemap::reinhard}};
-constexpr Choice<bool> integrators[] = {{"path", "the path tracer", false},
-                                        {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, "
-                                                "--direct and --sampler do not apply)", true}};
+enum class IntegratorKind { path, vpl, sppm, photons };
+constexpr Choice<IntegratorKind> integrators[] = {
+    {"path", "the path tracer (with --time-budget: passes of --spp samples per pixel)", IntegratorKind::path},
+    {"vpl", "virtual light sources (one ray per pixel centre; --spp, --roulette, --direct and --sampler do not apply; "
+            "no passes)", IntegratorKind::vpl},
+    {"sppm", "stochastic progressive photon mapping (Hachisuka and Jensen 2009): --spp passes, or passes for "
+             "--time-budget", IntegratorKind::sppm},
+    {"photons", "photon mapping (Jensen 2001): direct light, caustic map, final gather from the global map; with "
+                "--time-budget, passes of new maps", IntegratorKind::photons}};
 constexpr Choice<bool> visibilities[] = {{"rays", "shadow rays", false},
                                          {"spheres", "occluder spheres from --insert-mesh or --mesh", true}};
 constexpr Choice<VplGather> gathers[] = {{"all", "every VPL, a shadow ray each", VplGather::all},
@@ -88,14 +96,21 @@ void usage() {
         "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n" +
         choices("  --tonemap NAME      PNG preview", std::span<const Choice<Tonemap>>(tonemaps)) +
         "  --seed N            random seed (default 0)\n"
+        "  --time-budget S     progressive passes until S seconds are spent (path, sppm, photons); prints\n"
+        "                      the passes done\n"
         "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
         "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n" +
-        choices("  --integrator NAME   integrator", std::span<const Choice<bool>>(integrators)) +
+        choices("  --integrator NAME   integrator", std::span<const Choice<IntegratorKind>>(integrators)) +
         "  --vpls N            vpl: shooting walks (default 1024)\n" +
         choices("  --visibility NAME   vpl: visibility", std::span<const Choice<bool>>(visibilities)) +
         "  --spheres K         vpl: occluder spheres (default 100)\n"
         "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n" +
-        choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers));
+        choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers)) +
+        "  --photons N         sppm, photons: photons emitted per pass (default 100000)\n"
+        "  --radius R          sppm: initial gather radius; photons: largest kNN radius (default 0.05)\n"
+        "  --camera-samples N  sppm: camera rays per pixel and pass for emission and direct light (default 1)\n"
+        "  --knn K             photons: photons per radiance estimate (default 50)\n"
+        "  --final-gather N    photons: final gather rays per pixel sample (default 64)\n";
     std::fputs(text.c_str(), stdout);
 }
 
@@ -196,7 +211,9 @@ struct Args {
     std::optional<Vec3f> eye, look_at, up;
     std::optional<float> fov_degrees;
     std::string integrator = "path";
+    double time_budget = 0;  // --time-budget: seconds of passes, 0: one render
     VplCliOptions vpl;
+    PhotonCliOptions photons;
 };
 
 /// Every name the command line gives, checked against its table before any file is read.
@@ -205,7 +222,7 @@ void check_names(const Args& g, const NamedRender<float>& o) {
     if (!g.scene_name.empty()) find_choice(scene_choices<float>(), "scene", g.scene_name);
     find_choice(accelerator_choices(), "accelerator", g.accel);
     find_choice(std::span<const Choice<Tonemap>>(tonemaps), "tonemap", g.tonemap);
-    find_choice(std::span<const Choice<bool>>(integrators), "integrator", g.integrator);
+    find_choice(std::span<const Choice<IntegratorKind>>(integrators), "integrator", g.integrator);
     find_choice(std::span<const Choice<bool>>(visibilities), "visibility", g.vpl.visibility);
     find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather);
 }
@@ -248,6 +265,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--fov") g.fov_degrees = to_float(a, value(), 0.01f, 179.0f);
         else if (a == "--tonemap") g.tonemap = value();
         else if (a == "--seed") o.seed = to_u64(a, value());
+        else if (a == "--time-budget") g.time_budget = to_float(a, value(), 1e-3f, 1e6f);
         else if (a == "--insert-mesh") g.insert = value();
         else if (a == "--export-scene") g.export_json = value();
         else if (a == "--integrator") g.integrator = value();
@@ -256,9 +274,16 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--spheres") g.vpl.spheres = std::size_t(to_int(a, value(), 1, 1 << 20));
         else if (a == "--clamp") g.vpl.clamp = to_float(a, value(), 0.0f, 1e30f);
         else if (a == "--gather") g.vpl.gather = value();
+        else if (a == "--photons") g.photons.photons = std::size_t(to_int(a, value(), 1, 1ll << 32));
+        else if (a == "--radius") g.photons.radius = to_float(a, value(), 1e-6f, 1e6f);
+        else if (a == "--knn") g.photons.knn = int(to_int(a, value(), 1, 1 << 16));
+        else if (a == "--final-gather") g.photons.gather_rays = int(to_int(a, value(), 0, 1 << 16));
+        else if (a == "--camera-samples") g.photons.camera_samples = int(to_int(a, value(), 1, 1 << 16));
         else throw Error("unknown option '" + a + "' (see --help)");
     }
     check_names(g, o);
+    if (g.time_budget > 0 && g.integrator == "vpl")
+        throw Error("--time-budget applies to integrators with passes (path, sppm, photons), not '" + g.integrator + "'");
     if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
     if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
         throw Error("--width x --height = " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
@@ -314,7 +339,18 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
     const auto build_start = std::chrono::steady_clock::now();
     const AcceleratorChoice accel = find_choice(accelerator_choices(), "accelerator", g.accel).make(scene.triangles);
     const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
-    const RenderResult r = std::visit([&](const auto& a) { return render_named(scene, *a, o); }, accel);
+    ProgressiveResult r;
+    if (g.time_budget > 0) {
+        // Passes of --spp samples continuing one sequence (pass k: samples k spp ..), averaged.
+        r = render_passes(PassBudget{g.time_budget, 0}, [&](int k) {
+            NamedRender<float> pass = o;
+            pass.image.first_sample = std::uint64_t(k) * std::uint64_t(o.image.spp);
+            return std::visit([&](const auto& a) { return render_named(scene, *a, pass); }, accel);
+        });
+    } else {
+        static_cast<RenderResult&>(r) = std::visit([&](const auto& a) { return render_named(scene, *a, o); }, accel);
+        r.passes = 1;
+    }
     const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
     write_exr(exr, r.image, exr_layers(r));
     write_png(png, r.image, g.exposure, g.tonemap == "reinhard");
@@ -322,9 +358,47 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
                 scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, double(r.rays) / r.seconds * 1e-6,
                 (unsigned long long)r.rays, double(r.rays) / double(std::max<std::uint64_t>(r.paths, 1)), exr.c_str(),
                 png.c_str());
+    if (g.time_budget > 0)
+        std::printf("passes: %d of %d spp (%d spp) in %.3f s, budget %.3f s\n", r.passes, o.image.spp, r.passes * o.image.spp,
+                    r.seconds, g.time_budget);
     if (r.capped_walks > 0)
         std::fprintf(stderr, "glint-render: warning: %llu walks reached the depth cap of %d vertices and were cut "
                      "(biased); raise --max-depth\n", (unsigned long long)r.capped_walks, o.tracer.max_depth);
+    return 0;
+}
+
+/// The render's EXR (no variance layer: progressive photon mapping keeps none) and PNG.
+void write_images(const Args& g, const Image<Rgb<float>>& image) {
+    const std::string stem = g.out.substr(0, g.out.size() - 4);
+    write_exr(stem + ".exr", image, {});
+    write_png(stem + ".png", image, g.exposure, g.tonemap == "reinhard");
+}
+
+/// --integrator sppm: --spp passes, or passes for --time-budget seconds.
+int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+    const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, o.image.spp};
+    const SppmResult r = render_sppm_cli(scene, g.photons, o.image, budget, o.seed);
+    write_images(g, r.image);
+    std::printf("rendered %s with SPPM in %.3f s (build 0 s): %d passes of %zu photons (%zu emitted), mean radius %.4g "
+                "(from %.4g), photon passes %.3f s; wrote %s\n",
+                scene.name.c_str(), r.seconds, r.passes, g.photons.photons, r.photons_emitted, r.mean_radius,
+                g.photons.radius, r.photon_seconds, g.out.c_str());
+    std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
+                g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
+    return 0;
+}
+
+/// --integrator photons: one render of --spp samples, or passes of new maps for --time-budget.
+int render_photons_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+    const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, 1};
+    const ProgressiveResult r = render_photons_cli(scene, g.photons, o.image, budget, o.seed);
+    write_images(g, r.image);
+    std::printf("rendered %s with photon maps in %.3f s (build 0 s): %zu + %zu photons per pass, k %d, radius %.4g, "
+                "%d gather rays, %d spp per pass; wrote %s\n",
+                scene.name.c_str(), r.seconds, g.photons.photons, 4 * g.photons.photons, g.photons.knn, g.photons.radius,
+                g.photons.gather_rays, o.image.spp, g.out.c_str());
+    std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
+                g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
     return 0;
 }
 
@@ -348,6 +422,8 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (g.integrator == "path") return render_path(g, o, scene);
+        if (g.integrator == "sppm") return render_sppm_main(g, o, scene);
+        if (g.integrator == "photons") return render_photons_main(g, o, scene);
         VplSettings st;
         st.seed = o.seed + 1;
         st.gather = find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather).make;

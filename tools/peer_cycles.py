@@ -56,6 +56,13 @@ exported with the nearest cosine-power lobe Cycles has, Ashikhmin-Shirley (a Bli
 about the half vector) with exponent 4n (roughness sqrt(sqrt(2 / (4n + 2)))): the two images
 differ (the region means show by how much), each renderer's error is still against its own
 reference, so the time ratio compares how each renders a glossy Cornell box, not one image.
+
+The caustic scenes (cornell-caustics, cornell-caustics-point: a glass sphere and a mirror cube
+in the Cornell box): the dielectric is Cycles' Glass BSDF with the sharp distribution (the ideal
+dielectric, glint's MaterialKind::dielectric), the mirror its Glossy BSDF, sharp; caustics are
+on (reflective and refractive), as for every scene. The point light is a Blender point light of
+radius 0. Region masks leave the sphere and the cube out (they belong to no region; 'image'
+keeps every pixel). tools/caustics_table.py compares glint's photon integrators on them.
 """
 import argparse
 import hashlib
@@ -81,12 +88,14 @@ SCENES = {
     'cornell': ['--scene', 'cornell'],
     'cornell-glossy': ['--scene', 'cornell-glossy'],
     'cornell-bunny': ['--scene', 'cornell', '--insert-mesh', '{bunny}'],
+    'cornell-caustics': ['--scene', 'cornell-caustics'],
+    'cornell-caustics-point': ['--scene', 'cornell-caustics-point'],
     'hall': ['--scene', 'hall'],
     'kitchen': ['--scene', 'kitchen'],
 }
 # Scenes that are not Cornell boxes have one region, 'image': every pixel whose 4 neighbours
 # hit geometry too.
-CORNELL = ('cornell', 'cornell-glossy', 'cornell-bunny')
+CORNELL = ('cornell', 'cornell-glossy', 'cornell-bunny', 'cornell-caustics', 'cornell-caustics-point')
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
@@ -236,6 +245,8 @@ def blender_settings(sc, job, scene_json):
     r.film_transparent = False
     c.pixel_filter_type, c.filter_width = 'BOX', 1.0
     c.samples = job['spp']
+    if job.get('time_limit'):  # equal-time runs: samples until the limit (tools/caustics_table.py)
+        c.time_limit = job['time_limit']
     c.seed = job['seed']
     c.use_animated_seed = False
     c.use_adaptive_sampling = False
@@ -323,9 +334,9 @@ class Runner:
         return run(self.pin + [self.a.blender, '-b', '--factory-startup', '-t', '1', '--python', os.path.abspath(__file__),
                                '--', '--job', job_path])
 
-    def cycles(self, scene_json, spp, seed, out):
+    def cycles(self, scene_json, spp, seed, out, time_limit=0):
         job = out + '.job.json'
-        json.dump({'scene': scene_json, 'spp': spp, 'seed': seed, 'out': out}, open(job, 'w'))
+        json.dump({'scene': scene_json, 'spp': spp, 'seed': seed, 'out': out, 'time_limit': time_limit}, open(job, 'w'))
         self.blender(job)
         t = json.load(open(out + '.json'))
         return read_rgb(out), {'cpu': t['cpu_seconds'], 'wall': t['seconds']}

@@ -45,6 +45,10 @@ struct RenderSettings {
     /// transport's alone: comparisons of estimators (bench_convergence) are not diluted by
     /// the pixel-footprint noise at silhouettes and light edges that every method shares.
     bool pixel_jitter = true;
+    /// The sample index of each pixel's first sample: a render of samples first_sample ..
+    /// first_sample + spp - 1, so that progressive passes continue one sequence (a Halton
+    /// sampler's pixel positions are not randomized by its seed: passes must not restart it).
+    std::uint64_t first_sample = 0;
 };
 
 /// An integrator's own layer of the image, by name (the VPL method's "indirect" part,
@@ -255,7 +259,7 @@ private:
         Tally tally;
         const int n = spp();
         for (int i = 0; i < n; ++i) {
-            const Ray<T> ray = camera_.ray(x, y, std::uint64_t(i), sampler);
+            const Ray<T> ray = camera_.ray(x, y, settings_.first_sample + std::uint64_t(i), sampler);
             PathSample<T> s;
             if constexpr (ThreadStateIntegrator<I>) s = integrator.radiance(ray, sampler, state, thread);
             else s = integrator.radiance(ray, sampler, state);

@@ -15,6 +15,13 @@
 //                   columns (Szécsi 2009, §3.2, Fig. 3.4);
 //   envmap          a sphere and a box on a ground plane under a procedural sky with a sun
 //                   (Szécsi 2009, §3.3, Fig. 3.7), or under a given lat-long EXR;
+//   cornell-caustics        the Cornell box's walls with a glass sphere (dielectric, ior 1.5,
+//                           96 x 192 quads) and a mirror cube instead of the two boxes, lit by
+//                           the same small area light: the caustic scene of photon mapping
+//                           (Jensen 2001, ch. 9; Larsen 2004, ch. 4);
+//   cornell-caustics-point  the same lit by an isotropic point light just below the ceiling
+//                           (intensity Le A of the area light: the same irradiance straight
+//                           below), whose caustics a path tracer cannot sample at all;
 //   hall, kitchen, lie-hall  many-light scenes (lights/scenes.hpp).
 //
 // insert_mesh() adds a mesh (an OBJ's triangles) to a scene, scaled to a footprint and standing
@@ -88,6 +95,17 @@ void add_quad_facing(Scene<T>& s, Vec3<T> a, Vec3<T> b, Vec3<T> c, Vec3<T> d, co
     s.add_quad(a, b, c, d, m);
 }
 
+/// The Cornell box's walls (floor, ceiling, back, green right, red left), as cornell() has them.
+template <Scalar T>
+void add_cornell_walls(Scene<T>& s, std::uint32_t w, std::uint32_t r, std::uint32_t g) {
+    using V = Vec3<T>;
+    s.add_quad(V(-1.01, 0, 0.99), V(1.00, 0, 0.99), V(1.00, 0, -1.04), V(-0.99, 0, -1.04), w);         // floor
+    s.add_quad(V(-1.02, 1.99, 0.99), V(-1.02, 1.99, -1.04), V(1.00, 1.99, -1.04), V(1.00, 1.99, 0.99), w);  // ceiling
+    s.add_quad(V(-0.99, 0, -1.04), V(1.00, 0, -1.04), V(1.00, 1.99, -1.04), V(-1.02, 1.99, -1.04), w); // back
+    s.add_quad(V(1.00, 0, -1.04), V(1.00, 0, 0.99), V(1.00, 1.99, 0.99), V(1.00, 1.99, -1.04), g);      // right
+    s.add_quad(V(-1.01, 0, 0.99), V(-0.99, 0, -1.04), V(-1.02, 1.99, -1.04), V(-1.02, 1.99, 0.99), r);  // left
+}
+
 template <Scalar T>
 Scene<T> cornell(bool glossy) {
     Scene<T> s;
@@ -102,11 +120,7 @@ Scene<T> cornell(bool glossy) {
     const auto w = surface(white), r = surface(red), g = surface(green);
     const auto light = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.78)), Rgb<T>(T(17), T(12), T(4))));
     using V = Vec3<T>;
-    s.add_quad(V(-1.01, 0, 0.99), V(1.00, 0, 0.99), V(1.00, 0, -1.04), V(-0.99, 0, -1.04), w);         // floor
-    s.add_quad(V(-1.02, 1.99, 0.99), V(-1.02, 1.99, -1.04), V(1.00, 1.99, -1.04), V(1.00, 1.99, 0.99), w);  // ceiling
-    s.add_quad(V(-0.99, 0, -1.04), V(1.00, 0, -1.04), V(1.00, 1.99, -1.04), V(-1.02, 1.99, -1.04), w); // back
-    s.add_quad(V(1.00, 0, -1.04), V(1.00, 0, 0.99), V(1.00, 1.99, 0.99), V(1.00, 1.99, -1.04), g);      // right
-    s.add_quad(V(-1.01, 0, 0.99), V(-0.99, 0, -1.04), V(-1.02, 1.99, -1.04), V(-1.02, 1.99, 0.99), r);  // left
+    add_cornell_walls(s, w, r, g);
     // Short box.
     s.add_quad(V(0.53, 0.60, 0.75), V(0.70, 0.60, 0.17), V(0.13, 0.60, 0.00), V(-0.05, 0.60, 0.57), w);
     s.add_quad(V(-0.05, 0, 0.57), V(-0.05, 0.60, 0.57), V(0.13, 0.60, 0.00), V(0.13, 0, 0.00), w);
@@ -122,6 +136,34 @@ Scene<T> cornell(bool glossy) {
     // Light, facing down, just below the ceiling.
     add_quad_facing(s, V(-0.24, 1.98, 0.16), V(-0.24, 1.98, -0.22), V(0.23, 1.98, -0.22), V(0.23, 1.98, 0.16),
                     V(0, 0, 0), light);
+    s.camera = Camera<T>{V(0, 1, 3.9), V(0, 1, 0), V(0, 1, 0), T(0.68)};
+    return s;
+}
+
+/// The caustic scenes: a glass sphere (radius 0.33 on the floor, right front) and a mirror cube
+/// (0.55 wide, left back, turned 0.35 rad) in the Cornell box, lit by its small area light or
+/// by an isotropic point light of intensity Le A at the light's centre, 0.08 below the ceiling.
+template <Scalar T>
+Scene<T> cornell_caustics(bool point) {
+    Scene<T> s;
+    s.name = point ? "cornell-caustics-point" : "cornell-caustics";
+    add_cornell_walls(s, s.add_material(Material<T>::lambertian(Rgb<T>(T(0.725), T(0.71), T(0.68)))),
+                      s.add_material(Material<T>::lambertian(Rgb<T>(T(0.63), T(0.065), T(0.05)))),
+                      s.add_material(Material<T>::lambertian(Rgb<T>(T(0.14), T(0.45), T(0.091)))));
+    using V = Vec3<T>;
+    const auto glass = s.add_material(Material<T>::dielectric(T(1.5)));
+    const auto mirror = s.add_material(Material<T>::mirror(Rgb<T>(T(0.95))));
+    add_sphere(s, V(0.38, 0.335, 0.28), T(0.33), 96, 192, glass);
+    add_box(s, V(-0.72, 0, -0.62), V(-0.17, 0.55, -0.07), T(0.35), mirror);
+    const Rgb<T> Le(T(17), T(12), T(4));
+    const T area = T(0.47) * T(0.38);
+    if (point) {
+        s.point_lights.push_back(PointLight<T>::isotropic(V(-0.005, 1.91, -0.03), Le * area));
+    } else {
+        const auto light = s.add_material(Material<T>::lambertian(Rgb<T>(T(0.78)), Le));
+        add_quad_facing(s, V(-0.24, 1.98, 0.16), V(-0.24, 1.98, -0.22), V(0.23, 1.98, -0.22), V(0.23, 1.98, 0.16),
+                        V(0, 0, 0), light);
+    }
     s.camera = Camera<T>{V(0, 1, 3.9), V(0, 1, 0), V(0, 1, 0), T(0.68)};
     return s;
 }
@@ -251,6 +293,9 @@ std::span<const Choice<Scene<T> (*)()>> scene_choices() {
         {"furnace", "a closed room of saturated albedos whose radiance is 1 everywhere", [] { return detail::furnace<T>(); }},
         {"arealight", "a room lit by a large area light, with occluding columns", [] { return detail::arealight<T>(); }},
         {"envmap", "a sphere and a box under a sky with a sun (or an EXR map)", [] { return detail::envmap<T>(); }},
+        {"cornell-caustics", "the Cornell box with a glass sphere and a mirror cube, small area light",
+         [] { return detail::cornell_caustics<T>(false); }},
+        {"cornell-caustics-point", "the same lit by a point light", [] { return detail::cornell_caustics<T>(true); }},
         {"hall", "a hall of columns with 800 point and spot lights", [] { return hall_scene<T>(); }},
         {"kitchen", "a kitchen lit by 72 disk area lights", [] { return kitchen_scene<T>(); }},
         {"lie-hall", "a hall with 100 point lights and many occluders", [] { return lie_hall_scene<T>(); }},

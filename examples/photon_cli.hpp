@@ -1,0 +1,75 @@
+// photon_cli.hpp: glint-render's photon-mapping integrators (glint/photons): where the
+// command line's values become their settings. Included by render.cpp only.
+//
+//   --integrator sppm      stochastic progressive photon mapping (photons/sppm.hpp): passes
+//                          of one camera ray per pixel and --photons photons, direct light by
+//                          MisDirect; --time-budget S runs passes for S seconds, else --spp
+//                          passes
+//   --integrator photons   photon mapping (photons/photon_integrator.hpp): direct light by
+//                          MisDirect, caustics from the caustic map, indirect light by a final
+//                          gather from the global map; --time-budget S runs passes of new maps
+//                          (a seed each) and --spp samples per pixel for S seconds, averaged
+//   --photons N            sppm: photons emitted per pass; photons: for the global map, and
+//                          4 N for the caustic map (default 100000)
+//   --radius R             sppm: initial gather radius; photons: largest kNN radius (scene
+//                          units, default 0.05)
+//   --camera-samples N     sppm: camera rays per pixel and pass for emission and direct light
+//                          (the last one's visible point gathers the photons; default 1)
+//   --knn K                photons: photons per radiance estimate (default 50)
+//   --final-gather N       photons: final gather rays per pixel sample (default 64)
+#pragma once
+
+#include <cstdio>
+
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/photons/photon_integrator.hpp>
+#include <glint/photons/sppm.hpp>
+#include <glint/tracer/lighting.hpp>
+#include <glint/tracer/progressive.hpp>
+#include <glint/tracer/renderer.hpp>
+#include <glint/trees/mesh_bvh.hpp>
+
+namespace glint {
+
+struct PhotonCliOptions {
+    std::size_t photons = 100000;
+    double radius = 0.05;
+    int knn = 50;
+    int gather_rays = 64;
+    int camera_samples = 1;
+};
+
+using PhotonCliAccel = MeshBvh<MollerTrumbore<float>, 8>;
+
+/// SPPM of `scene` at `image`'s size and threads: passes until `budget` says stop.
+inline SppmResult render_sppm_cli(const Scene<float>& scene, const PhotonCliOptions& p, const RenderSettings& image,
+                                  const PassBudget& budget, std::uint64_t seed) {
+    const PhotonCliAccel accel(scene.triangles);
+    SppmSettings st;
+    st.photons = p.photons;
+    st.radius = p.radius;
+    st.camera_samples = p.camera_samples;
+    st.seed = seed;
+    return render_sppm(scene, accel, MisDirect<float>(scene, PathTracerSettings<float>{}), image, st, budget);
+}
+
+/// Photon mapping of `scene`: passes of new maps (seed + pass) and `image`'s spp until
+/// `budget` says stop, averaged.
+inline ProgressiveResult render_photons_cli(const Scene<float>& scene, const PhotonCliOptions& p, const RenderSettings& image,
+                                            const PassBudget& budget, std::uint64_t seed) {
+    const PhotonCliAccel accel(scene.triangles);
+    PhotonMapSettings st;
+    st.photons = p.photons;
+    st.caustic_photons = 4 * p.photons;
+    st.knn = std::size_t(p.knn);
+    st.radius = float(p.radius);
+    st.gather_rays = p.gather_rays;
+    st.threads = image.threads;
+    const MisDirect<float> direct(scene, PathTracerSettings<float>{});
+    return render_passes(budget, [&](int pass) {
+        st.seed = seed + std::uint64_t(pass);
+        return render_photon_map(scene, accel, direct, image, st);
+    });
+}
+
+}  // namespace glint
