@@ -12,6 +12,7 @@
 
 #include <glint/core/random.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
+#include <glint/photons/caustic_filter.hpp>
 #include <glint/photons/final_gather.hpp>
 #include <glint/photons/hash_grid.hpp>
 #include <glint/photons/hemiplane.hpp>
@@ -787,4 +788,45 @@ TEST_CASE("texel cache: texels follow their triangles; updates go by priority wi
     while (cache.update(s, accel, photons).iim_texels > 0) ++frames;
     CHECK(frames >= 2);
     CHECK(cache.update(s, accel, photons).aim_groups == 0);
+}
+
+TEST_CASE("caustic filter: the kernel is normalized; a uniform photon density gives its irradiance at every view angle") {
+    const std::vector<float> w = caustic_kernel(3);
+    REQUIRE(w.size() == 49);
+    CHECK(w[24] == doctest::Approx(std::sqrt(19.0f)));  // centre: sqrt(1 + 2 k^2)
+    CHECK(w[0] == doctest::Approx(1.0f));               // corner: sqrt(1 + 18 - 18)
+    // A floor [-4, 4]^2 seen from above and in front (view angles 33 to 79 degrees off the
+    // plane); photons of total power Phi uniform on it: E = Phi / 64 everywhere.
+    Scene<float> s;
+    s.add_quad(Vec3<float>(-4, 0, -4), Vec3<float>(-4, 0, 4), Vec3<float>(4, 0, 4), Vec3<float>(4, 0, -4),
+               s.add_material(Material<float>::lambertian(Rgb<float>(0.5f))));
+    s.camera = Camera<float>{Vec3<float>(0, 3, 2), Vec3<float>(0, 0, 0), Vec3<float>(0, 1, 0), 0.8f};
+    const int W = 48, H = 40;
+    const std::vector<ScreenSurface> screen = screen_surfaces(s, Accel(s.triangles), W, H);
+    const std::size_t n = 400000;
+    const float phi = 64.0f;
+    Pcg32 rng(5);
+    std::vector<Photon> photons;
+    for (std::size_t i = 0; i < n; ++i)
+        photons.emplace_back(Vec3<float>(8 * rng.uniform<float>() - 4, 0, 8 * rng.uniform<float>() - 4), Rgb<float>(phi / float(n)),
+                             Vec3<float>(0, -1, 0), Vec3<float>(0, 1, 0));
+    const ScreenProjection proj(s.camera, W, H);
+    const Image<Rgb<float>> e = caustic_filter(proj, W, H, screen, photons);
+    // Rows far from and near the eye separately (their footprints differ about 3x): the mean of
+    // E over interior pixels within 4 standard errors (pixels 7 apart counted as independent).
+    for (const auto& rows : {std::pair{3, 20}, std::pair{20, H - 3}}) {
+        double sum = 0, sum2 = 0, count = 0;
+        for (int y = rows.first; y < rows.second; ++y)
+            for (int x = 3; x < W - 3; ++x) {
+                const double v = e.at(x, y)[0];
+                sum += v, sum2 += v * v, count += 1;
+            }
+        const double mean = sum / count, sd = std::sqrt(std::max(0.0, sum2 / count - mean * mean));
+        const double se = sd / std::sqrt(count / 49.0);
+        CHECK(std::abs(mean - 1.0) < 4 * se + 2e-3);
+        CHECK(4 * se < 0.04);  // the check resolves a 4 % error (a cos^2 error is 4 % to 70 % here)
+    }
+    CHECK(e.at(0, H / 2)[0] < 0.8f);  // at the image's edge part of the kernel is missing: darker
+    CHECK_THROWS_AS(caustic_filter(proj, W, H + 1, screen, photons), Error);
+    CHECK_THROWS_AS(caustic_filter(proj, W, H, screen, photons, CausticFilterSettings{-1}), Error);
 }
