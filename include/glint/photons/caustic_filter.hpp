@@ -20,8 +20,9 @@
 // than the kernel is blurred (its peak lowered, its edges widened), and photons are counted
 // from neighbouring pixels on other surfaces (the kernel ignores depth; only the splat does
 // not). Photons seen through mirrors or glass are not splatted. The depth test accepts a
-// photon whose distance along the view axis is within `depth_tolerance` (relative) of the
-// surface the pixel's centre sees and whose normal is within 60 degrees of it.
+// photon that lies within `depth_tolerance` times the pixel's depth of the tangent plane of
+// the surface the pixel's centre sees, with its normal within 60 degrees of that surface's (a
+// test on the view-axis distance alone rejects photons in the far half of an oblique pixel).
 #pragma once
 
 #include <cmath>
@@ -42,7 +43,7 @@ namespace glint {
 
 struct CausticFilterSettings {
     int k = 3;                     // kernel half-width: (2k + 1)^2 pixels
-    float depth_tolerance = 0.01f; // relative, on the distance along the view axis
+    float depth_tolerance = 0.01f; // distance off the pixel's tangent plane, relative to its depth
 
     void validate() const {
         if (k < 0 || k > 64) throw Error("glint::caustic_filter: k must be in [0, 64] (got " + std::to_string(k) + ")");
@@ -64,6 +65,7 @@ struct ScreenSurface {
     float depth = 0.0f;      // distance along the view axis
     float area = 0.0f;       // A: world area of the pixel's footprint
     Vec3<float> normal{0.0f};  // facing the eye
+    Vec3<float> position{0.0f};
 };
 
 /// The camera's projection: pixel of a point and the view-axis distance (the inverse of Camera::ray).
@@ -121,6 +123,7 @@ std::vector<ScreenSurface> screen_surfaces(const Scene<T>& s, const A& accel, in
             const float cos_s = std::max(-glm::dot(n, Vec3<float>(ray.direction)), 1e-6f);
             o.area = float(hit.t * hit.t) * proj.solid_angle(x, y) / cos_s;
             o.normal = n;
+            o.position = p;
         }
     return out;
 }
@@ -139,7 +142,8 @@ inline Image<Rgb<float>> caustic_filter(const ScreenProjection& proj, int width,
         const long i = proj.pixel(p.position, depth);
         if (i < 0) continue;
         const ScreenSurface& s = screen[std::size_t(i)];
-        if (s.diffuse && std::abs(depth - s.depth) <= settings.depth_tolerance * s.depth && glm::dot(p.normal(), s.normal) > 0.5f)
+        if (s.diffuse && std::abs(glm::dot(p.position - s.position, s.normal)) <= settings.depth_tolerance * s.depth &&
+            glm::dot(p.normal(), s.normal) > 0.5f)
             t[std::size_t(i)] += p.power();
     }
     const int k = settings.k;
