@@ -12,16 +12,20 @@
 
 #include <glint/core/random.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
+#include <glint/photons/caustic_filter.hpp>
 #include <glint/photons/final_gather.hpp>
 #include <glint/photons/hash_grid.hpp>
+#include <glint/photons/hemiplane.hpp>
 #include <glint/photons/photon.hpp>
 #include <glint/photons/photon_map.hpp>
 #include <glint/photons/photon_integrator.hpp>
 #include <glint/photons/photon_tracing.hpp>
 #include <glint/photons/radiance_estimate.hpp>
+#include <glint/photons/selective_tracing.hpp>
 #include <glint/photons/sppm.hpp>
 #include <glint/photons/sppm_statistics.hpp>
 #include <glint/photons/surface_groups.hpp>
+#include <glint/photons/texel_cache.hpp>
 #include <glint/tracer/lighting.hpp>
 #include <glint/tracer/path_tracer.hpp>
 #include <glint/tracer/progressive.hpp>
@@ -646,4 +650,188 @@ TEST_CASE("photon map on the diffuse Cornell box: agreement with the path tracer
     // gather ray's emission) or a wrong photon power would break both.
     CHECK(std::abs(e.mean_bias) < 0.03 * mean_ref);
     CHECK(e.bias2 + 2 * e.bias2_se < e.variance);
+}
+
+// ---- dynamic scenes: selective photon tracing, texel caches (photons-dynamic) ----
+
+namespace {
+
+/// The closed grey cube of closed_box (its ceiling the light) with a box inside at x offset
+/// `lit`, beside a second closed cube, [3, 5] x [-1, 1] x [-1, 1], that no light reaches, with a
+/// box inside at x offset `dark`. Triangle count and order do not depend on the offsets.
+Scene<float> two_rooms(float lit, float dark) {
+    Scene<float> s = closed_box(0.5f, true, false);
+    using V = Vec3<float>;
+    const auto wall = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    const V o(4, 0, 0);
+    detail::add_quad_facing(s, V(3, -1, -1), V(5, -1, -1), V(5, -1, 1), V(3, -1, 1), o, wall);
+    detail::add_quad_facing(s, V(3, 1, -1), V(3, 1, 1), V(5, 1, 1), V(5, 1, -1), o, wall);
+    detail::add_quad_facing(s, V(3, -1, -1), V(3, 1, -1), V(5, 1, -1), V(5, -1, -1), o, wall);
+    detail::add_quad_facing(s, V(3, -1, 1), V(5, -1, 1), V(5, 1, 1), V(3, 1, 1), o, wall);
+    detail::add_quad_facing(s, V(3, -1, -1), V(3, -1, 1), V(3, 1, 1), V(3, 1, -1), o, wall);
+    detail::add_quad_facing(s, V(5, -1, -1), V(5, 1, -1), V(5, 1, 1), V(5, -1, 1), o, wall);
+    const auto grey = s.add_material(Material<float>::lambertian(Rgb<float>(0.7f)));
+    detail::add_box(s, V(-0.3f + lit, -1.0f, -0.3f), V(0.3f + lit, -0.2f, 0.3f), 0.3f, grey);
+    detail::add_box(s, V(3.7f + dark, -1.0f, -0.3f), V(4.3f + dark, -0.2f, 0.3f), 0.3f, grey);
+    return s;
+}
+
+/// Photons of a and b that differ (triangle, or position beyond 1e-4), plus the size difference.
+std::size_t photon_mismatches(const PhotonSet& a, const PhotonSet& b) {
+    auto count = [](const std::vector<Photon>& x, const std::vector<std::uint32_t>& tx, const std::vector<Photon>& y,
+                    const std::vector<std::uint32_t>& ty) {
+        std::size_t bad = x.size() > y.size() ? x.size() - y.size() : y.size() - x.size();
+        for (std::size_t k = 0; k < std::min(x.size(), y.size()); ++k)
+            bad += tx[k] != ty[k] || glm::length(x[k].position - y[k].position) > 1e-4f || x[k].rgbe != y[k].rgbe;
+        return bad;
+    };
+    return count(a.global, a.global_triangle, b.global, b.global_triangle) +
+           count(a.caustic, a.caustic_triangle, b.caustic, b.caustic_triangle);
+}
+
+}  // namespace
+
+TEST_CASE("selective tracing: an unlit room's changes emit nothing; the maintained set converges to a full re-trace") {
+    SelectiveTracingSettings st;
+    st.photons.photons = 20000;
+    st.photons.seed = 11;
+    st.photons.emission = PhotonEmission::halton;
+    st.photons.threads = 2;
+    st.groups = 210;  // 2 * 3 * 5 * 7
+    Scene<float> s = two_rooms(0.0f, 0.0f);
+    SelectivePhotons<float> sel(s, Accel(s.triangles), st);
+    CHECK(photon_mismatches(sel.photons(), trace_photons(s, Accel(s.triangles), st.photons)) == 0);
+    for (int f = 1; f <= 5; ++f) {  // the box in the unlit room moves: pilots only
+        s = two_rooms(0.0f, 0.1f * float(f));
+        const SelectiveFrame frame = sel.update(s, Accel(s.triangles));
+        CHECK(frame.pilots == 210);
+        CHECK(frame.reemitted == 0);
+        CHECK(frame.added.empty());
+    }
+    s = two_rooms(0.4f, 0.5f);  // the lit room's box moves
+    const Accel accel(s.triangles);
+    const PhotonSet full = trace_photons(s, accel, st.photons);
+    const SelectiveFrame first = sel.update(s, accel);
+    CHECK(first.reemitted > 0);
+    CHECK(first.reemitted >= first.groups_changed * (20000 / 210));  // whole groups of 95 or 96
+    CHECK(first.reemitted <= first.groups_changed * (20000 / 210 + 1));
+    CHECK(first.removed.size() > 0);
+    CHECK(photon_mismatches(sel.photons(), full) > 0);  // one pilot per group does not see every change
+    std::size_t frames = 1, reemitted = first.reemitted;
+    for (; frames < sel.group_size(0); ++frames) reemitted += sel.update(s, accel).reemitted;
+    CHECK(photon_mismatches(sel.photons(), full) == 0);
+    CHECK(reemitted <= 20000);
+    CHECK(sel.update(s, accel).reemitted == 0);  // nothing moves: nothing is emitted
+    CHECK_THROWS_AS(SelectivePhotons<float>(s, accel, SelectiveTracingSettings{st.photons, 0}), Error);
+}
+
+TEST_CASE("hemiplane: the weights sum to the closed-form covered fraction; uniform radiance gathers pi L") {
+    CHECK(hemiplane_fraction(1.0) == doctest::Approx(0.55408).epsilon(1e-4));  // the hemicube's front face
+    CHECK(hemiplane_fraction(2.0) == doctest::Approx(0.83103).epsilon(1e-4));  // enlarged to twice its side
+    for (const double a : {1.0, 2.0}) {
+        // Midpoint rule: the error falls as h^2, so 4x the resolution cuts it about 16x.
+        const double e64 = std::abs(HemiPlane<double>(64, a).fraction() - hemiplane_fraction(a));
+        const double e256 = std::abs(HemiPlane<double>(256, a).fraction() - hemiplane_fraction(a));
+        CHECK(e64 < 2e-4);
+        CHECK(e256 < e64 / 10);
+    }
+    const Scene<float> s = closed_box(0.5f, true, false);
+    const Accel accel(s.triangles);
+    const HemiPlane<float> plane(64, 2.0f);
+    const Vec3<float> x(0.1f, -1.0f, 0.2f), up(0, 1, 0);
+    const Rgb<float> L(0.3f, 1.0f, 2.0f);
+    const Rgb<float> e = plane.gather(accel, x, up, [&](const Ray<float>&, const StoreHit<float>&) { return L; });
+    for (int c = 0; c < 3; ++c) CHECK(e[c] == doctest::Approx(pi<float> * L[c]).epsilon(1e-4));
+    // Radiance from the ceiling only, seen from the floor's centre: within the plane (a = 0.5
+    // there), so it is overestimated by exactly 1 / fraction: pi L F(0.5) / F_plane.
+    const auto ceiling = [&](const Ray<float>& r, const StoreHit<float>& h) {
+        return r.at(h.t).y > 0.99f ? Rgb<float>(1.0f) : Rgb<float>(0.0f);
+    };
+    const HemiPlane<float> fine(256, 2.0f);
+    const float got = fine.gather(accel, Vec3<float>(0, -1, 0), up, ceiling)[0];
+    const float expected = pi<float> * hemiplane_fraction(0.5f) / fine.fraction();
+    CHECK(got == doctest::Approx(expected).epsilon(0.01));
+    CHECK(std::abs(got - pi<float> * hemiplane_fraction(0.5f)) > 0.1f * got);  // the renormalization's bias is resolved
+    CHECK_THROWS_AS(HemiPlane<float>(0, 2.0f), Error);
+    CHECK_THROWS_AS(HemiPlane<float>(8, -1.0f), Error);
+}
+
+TEST_CASE("texel cache: texels follow their triangles; updates go by priority within the budget") {
+    const Scene<float> s = closed_box(0.5f, true, false);
+    const Accel accel(s.triangles);
+    PhotonSettings ps;
+    ps.photons = 20000;
+    ps.seed = 3;
+    const PhotonSet photons = trace_photons(s, accel, ps);
+    TexelCacheSettings ts;
+    ts.texel_size = 0.5f;
+    ts.hemiplane_resolution = 8;
+    ts.estimate = {50, 1.0f};
+    TexelCache<float> cache(s, surface_groups<float>(s.triangles, 0.5f), ts);
+    CHECK(cache.texels() == 12 * 6 * 6);  // longest edge 2 sqrt 2: n = ceil(2.83 / 0.5) = 6, n^2 texels a triangle
+    cache.update_all(s, accel, photons);
+    // Closed grey cube: the floor's reflected radiance (AIM) is a / pi times the irradiance
+    // from all walls; its IIM (everything but the ceiling's emission) is positive.
+    const Rgb<float> aim = cache.approximated(s, 0, Vec3<float>(0.1f, -1.0f, 0.1f));
+    const Rgb<float> iim = cache.indirect(s, 0, Vec3<float>(0.1f, -1.0f, 0.1f));
+    CHECK(aim[0] > 0.0f);
+    CHECK(iim[0] > 0.0f);
+    CHECK(std::isfinite(iim[0]));
+    Scene<float> moved = s;  // texels are named by triangle and barycentrics: they move along
+    for (auto& t : moved.triangles)
+        for (auto& v : t) v += Vec3<float>(10, 0, 0);
+    CHECK(cache.indirect(moved, 0, Vec3<float>(10.1f, -1.0f, 0.1f))[0] == iim[0]);
+    CHECK(cache.indirect(s, 0, Vec3<float>(-0.9f, -1.0f, 0.9f))[0] != iim[0]);  // another texel
+    // Changes on the floor (triangles 0 and 1) only: its group alone is refreshed, 20 texels a frame.
+    SelectiveFrame f;
+    f.added.push_back({0, 0.01f, true});
+    cache.record(f);
+    const TexelUpdate u = cache.update(s, accel, photons);
+    CHECK(u.aim_groups == 1);
+    CHECK(u.iim_texels == 20);
+    std::size_t frames = 1;
+    while (cache.update(s, accel, photons).iim_texels > 0) ++frames;
+    CHECK(frames >= 2);
+    CHECK(cache.update(s, accel, photons).aim_groups == 0);
+}
+
+TEST_CASE("caustic filter: the kernel is normalized; a uniform photon density gives its irradiance at every view angle") {
+    const std::vector<float> w = caustic_kernel(3);
+    REQUIRE(w.size() == 49);
+    CHECK(w[24] == doctest::Approx(std::sqrt(19.0f)));  // centre: sqrt(1 + 2 k^2)
+    CHECK(w[0] == doctest::Approx(1.0f));               // corner: sqrt(1 + 18 - 18)
+    // A floor [-4, 4]^2 seen from above and in front (view angles 33 to 79 degrees off the
+    // plane); photons of total power Phi uniform on it: E = Phi / 64 everywhere.
+    Scene<float> s;
+    s.add_quad(Vec3<float>(-4, 0, -4), Vec3<float>(-4, 0, 4), Vec3<float>(4, 0, 4), Vec3<float>(4, 0, -4),
+               s.add_material(Material<float>::lambertian(Rgb<float>(0.5f))));
+    s.camera = Camera<float>{Vec3<float>(0, 3, 2), Vec3<float>(0, 0, 0), Vec3<float>(0, 1, 0), 0.8f};
+    const int W = 48, H = 40;
+    const std::vector<ScreenSurface> screen = screen_surfaces(s, Accel(s.triangles), W, H);
+    const std::size_t n = 400000;
+    const float phi = 64.0f;
+    Pcg32 rng(5);
+    std::vector<Photon> photons;
+    for (std::size_t i = 0; i < n; ++i)
+        photons.emplace_back(Vec3<float>(8 * rng.uniform<float>() - 4, 0, 8 * rng.uniform<float>() - 4), Rgb<float>(phi / float(n)),
+                             Vec3<float>(0, -1, 0), Vec3<float>(0, 1, 0));
+    const ScreenProjection proj(s.camera, W, H);
+    const Image<Rgb<float>> e = caustic_filter(proj, W, H, screen, photons);
+    // Rows far from and near the eye separately (their footprints differ about 3x): the mean of
+    // E over interior pixels within 4 standard errors (pixels 7 apart counted as independent).
+    for (const auto& rows : {std::pair{3, 20}, std::pair{20, H - 3}}) {
+        double sum = 0, sum2 = 0, count = 0;
+        for (int y = rows.first; y < rows.second; ++y)
+            for (int x = 3; x < W - 3; ++x) {
+                const double v = e.at(x, y)[0];
+                sum += v, sum2 += v * v, count += 1;
+            }
+        const double mean = sum / count, sd = std::sqrt(std::max(0.0, sum2 / count - mean * mean));
+        const double se = sd / std::sqrt(count / 49.0);
+        CHECK(std::abs(mean - 1.0) < 4 * se + 2e-3);
+        CHECK(4 * se < 0.04);  // the check resolves a 4 % error (a cos^2 error is 4 % to 70 % here)
+    }
+    CHECK(e.at(0, H / 2)[0] < 0.8f);  // at the image's edge part of the kernel is missing: darker
+    CHECK_THROWS_AS(caustic_filter(proj, W, H + 1, screen, photons), Error);
+    CHECK_THROWS_AS(caustic_filter(proj, W, H, screen, photons, CausticFilterSettings{-1}), Error);
 }

@@ -73,6 +73,14 @@ struct PhotonSet {
     std::vector<std::uint32_t> global_triangle, caustic_triangle;
 };
 
+/// Appends p's photons (both maps, with their triangles) to out's; `emitted` is left alone.
+inline void append_photons(PhotonSet& out, const PhotonSet& p) {
+    out.global.insert(out.global.end(), p.global.begin(), p.global.end());
+    out.caustic.insert(out.caustic.end(), p.caustic.begin(), p.caustic.end());
+    out.global_triangle.insert(out.global_triangle.end(), p.global_triangle.begin(), p.global_triangle.end());
+    out.caustic_triangle.insert(out.caustic_triangle.end(), p.caustic_triangle.begin(), p.caustic_triangle.end());
+}
+
 /// The scene's emitters chosen by luminance power (emissive triangles, point lights).
 template <Scalar T>
 class PhotonEmitters {
@@ -179,12 +187,7 @@ PhotonSet trace_photons(const Scene<T>& s, const A& accel, const PhotonSettings&
     });
     PhotonSet out;
     out.emitted = settings.photons;
-    for (const PhotonSet& p : parts) {
-        out.global.insert(out.global.end(), p.global.begin(), p.global.end());
-        out.caustic.insert(out.caustic.end(), p.caustic.begin(), p.caustic.end());
-        out.global_triangle.insert(out.global_triangle.end(), p.global_triangle.begin(), p.global_triangle.end());
-        out.caustic_triangle.insert(out.caustic_triangle.end(), p.caustic_triangle.begin(), p.caustic_triangle.end());
-    }
+    for (const PhotonSet& p : parts) append_photons(out, p);
     return out;
 }
 
