@@ -17,7 +17,8 @@
 // adversarial rays (axis-parallel through vertex coordinates) may have any number, but
 // every one must be an edge case. Nothing else is tolerated.
 //
-// CI runs 2 * 10^4 rays per scene and combination; -DGLINT_LONG_TESTS runs 10^6 (for the wide
+// CI runs 2 * 10^4 rays per scene and combination (4000 under the sanitizers,
+// -DGLINT_SANITIZER_TESTS); -DGLINT_LONG_TESTS runs 10^6 (for the wide
 // BVH alone: test_trees -tc="agreement: wide*", or one kind of it, e.g. -tc="*spatial*").
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
@@ -55,8 +56,10 @@ std::string type_label() {
     return f.substr(b, f.find_first_of(";]", b) - b);
 }
 
-#ifdef GLINT_LONG_TESTS
+#if defined(GLINT_LONG_TESTS)
 constexpr std::size_t rays_per_scene = 1'000'000;
+#elif defined(GLINT_SANITIZER_TESTS)
+constexpr std::size_t rays_per_scene = 4'000;  // under ASan (25x slower): memory errors, not rare edge cases
 #else
 constexpr std::size_t rays_per_scene = 20'000;
 #endif

@@ -94,10 +94,12 @@ namespace detail {
 inline double image_aspect(const RenderSettings& image) {
     return double(std::max(image.width, 1)) / double(std::max(image.height, 1));
 }
-/// The LIEs of a named render: 2^15 construction samples of the image's view.
+/// The LIEs of a named render: construction samples of the image's view, 4 per pixel and at
+/// most 2^15 (the whole budget from 91 x 91 pixels up; a small preview does not pay for more).
 inline LieSettings factory_lie_settings(const RenderSettings& image) {
     LieSettings s;
-    s.samples = 1 << 15;
+    const long pixels = long(std::max(image.width, 1)) * long(std::max(image.height, 1));
+    s.samples = int(std::clamp(4 * pixels, 1024L, 1L << 15));
     s.aspect = image_aspect(image);
     return s;
 }
