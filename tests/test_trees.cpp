@@ -678,10 +678,10 @@ std::vector<AABB<float>> triangle_boxes(const Mesh<float>& m) {
 
 /// Closest hit through WideBvh::intersect with a user leaf callable (one Triangle per
 /// primitive): the traversal API a user with their own primitives calls.
-template <int N, bool Portable, WideBoxes B, WideNodeLayout L>
+template <int N, WideBoxes B, WideNodeLayout L>
 bool user_leaf_closest(const WideBvh<N, B, L>& bvh, const std::vector<Triangle<MollerTrumbore<float>>>& tris,
                        Ray<float> r, StoreHit<float>& hit) {
-    return bvh.template intersect<false, Portable>(r, [&](std::uint32_t first, std::uint32_t count) {
+    return bvh.template intersect<false>(r, [&](std::uint32_t first, std::uint32_t count) {
         bool found = false;
         for (std::uint32_t k = first; k < first + count; ++k) {
             TriangleHit<float> h;
@@ -807,9 +807,14 @@ struct BruteCollapse {
     std::map<std::uint32_t, double> memo;  // as_node, per binary subtree
 };
 
+/// The tree's queries with every kernel this CPU runs (core/isa.hpp) give the same floats.
 template <int N, WideBoxes B>
 void check_portable_and_user_leaf(const Scene& sc) {
-    const WideBvh<N, B> bvh(triangle_boxes(sc.mesh));
+    WideBvh<N, B> bvh(triangle_boxes(sc.mesh)), portable = bvh;
+    portable.set_isa(Isa::portable);
+    std::vector<WideBvh<N, B>> others;
+    for (Isa isa : {Isa::sse2, Isa::avx2})
+        if (isa_supported(isa) && isa != bvh.isa()) others.push_back(bvh), others.back().set_isa(isa);
     std::vector<Triangle<MollerTrumbore<float>>> tris;
     for (const auto& t : sc.mesh) tris.emplace_back(t[0], t[1], t[2]);
     const BruteForce<MollerTrumbore<float>> bf(sc.mesh);
@@ -818,15 +823,20 @@ void check_portable_and_user_leaf(const Scene& sc) {
     for (std::size_t i = 0; i < sc.rays.size(); ++i) {
         const Ray<float>& r = sc.rays[i];
         StoreHit<float> a, b, ref;
-        const bool fa = user_leaf_closest<N, false, B>(bvh, tris, r, a);
-        const bool fb = user_leaf_closest<N, true, B>(bvh, tris, r, b);
+        const bool fa = user_leaf_closest(bvh, tris, r, a);
+        const bool fb = user_leaf_closest(portable, tris, r, b);
         differ += fa != fb || a.t != b.t || a.id != b.id;  // SIMD and portable: the same floats
+        for (const auto& other : others) {
+            StoreHit<float> c;
+            const bool fc = user_leaf_closest(other, tris, r, c);
+            differ += fa != fc || a.t != c.t || a.id != c.id;
+        }
         // Against brute force (whose batch kernel may round differently from the scalar
         // test), by the agreement rules at the top of this file.
         const bool fr = bf.closest_hit(r, ref);
         compare(sc, i, a, fa, ref, fr, tally);
     }
-    INFO(sc.name << " width " << N << " " << type_label<WideBvh<N, B>>() << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
+    INFO(sc.name << " width " << N << " " << type_label<WideBvh<N, B>>() << " kernels " << std::string(isa_name(bvh.isa())) << " rays " << tally.rays << " hits " << tally.hits << " edges " << tally.edges
                  << " (generic " << tally.generic_edges << ") errors " << tally.errors);
     CHECK(differ == 0);
     CHECK(tally.errors == 0);
@@ -843,6 +853,42 @@ TEST_CASE("wide BVH: SIMD and portable box tests give the same hits; a user's le
         check_portable_and_user_leaf<8, WideBoxes::quantized>(sc);
         check_portable_and_user_leaf<4, WideBoxes::quantized>(sc);
     }
+}
+
+namespace {
+/// A MeshBvh's closest and any hits with every kernel this CPU runs: the same floats.
+template <class Bvh>
+void check_kernels(const Scene& sc) {
+    Bvh best(std::span<const TriangleVertices<float>>(sc.mesh));
+    std::size_t differ = 0, kernels = 0;
+    for (Isa isa : {Isa::portable, Isa::sse2, Isa::avx2}) {
+        if (!isa_supported(isa) || isa == best.isa()) continue;
+        Bvh other = best;
+        other.set_isa(isa);
+        ++kernels;
+        for (const Ray<float>& r : sc.rays) {
+            StoreHit<float> a, b;
+            const bool fa = best.closest_hit(r, a), fb = other.closest_hit(r, b);
+            differ += fa != fb || a.t != b.t || a.u != b.u || a.v != b.v || a.id != b.id;
+            differ += best.any_hit(r) != other.any_hit(r);
+        }
+    }
+    INFO(sc.name << " " << type_label<Bvh>() << " best kernels " << std::string(isa_name(best.isa())));
+    CHECK(kernels >= 1);
+    CHECK(differ == 0);
+}
+}  // namespace
+
+TEST_CASE("MeshBvh: every kernel this CPU runs gives the same hits as the one chosen at construction") {
+    CHECK(isa_supported(Isa::portable));
+    CHECK(isa_supported(best_isa()));
+    for (const Scene& sc : scenes()) {
+        check_kernels<MeshBvh<MollerTrumbore<float>, 8>>(sc);
+        check_kernels<MeshBvh<MollerTrumbore<float>, 4>>(sc);
+        check_kernels<MeshBvh<Watertight<float>, 8, WideBoxes::quantized>>(sc);
+    }
+    MeshBvh<MollerTrumbore<float>, 8> bvh(std::span<const TriangleVertices<float>>(scenes().front().mesh));
+    if (!isa_supported(Isa::avx2)) CHECK_THROWS_AS(bvh.set_isa(Isa::avx2), Error);
 }
 
 TEST_CASE("wide BVH: quantized child boxes contain the float boxes, extreme ranges included") {
@@ -916,8 +962,8 @@ void check_collapse(const Mesh<float>& mesh, const std::string& name, const std:
         std::size_t differ = 0;
         for (const Ray<float>& r : rays) {
             StoreHit<float> a, b;
-            const bool fa = user_leaf_closest<N, false, WideBoxes::floats>(t, tris, r, a);
-            const bool fb = user_leaf_closest<N, false, WideBoxes::floats>(reference, tris, r, b);
+            const bool fa = user_leaf_closest(t, tris, r, a);
+            const bool fb = user_leaf_closest(reference, tris, r, b);
             differ += fa != fb || a.t != b.t;
         }
         CHECK(differ == 0);
@@ -1054,7 +1100,7 @@ TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree d
     std::size_t generic = 0, differ = 0, hits = 0;
     for (const Ray<float>& r : ray_mix(knot, 20000, 11, generic)) {
         StoreHit<float> a, b;
-        const bool fa = user_leaf_closest<8, false>(chopped, tris, r, a), fb = user_leaf_closest<8, false>(plain, tris, r, b);
+        const bool fa = user_leaf_closest(chopped, tris, r, a), fb = user_leaf_closest(plain, tris, r, b);
         differ += fa != fb || a.t != b.t;  // the same exact tests: the same nearest t
         hits += fa;
     }
@@ -1126,8 +1172,8 @@ TEST_CASE("wide BVH: sibling blocks place a node's inner children side by side, 
     std::size_t differ = 0;
     for (const Ray<float>& r : sc.rays) {
         StoreHit<float> a, b;
-        const bool fa = user_leaf_closest<8, false, WideBoxes::floats>(depth, tris, r, a);
-        const bool fb = user_leaf_closest<8, false, WideBoxes::floats>(blocks, tris, r, b);
+        const bool fa = user_leaf_closest(depth, tris, r, a);
+        const bool fb = user_leaf_closest(blocks, tris, r, b);
         differ += fa != fb || a.t != b.t || a.id != b.id;
     }
     CHECK(differ == 0);
@@ -1203,8 +1249,8 @@ void check_compact_subtrees(const Mesh<float>& mesh, const std::vector<Ray<float
     std::size_t differ = 0;
     for (const Ray<float>& r : rays) {
         StoreHit<float> a, b;
-        const bool fa = user_leaf_closest<N, false>(build, tris, r, a);
-        const bool fb = user_leaf_closest<N, false>(compact, tris, r, b);
+        const bool fa = user_leaf_closest(build, tris, r, a);
+        const bool fb = user_leaf_closest(compact, tris, r, b);
         differ += fa != fb || a.t != b.t || a.id != b.id;
     }
     CHECK(differ == 0);

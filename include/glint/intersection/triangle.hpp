@@ -16,7 +16,8 @@
 #include <type_traits>
 #include <vector>
 
-#if defined(__AVX__)
+#include <glint/core/isa.hpp>
+#if GLINT_X86
 #include <immintrin.h>
 #endif
 
@@ -35,8 +36,9 @@ namespace detail {
 
 /// The lane of the smallest of W = batch_width values below `limit` (the first such lane
 /// on ties), or -1 when none is: how a leaf picks its nearest hit from a batch's t values
-/// (+inf for a miss, never NaN). One SIMD compare and a shuffle reduction for 8 floats with
-/// AVX; the portable loop (a chain of dependent scalar compares) otherwise.
+/// (+inf for a miss, never NaN). On x86-64, two SSE compares and a shuffle reduction for 8
+/// floats (SSE2 is always there, and where AVX2 kernels run the compiler encodes them with
+/// VEX); the portable loop (a chain of dependent scalar compares) otherwise.
 template <class T>
 [[gnu::always_inline]] inline int nearest_lane(const T* ts, T limit) {
 #if defined(__AVX__)
@@ -48,6 +50,17 @@ template <class T>
         m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
         m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
         return std::countr_zero(unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t, m, _CMP_EQ_OQ)) & below));
+    }
+#elif GLINT_X86
+    if constexpr (std::is_same_v<T, float> && batch_width == 8) {
+        const __m128 a = _mm_loadu_ps(ts), b = _mm_loadu_ps(ts + 4), lim = _mm_set1_ps(limit);
+        const int below = _mm_movemask_ps(_mm_cmplt_ps(a, lim)) | _mm_movemask_ps(_mm_cmplt_ps(b, lim)) << 4;
+        if (below == 0) return -1;
+        __m128 m = _mm_min_ps(a, b);
+        m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+        m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+        const int equal = _mm_movemask_ps(_mm_cmpeq_ps(a, m)) | _mm_movemask_ps(_mm_cmpeq_ps(b, m)) << 4;
+        return std::countr_zero(unsigned(equal & below));
     }
 #endif
     int best = -1;

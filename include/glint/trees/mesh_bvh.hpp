@@ -92,27 +92,26 @@ public:
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit) const { return closest(ray, hit); }
     /// closest_hit(), counting the nodes, leaves and records it tests into `counters`.
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters& counters) const {
-        Ray<float> r = ray_before(ray, hit);
-        StoreHit<float> h = hit;
-        const auto world = leaves_.prepare(r);
-        LeafQuery<P, false> leaf(leaves_, r, world, h);
-        const auto counted = [&](std::uint32_t first, std::uint32_t count) {
-            ++counters.leaves;
-            counters.records += leaves_.records(first, count);
-            return leaf(first, count);
-        };
-        if (!bvh_.template intersect<false>(r, counted, [&] { ++counters.nodes; })) return false;
-        hit = leaf.hit();
-        return true;
+        return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            const auto counted = [&](auto& leaf) {
+                return [&](std::uint32_t first, std::uint32_t count) {
+                    ++counters.leaves;
+                    counters.records += leaves_.records(first, count);
+                    return leaf(first, count);
+                };
+            };
+            return closest(kernels, ray, hit, counted, [&] { ++counters.nodes; });
+        });
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
-        Ray<float> r = ray;
-        StoreHit<float> h;
-        const auto world = leaves_.prepare(r);
-        LeafQuery<P, true> leaf(leaves_, r, world, h);
-        return bvh_.template intersect<true>(r, leaf);
+        return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) { return any(kernels, ray); });
     }
+
+    /// The kernels queries run (core/isa.hpp): the best this CPU supports, checked when the
+    /// tree is built; set_isa() picks another (the same hits; for tests and comparisons).
+    Isa isa() const { return bvh_.isa(); }
+    void set_isa(Isa isa) { bvh_.set_isa(isa); }
 
     const WideBvh<N, B, L>& bvh() const { return bvh_; }
     /// The triangle records of the leaves.
@@ -122,15 +121,32 @@ public:
 
 private:
     [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit) const {
-        // On local copies: the compiler keeps them in registers (the caller's `hit` could
-        // alias the traversal stack's floats).
+        return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            return closest(kernels, ray, hit, [](auto& leaf) -> auto& { return leaf; }, NoNodeHook{});
+        });
+    }
+    /// The queries with kernels I (inside the tree's dispatch); `wrap(leaf)` gives the leaf
+    /// test the traversal calls (the leaf itself, or a counting one). On local copies of the
+    /// ray and the hit: the compiler keeps them in registers (the caller's `hit` could alias
+    /// the traversal stack's floats).
+    template <Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] bool closest(IsaTag<I> kernels, const Ray<float>& ray, StoreHit<float>& hit, Wrap&& wrap,
+                                        Hook&& node_hook) const {
         Ray<float> r = ray_before(ray, hit);
         StoreHit<float> h = hit;
         const auto world = leaves_.prepare(r);
         LeafQuery<P, false> leaf(leaves_, r, world, h);
-        if (!bvh_.template intersect<false>(r, leaf)) return false;
+        if (!bvh_.template intersect<false>(kernels, r, wrap(leaf), node_hook)) return false;
         hit = leaf.hit();
         return true;
+    }
+    template <Isa I>
+    [[gnu::always_inline]] bool any(IsaTag<I> kernels, const Ray<float>& ray) const {
+        Ray<float> r = ray;
+        StoreHit<float> h;
+        const auto world = leaves_.prepare(r);
+        LeafQuery<P, true> leaf(leaves_, r, world, h);
+        return bvh_.template intersect<true>(kernels, r, leaf);
     }
 
     template <class Get>

@@ -1,6 +1,8 @@
 // glint/trees/wide_box_test.hpp: the slab test of one wide node's N child boxes against
-// one ray (AVX for N = 8, SSE for N = 4, a portable loop otherwise and on request; all
-// three compute the same floats).
+// one ray, per instruction set (core/isa.hpp): AVX2 for N = 8, SSE for N = 4, a portable
+// loop otherwise and on request; all three compute the same floats. The AVX2 test is
+// compiled for AVX2 whatever the flags, so it may only run inside a function compiled for
+// AVX2 too (WideBvh's dispatch).
 //
 // The test is conservative (Ize, "Robust BVH Ray Traversal", JCGT 2013): the exit distance
 // is enlarged by 1 + 2 gamma_3 (the bound on the rounding of (plane - o) / d), so a box the
@@ -15,13 +17,14 @@
 #include <cstddef>
 #include <cstdint>
 
-#if defined(__SSE2__) || defined(__AVX__)
-#include <immintrin.h>
-#endif
-
+#include <glint/core/isa.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/trees/wide_node.hpp>
+
+#if GLINT_X86
+#include <immintrin.h>
+#endif
 
 namespace glint {
 
@@ -51,7 +54,7 @@ template <bool Signed>
 
 /// The per-ray data of the slab test, and the test of one node's N boxes: a bit mask of the
 /// children entered within (tmin, tmax), their entry distances in tn.
-template <int N, bool Portable, bool Signed = false>
+template <int N, Isa I, bool Signed = false>
 struct WideBoxTest {
     float o[3], inv[3];
     int near[3], far[3];  // bounds rows of the entry and exit planes per axis
@@ -87,14 +90,14 @@ struct WideBoxTest {
     }
 };
 
-#if defined(__AVX__)
-/// 8-wide nodes with AVX: the same operations as the portable loop, in the same order.
+#if GLINT_X86
+/// 8-wide nodes with AVX2: the same operations as the portable loop, in the same order.
 template <bool Signed>
-struct WideBoxTest<8, false, Signed> {
+struct WideBoxTest<8, Isa::avx2, Signed> {
     __m256 o[3], inv[3];
     std::size_t near[3], far[3];  // byte offsets of the rows in a node
 
-    [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
+    GLINT_KERNEL_AVX2 explicit WideBoxTest(const Ray<float>& r) {
         // 1 / d for the three axes with one division (the same correctly rounded quotients).
         alignas(16) float q[4];
         _mm_store_ps(q, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(r.direction.x, r.direction.y, r.direction.z, 1.0f)));
@@ -106,7 +109,7 @@ struct WideBoxTest<8, false, Signed> {
             far[a] = (2 * std::size_t(a) + 1 - neg) * sizeof(__m256);
         }
     }
-    [[gnu::always_inline]] unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
+    GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
         __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
         const char* rows = reinterpret_cast<const char*>(n.bounds);
         for (int a = 0; a < 3; ++a) {
@@ -117,33 +120,28 @@ struct WideBoxTest<8, false, Signed> {
         }
         return finish(t0, t1, tn);
     }
-#if defined(__AVX2__)
-    [[gnu::always_inline]] unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
+    GLINT_KERNEL_AVX2 unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
         __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
         const char* rows = reinterpret_cast<const char*>(n.q);
-        auto plane = [&](std::size_t row_offset, __m256 origin, __m256 scale) {  // the float row offset / 4
-            const __m128i q = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows + row_offset / 4));
-            return _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(q)), scale));
-        };
         for (int a = 0; a < 3; ++a) {
             const __m256 org = _mm256_broadcast_ss(&n.origin[a]), s = _mm256_set1_ps(wide_scale(n.exp[a]));
-            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(plane(near[a], org, s), o[a]), inv[a]);
-            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(plane(far[a], org, s), o[a]), inv[a]);
+            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(plane(rows, near[a], org, s), o[a]), inv[a]);
+            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(plane(rows, far[a], org, s), o[a]), inv[a]);
             t0 = _mm256_max_ps(tl, t0);
             t1 = _mm256_min_ps(th, t1);
         }
         const unsigned used = (1u << n.count) - 1u;
         return finish(t0, t1, tn) & used;
     }
-#else
-    unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
-        return test(wide_decode(n), tmin, tmax, tn);
-    }
-#endif
 
 private:
+    /// A quantized node's 8 planes of one row (its byte offset is the float row's / 4), decoded.
+    GLINT_KERNEL_AVX2 static __m256 plane(const char* rows, std::size_t row_offset, __m256 origin, __m256 scale) {
+        const __m128i q = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows + row_offset / 4));
+        return _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(q)), scale));
+    }
     /// Entry distances to tn, and the mask of children entered (the portable test's ends).
-    [[gnu::always_inline]] unsigned finish(__m256 t0, __m256 t1, float* tn) const {
+    GLINT_KERNEL_AVX2 unsigned finish(__m256 t0, __m256 t1, float* tn) const {
         const __m256 up = _mm256_set1_ps(wide_exit_scale), down = _mm256_set1_ps(wide_entry_scale);
         if constexpr (Signed) {  // blendv picks its second operand where the sign bit is set
             t0 = _mm256_mul_ps(t0, _mm256_blendv_ps(down, up, t0));
@@ -155,17 +153,15 @@ private:
         return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
     }
 };
-#endif
 
-#if defined(__SSE2__)
 /// 4-wide nodes with SSE.
 template <bool Signed>
-struct WideBoxTest<4, false, Signed> {
+struct WideBoxTest<4, Isa::sse2, Signed> {
     __m128 o[3], inv[3];
     int near[3], far[3];
 
     [[gnu::always_inline]] explicit WideBoxTest(const Ray<float>& r) {
-        const WideBoxTest<4, true> s(r);
+        const WideBoxTest<4, Isa::portable> s(r);
         for (int a = 0; a < 3; ++a) {
             o[a] = _mm_set1_ps(s.o[a]);
             inv[a] = _mm_set1_ps(s.inv[a]);
@@ -195,6 +191,12 @@ struct WideBoxTest<4, false, Signed> {
     unsigned test(const WideBvhQNode<4>& n, float tmin, float tmax, float* tn) const {
         return test(wide_decode(n), tmin, tmax, tn);
     }
+};
+
+/// 4-wide nodes where AVX2 runs: the SSE test (compiled with VEX encodings there).
+template <bool Signed>
+struct WideBoxTest<4, Isa::avx2, Signed> : WideBoxTest<4, Isa::sse2, Signed> {
+    using WideBoxTest<4, Isa::sse2, Signed>::WideBoxTest;
 };
 #endif
 

@@ -25,13 +25,10 @@
 #include <utility>
 #include <vector>
 
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
-
 #include <glint/core/aabb.hpp>
 #include <glint/core/cache_line_allocator.hpp>
 #include <glint/core/error.hpp>
+#include <glint/core/isa.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle_leaves.hpp>
 #include <glint/trees/bvh_builder.hpp>
@@ -109,24 +106,70 @@ public:
 
     /// Closest (Any = false) or any hit: `leaf(first, count)` is called for the leaves the
     /// ray enters, nearest first; it lowers ray.tmax to each hit it finds (closest hit).
-    /// Portable = true forces the portable box test (the same hits, for tests).
     /// `node_hook()` is called at every inner node whose children are tested (for
-    /// measurements; the default does nothing).
-    template <bool Any, bool Portable = false, LeafTest Leaf, NodeHook Hook = NoNodeHook>
+    /// measurements; the default does nothing). Runs the kernels of isa(), the leaf
+    /// callable compiled with them.
+    template <bool Any, LeafTest Leaf, NodeHook Hook = NoNodeHook>
     [[gnu::always_inline]] bool intersect(Ray<float>& ray, Leaf&& leaf, Hook&& node_hook = {}) const {
+        return dispatch([&](auto kernels) __attribute__((always_inline)) { return intersect<Any>(kernels, ray, leaf, node_hook); });
+    }
+    /// intersect() with kernels I, inside a query that dispatch() runs (elsewhere the AVX2
+    /// kernels do not compile unless the flags give AVX2).
+    template <bool Any, Isa I, LeafTest Leaf, NodeHook Hook = NoNodeHook>
+    [[gnu::always_inline]] bool intersect(IsaTag<I>, Ray<float>& ray, Leaf&& leaf, Hook&& node_hook = {}) const {
         if (nodes_.empty() || !detail::wide_ray_valid(ray)) return false;
-        // Intervals starting below 0 take the box test that widens both ends (see the file
-        // comment); the usual ones keep the cheaper test, with no per-node check of which.
+        // Intervals starting below 0 take the box test that widens both ends (see
+        // wide_box_test.hpp); the usual ones keep the cheaper test, with no per-node check.
         if (ray.tmin < 0.0f) [[unlikely]]
-            return traverse<Any, Portable, true>(ray, leaf, node_hook);
-        return traverse<Any, Portable, false>(ray, leaf, node_hook);
+            return traverse<Any, I, true>(ray, leaf, node_hook);
+        return traverse<Any, I, false>(ray, leaf, node_hook);
+    }
+    /// Runs `query(IsaTag<isa()>{})`, compiled with isa()'s kernels: the AVX2 call compiled
+    /// for AVX2 whatever the flags, with what it calls inlined. A query keeps its ray and
+    /// hit in locals of its own (a dispatch around a traversal whose ray the caller holds
+    /// would make the compiler keep that ray in memory).
+    template <class Query>
+    [[gnu::always_inline]] bool dispatch(Query&& query) const {
+#if GLINT_X86
+        if constexpr (compiled_isa != Isa::avx2) {  // the caller stays small: every kernel out of line
+            if (isa_ == Isa::avx2) [[likely]] return dispatch_avx2(query);
+            return dispatch_other(query);
+        } else
+#endif
+        {
+            if (isa_ == compiled_isa) [[likely]] return query(IsaTag<compiled_isa>{});
+            return dispatch_other(query);
+        }
+    }
+
+    /// The kernels queries run (core/isa.hpp): best_isa() from construction on.
+    Isa isa() const { return isa_; }
+    /// Runs queries with `isa`'s kernels (every choice gives the same hits); throws
+    /// glint::Error where this build and CPU cannot run them.
+    void set_isa(Isa isa) {
+        if (!isa_supported(isa)) throw Error(std::string("WideBvh::set_isa: this CPU cannot run ") + isa_name(isa));
+        isa_ = isa;
     }
 
 private:
+    template <class Query>
+    [[gnu::noinline, gnu::flatten]] GLINT_TARGET_AVX2 bool dispatch_avx2(Query& query) const {
+        return query(IsaTag<Isa::avx2>{});
+    }
+    /// The kernels other than AVX2 where the flags do not give AVX2, and those below what the
+    /// flags give where they do (for tests and comparisons).
+    template <class Query>
+    [[gnu::noinline, gnu::flatten]] bool dispatch_other(Query& query) const {
+#if GLINT_X86
+        if (isa_ == Isa::sse2) return query(IsaTag<Isa::sse2>{});
+#endif
+        return query(IsaTag<Isa::portable>{});
+    }
+
     /// intersect() for a valid ray, with the box test for intervals starting below 0 or not.
-    template <bool Any, bool Portable, bool Signed, class Leaf, class Hook>
+    template <bool Any, Isa I, bool Signed, class Leaf, class Hook>
     [[gnu::always_inline]] bool traverse(Ray<float>& ray, Leaf& leaf, Hook& node_hook) const {
-        const detail::WideBoxTest<N, Portable, Signed> box(ray);
+        const detail::WideBoxTest<N, I, Signed> box(ray);
         struct Entry {
             std::uint32_t ref;
             float t;
@@ -187,18 +230,17 @@ private:
     }
 
     /// Asks for the cache lines of inner node `ref` (a child about to be visited or pushed).
-    [[gnu::always_inline]] void prefetch([[maybe_unused]] std::uint32_t ref) const {
-#if defined(__SSE2__)
+    [[gnu::always_inline]] void prefetch(std::uint32_t ref) const {
         if (!detail::wide_is_leaf(ref)) {
             const char* p = reinterpret_cast<const char*>(&nodes_[ref]);
-            for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+            for (std::size_t line = 0; line < sizeof(Node); line += 64) __builtin_prefetch(p + line, 0, 3);
         }
-#endif
     }
 
     std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
     std::vector<std::uint32_t> prims_;
     WideBvhStats stats_;
+    Isa isa_ = best_isa();
 };
 
 }  // namespace glint

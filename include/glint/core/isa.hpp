@@ -1,0 +1,85 @@
+// glint/core/isa.hpp: the instruction sets glint's hot kernels are compiled for, and the one
+// the CPU running the program supports, found once at run time.
+//
+// A header-only library is compiled with its user's flags, which for a distribution package
+// or any renderer built for baseline x86-64 means SSE2 only. The kernels that pay for wider
+// vectors (the wide BVH's traversal with its leaf tests) are therefore compiled twice: for
+// the flags given, and for AVX2 through GCC's and Clang's `target` attribute (no compiler
+// flag needed). A tree picks one when it is built (best_isa()) and branches on it
+// once per query, never per node. With -march flags that already include AVX2 both are the
+// same code.
+#pragma once
+
+#include <type_traits>
+
+namespace glint {
+
+/// Kernels by instruction set, ordered: a CPU that runs one runs those before it.
+enum class Isa : unsigned char {
+    portable,  // plain C++ loops (the reference; any CPU)
+    sse2,      // 128-bit vectors (every x86-64 CPU)
+    avx2,      // 256-bit vectors (x86-64 from 2013 on)
+};
+
+/// An instruction set as a type, for the callables a dispatch hands the kernels to.
+template <Isa I>
+using IsaTag = std::integral_constant<Isa, I>;
+
+inline const char* isa_name(Isa isa) {
+    switch (isa) {
+        case Isa::portable: return "portable";
+        case Isa::sse2: return "sse2";
+        case Isa::avx2: return "avx2";
+    }
+    return "?";
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define GLINT_X86 1
+/// Compiles the function it precedes for AVX2, whatever the translation unit's flags. Not
+/// for FMA: contracting a * b + c would round the leaf tests differently from the other
+/// kernels of the same build, and every kernel of a build gives the same hits.
+#define GLINT_TARGET_AVX2 [[gnu::target("avx2,bmi,bmi2,popcnt")]]
+#else
+#define GLINT_X86 0
+#define GLINT_TARGET_AVX2
+#endif
+
+/// A small kernel written with AVX2 intrinsics: always inlined where the flags compile AVX2
+/// anyway; elsewhere compiled for AVX2 and inlined into its AVX2 caller by that caller's
+/// `flatten` (GCC and Clang refuse always_inline across targets).
+#if defined(__AVX2__)
+#define GLINT_KERNEL_AVX2 [[gnu::always_inline]]
+#else
+#define GLINT_KERNEL_AVX2 GLINT_TARGET_AVX2
+#endif
+
+/// The kernels the translation unit's own flags compile (what -march gives).
+inline constexpr Isa compiled_isa =
+#if defined(__AVX2__)
+    Isa::avx2;
+#elif GLINT_X86
+    Isa::sse2;
+#else
+    Isa::portable;
+#endif
+
+/// The best kernels the running CPU (and its operating system) supports; checked once.
+inline Isa best_isa() {
+#if GLINT_X86
+    static const Isa isa = [] {
+        __builtin_cpu_init();
+        const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2") &&
+                          __builtin_cpu_supports("popcnt");
+        return avx2 ? Isa::avx2 : Isa::sse2;
+    }();
+    return isa;
+#else
+    return Isa::portable;
+#endif
+}
+
+/// Whether this build and this CPU can run `isa`'s kernels.
+inline bool isa_supported(Isa isa) { return isa <= best_isa() || isa <= compiled_isa; }
+
+}  // namespace glint
