@@ -54,6 +54,7 @@ struct GltfFixture {
     std::vector<float> positions{-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
     std::vector<std::uint16_t> indices{0, 1, 2, 0, 2, 3};
     int mode = 4;
+    std::size_t position_count = 4;  // the POSITION accessor's count
     std::string material = R"({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 1}})";
     std::string nodes = R"([{"translation": [0, -1, 0], "children": [1]},
         {"mesh": 0, "rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752], "scale": [2, 2, 2]},
@@ -79,7 +80,7 @@ struct GltfFixture {
           << R"("extensions": {"KHR_lights_punctual": {"lights": )" << lights << "}}, \"buffers\": [{\"byteLength\": " << pb + ib
           << (uri.empty() ? "" : ", \"uri\": \"" + uri + "\"") << R"(}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": )"
           << pb << R"(}, {"buffer": 0, "byteOffset": )" << pb << R"(, "byteLength": )" << ib
-          << R"(}], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << positions.size() / 3
+          << R"(}], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << position_count
           << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}]}";
         return j.str();
     }
@@ -280,6 +281,11 @@ TEST_CASE("gltf: bad input is an error naming the file and the item") {
     f = GltfFixture{};
     f.indices[4] = 9;
     contains(gltf_error(f, "index"), "indices accessor 1: index 4 = 9 is past the 4 vertices");
+    f = GltfFixture{};
+    f.position_count = 5;
+    contains(gltf_error(f, "past_buffer"), "POSITION, accessor 0: 5 elements reach past the end of its buffer");
+    f.position_count = std::size_t(1) << 62;  // stride * count overflows
+    contains(gltf_error(f, "overflow"), "elements reach past the end of its buffer");
     f = GltfFixture{};
     f.nodes = R"([{"children": [1]}, {"mesh": 0, "children": [0]}, {}, {}])";
     contains(gltf_error(f, "cycle"), "node 0 is its own ancestor");

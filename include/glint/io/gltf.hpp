@@ -138,9 +138,11 @@ inline GltfElements gltf_elements(const GltfContext& c, int index, int type, con
     const int size = tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType)) *
                      tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
     if (stride <= 0 || size <= 0) throw Error(at + ": invalid component type or stride");
-    const std::size_t end = a.count == 0 ? 0 : a.byteOffset + std::size_t(stride) * (a.count - 1) + std::size_t(size);
-    if (end > v.byteLength || v.byteOffset + v.byteLength > b.size())
-        throw Error(at + ": " + std::to_string(a.count) + " elements reach past the end of its buffer");
+    // In bounds: byteOffset + stride (count - 1) + size <= byteLength, written without overflow.
+    const bool inside = v.byteOffset <= b.size() && v.byteLength <= b.size() - v.byteOffset &&
+                        (a.count == 0 || (a.byteOffset <= v.byteLength && std::size_t(size) <= v.byteLength - a.byteOffset &&
+                                          a.count - 1 <= (v.byteLength - a.byteOffset - std::size_t(size)) / std::size_t(stride)));
+    if (!inside) throw Error(at + ": " + std::to_string(a.count) + " elements reach past the end of its buffer");
     return {b.data() + v.byteOffset + a.byteOffset, std::size_t(stride), a.count, a.componentType};
 }
 
