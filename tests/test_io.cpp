@@ -55,6 +55,7 @@ struct GltfFixture {
     std::vector<std::uint16_t> indices{0, 1, 2, 0, 2, 3};
     int mode = 4;
     std::size_t position_count = 4;  // the POSITION accessor's count
+    std::string extra;               // more top-level members, after a comma
     std::string material = R"({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 1}})";
     std::string nodes = R"([{"translation": [0, -1, 0], "children": [1]},
         {"mesh": 0, "rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752], "scale": [2, 2, 2]},
@@ -81,7 +82,7 @@ struct GltfFixture {
           << (uri.empty() ? "" : ", \"uri\": \"" + uri + "\"") << R"(}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": )"
           << pb << R"(}, {"buffer": 0, "byteOffset": )" << pb << R"(, "byteLength": )" << ib
           << R"(}], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << position_count
-          << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}]}";
+          << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}]" << extra << "}";
         return j.str();
     }
 
@@ -248,6 +249,12 @@ TEST_CASE("gltf: metallic-roughness, emission and spot lights map as the header 
     const Scene<float> lamp = load_gltf<float>(f.write_gltf("emissive"));
     CHECK(lamp.area_lights.size() == 2);
     CHECK(lamp.area_lights[0].emission[1] == doctest::Approx(2.0));
+    f.material = R"({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0}})";
+    f.extra = R"(, "textures": [{"source": 0}], "images": [{"uri": "no_such_image.png"}])";
+    const GltfScene<float> textured = read_gltf<float>(f.write_gltf("texture"));  // the image need not exist
+    REQUIRE(textured.warnings.size() == 1);
+    CHECK(textured.warnings[0].find("material 0 (''): textures are ignored") != std::string::npos);
+    CHECK(textured.scene.materials.at(0).kind == MaterialKind::lambertian);
     f.lights = R"([{"type": "spot", "intensity": 683, "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}}])";
     f.nodes = R"([{"children": [1]}, {"mesh": 0}, {"camera": 0}, {"rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752],
         "extensions": {"KHR_lights_punctual": {"light": 0}}}])";

@@ -90,6 +90,9 @@ struct GltfContext {
 inline tinygltf::Model gltf_read_model(const std::string& path) {
     if (!std::ifstream(path, std::ios::binary)) throw Error("load_gltf(" + path + "): cannot read the file");
     tinygltf::TinyGLTF loader;
+    // Textures are not used: their images are neither decoded nor required to exist.
+    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                             void*) { return true; }, nullptr);
     tinygltf::Model model;
     std::string err, warn;
     const bool glb = path.size() >= 4 && path.compare(path.size() - 4, 4, ".glb") == 0;
