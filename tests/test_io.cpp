@@ -56,6 +56,7 @@ struct GltfFixture {
     int mode = 4;
     std::size_t position_count = 4;  // the POSITION accessor's count
     std::string extra;               // more top-level members, after a comma
+    int position_accessor = 0;
     std::string material = R"({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 1}})";
     std::string nodes = R"([{"translation": [0, -1, 0], "children": [1]},
         {"mesh": 0, "rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752], "scale": [2, 2, 2]},
@@ -75,7 +76,8 @@ struct GltfFixture {
         const std::size_t pb = positions.size() * 4, ib = indices.size() * 2;
         std::ostringstream j;
         j << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 2, 3]}], "nodes": )" << nodes
-          << R"(, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0, "mode": )" << mode
+          << R"(, "meshes": [{"primitives": [{"attributes": {"POSITION": )" << position_accessor
+          << R"(}, "indices": 1, "material": 0, "mode": )" << mode
           << R"(}]}], "materials": [)" << material << R"(], "cameras": [{"type": "perspective", "perspective": )"
           << R"({"yfov": 0.8, "aspectRatio": 1.5, "znear": 0.01}}], "extensionsUsed": ["KHR_lights_punctual"], )"
           << R"("extensions": {"KHR_lights_punctual": {"lights": )" << lights << "}}, \"buffers\": [{\"byteLength\": " << pb + ib
@@ -289,8 +291,11 @@ TEST_CASE("gltf: bad input is an error naming the file and the item") {
     f.indices[4] = 9;
     contains(gltf_error(f, "index"), "indices accessor 1: index 4 = 9 is past the 4 vertices");
     f = GltfFixture{};
+    f.position_accessor = 1;
+    contains(gltf_error(f, "scalar_positions"), "mesh 0, primitive 0, POSITION accessor 1: expected type VEC3");
+    f = GltfFixture{};
     f.position_count = 5;
-    contains(gltf_error(f, "past_buffer"), "POSITION, accessor 0: 5 elements reach past the end of its buffer");
+    contains(gltf_error(f, "past_buffer"), "POSITION accessor 0: 5 elements reach past the end of its buffer");
     f.position_count = std::size_t(1) << 62;  // stride * count overflows
     contains(gltf_error(f, "overflow"), "elements reach past the end of its buffer");
     f = GltfFixture{};

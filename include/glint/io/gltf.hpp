@@ -128,11 +128,12 @@ struct GltfElements {
 };
 
 inline GltfElements gltf_elements(const GltfContext& c, int index, int type, const std::string& where) {
-    const std::string at = where + ", accessor " + std::to_string(index);
+    const std::string at = where + " accessor " + std::to_string(index);
     if (index < 0 || std::size_t(index) >= c.model.accessors.size()) throw Error(at + ": no such accessor");
     const tinygltf::Accessor& a = c.model.accessors[std::size_t(index)];
     if (a.sparse.isSparse) throw Error(at + ": sparse accessors are not supported");
-    if (a.type != type) throw Error(at + ": expected type " + std::to_string(type) + ", got " + std::to_string(a.type));
+    if (a.type != type)
+        throw Error(at + ": expected type " + (type == TINYGLTF_TYPE_VEC3 ? "VEC3" : "SCALAR") + ", got type code " + std::to_string(a.type));
     if (a.bufferView < 0 || std::size_t(a.bufferView) >= c.model.bufferViews.size()) throw Error(at + ": no buffer view");
     const tinygltf::BufferView& v = c.model.bufferViews[std::size_t(a.bufferView)];
     if (v.buffer < 0 || std::size_t(v.buffer) >= c.model.buffers.size()) throw Error(at + ": its buffer view has no buffer");
@@ -247,7 +248,8 @@ Material<T> gltf_material(const GltfContext& c, int index) {
 
 template <Scalar T>
 std::uint32_t gltf_material_index(GltfContext& c, Scene<T>& s, int index, const std::string& where) {
-    if (index >= int(c.model.materials.size())) throw Error(where + ": material " + std::to_string(index) + " does not exist");
+    if (index < -1 || index >= int(c.model.materials.size()))
+        throw Error(where + ": material " + std::to_string(index) + " does not exist");
     const std::size_t slot = std::size_t(index + 1);  // slot 0: the default material
     if (c.materials.empty()) c.materials.assign(c.model.materials.size() + 1, -1);
     if (c.materials[slot] < 0) c.materials[slot] = s.add_material(gltf_material<T>(c, index));
@@ -316,8 +318,9 @@ void gltf_add_light(const GltfContext& c, Scene<T>& s, int light, const glm::dma
         return;
     }
     const double outer = l.spot.outerConeAngle, inner = l.spot.innerConeAngle;
-    if (!(outer > 0.0 && outer <= 1.5707963267949 && inner >= 0.0 && inner < outer))
-        throw Error(where + ": spot cones need 0 <= innerConeAngle < outerConeAngle <= pi/2");
+    if (!(outer > 0.0 && outer <= 1.5707963267949 && inner >= 0.0 && inner <= outer))  // equal: Blender's blend 0
+        throw Error(where + ": spot cones need 0 <= innerConeAngle <= outerConeAngle <= pi/2, got " + std::to_string(inner) +
+                    ", " + std::to_string(outer));
     const Vec3<T> axis(glm::dvec3(world * glm::dvec4(0, 0, -1, 0)));
     if (!(glm::length(axis) > T(0))) throw Error(where + ": its node's transform collapses the spot's axis");
     s.point_lights.push_back(PointLight<T>::spot(p, axis, intensity, T(outer), T(inner)));
