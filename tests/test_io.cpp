@@ -382,3 +382,28 @@ TEST_CASE("scene json: bad files are errors naming the file and the line") {
     CHECK(error(s).find("material_of = 99") != std::string::npos);
     CHECK(parse_json("[\"a\\u00e9\\ud83d\\ude00\"]", "x").items.at(0).string == "a\xc3\xa9\xf0\x9f\x98\x80");
 }
+
+TEST_CASE("scene json: meshes by path, relative to the scene file") {
+    std::ofstream(temp_path("mesh.obj")) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    const std::string head = R"({"width": 8, "height": 6, "max_depth": 4,
+        "camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 0.8},
+        "materials": [{"kind": "lambertian", "kd": [0.5, 0.5, 0.5], "ks": [0, 0, 0], "exponent": 1, "emission": [0, 0, 0], "ior": 1.5},
+                      {"kind": "lambertian", "kd": [0, 0, 0], "ks": [0, 0, 0], "exponent": 1, "emission": [2, 2, 2], "ior": 1.5}],
+        "area_lights": [], "point_lights": [],
+        "meshes": [{"path": "glint_test_io_mesh.obj", "material": 0}, {"path": )";
+    const std::string path = temp_path("meshes.json");
+    std::ofstream(path) << head << R"("glint_test_io_mesh.obj", "material": 1}]})";
+    const SceneFile<float> f = read_scene_json<float>(path);
+    REQUIRE(f.scene.triangles.size() == 4);
+    CHECK(f.scene.material_of == std::vector<std::uint32_t>{0, 0, 1, 1});
+    CHECK(f.scene.light_of == std::vector<std::int32_t>{-1, -1, 0, 1});
+    CHECK(f.scene.area_lights.size() == 2);
+    CHECK(f.scene.triangles[2][2] == Vec3f(1, 1, 0));
+    std::ofstream(path) << head << R"("no_such_mesh.obj", "material": 1}]})";
+    try {
+        read_scene_json<float>(path);
+        FAIL("no error");
+    } catch (const Error& e) {
+        CHECK(std::string(e.what()).find("no_such_mesh.obj") != std::string::npos);
+    }
+}

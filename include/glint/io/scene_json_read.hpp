@@ -4,6 +4,12 @@
 // path-length cap. A float scene reads back exactly (9 significant digits round-trip every
 // float); a double scene to 9 digits.
 //
+// A hand-written scene may also name meshes by path: "meshes": [{"path": "bunny.obj",
+// "material": 2}] loads each OBJ (io/obj.hpp; a relative path is taken from the scene file's
+// folder) and gives all its triangles material 2 (the OBJ's own materials are not used), after
+// the inline triangles; an emissive material makes each of them an area light. "triangles"
+// may then be left out (with "material_of" and "light_of").
+//
 // Files written before `light_of` was exported get it rebuilt: each emissive triangle belongs
 // to the first area light, from the previous triangle's on, whose polygon has its three
 // vertices (as Scene::add_polygon fans a polygon). Unknown members are ignored (peers may add
@@ -11,6 +17,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -20,6 +27,7 @@
 
 #include <glint/core/error.hpp>
 #include <glint/io/json.hpp>
+#include <glint/io/obj.hpp>
 #include <glint/io/scene_json.hpp>
 #include <glint/tracer/scene.hpp>
 
@@ -159,6 +167,7 @@ void rebuild_light_of(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& 
 
 template <Scalar T>
 void read_json_triangles(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& s) {
+    if (!doc.find("triangles") && doc.find("meshes")) return;
     const auto& tris = r.member(doc, "triangles", JsonValue::Kind::array).items;
     const auto& mats = r.member(doc, "material_of", JsonValue::Kind::array).items;
     if (mats.size() != tris.size()) r.fail(doc, "material_of has " + std::to_string(mats.size()) + " entries for " +
@@ -176,6 +185,28 @@ void read_json_triangles(const SceneJsonReader& r, const JsonValue& doc, Scene<T
         r.fail(*lights, "light_of needs one entry per triangle");
     for (std::size_t i = 0; i < tris.size(); ++i)
         s.light_of[i] = std::int32_t(r.integer(lights->items[i], "light_of", -1, (long long)s.area_lights.size() - 1));
+}
+
+/// The "meshes" an OBJ path each (see the file comment).
+template <Scalar T>
+void read_json_meshes(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& s) {
+    const JsonValue* meshes = doc.find("meshes");
+    if (!meshes) return;
+    if (meshes->kind != JsonValue::Kind::array) r.fail(*meshes, "meshes must be an array");
+    const auto slash = r.file.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "" : r.file.substr(0, slash + 1);
+    for (const JsonValue& m : meshes->items) {
+        const std::string& path = r.member(m, "path", JsonValue::Kind::string).string;
+        const auto mat = std::uint32_t(r.integer(r.member(m, "material", JsonValue::Kind::number), "material", 0,
+                                                 (long long)s.materials.size() - 1));
+        const ObjMesh obj = load_obj(path.starts_with('/') ? path : dir + path);
+        for (const auto& t : obj.triangles) {
+            const std::array<Vec3<T>, 3> tri{Vec3<T>(t[0]), Vec3<T>(t[1]), Vec3<T>(t[2])};
+            if (s.materials[mat].emissive() && !(glm::length(glm::cross(tri[1] - tri[0], tri[2] - tri[0])) > T(0)))
+                r.fail(m, "mesh '" + path + "' has an emissive triangle of zero area");
+            s.add_polygon(tri, mat);
+        }
+    }
 }
 
 }  // namespace detail
@@ -198,6 +229,7 @@ SceneFile<T> parse_scene_json(std::string_view text, const std::string& file) {
     detail::read_json_materials(r, doc, s);
     detail::read_json_lights(r, doc, s);
     detail::read_json_triangles(r, doc, s);
+    detail::read_json_meshes(r, doc, s);
     try {
         s.validate();
     } catch (const Error& e) {
