@@ -79,7 +79,7 @@ void usage() {
         "  --scene-file FILE   FILE.gltf or FILE.glb: a glTF 2.0 scene (meshes, materials, the first camera,\n"
         "                      KHR_lights_punctual lights; a sky if nothing emits); FILE.json: a scene\n"
         "                      --export-scene wrote (its size and --max-depth unless given)\n"
-        "  --env FILE.exr      lat-long environment map (envmap scene, --mesh or a glTF scene)\n"
+        "  --env FILE.exr      lat-long environment map (envmap scene, --mesh or --scene-file)\n"
         "  --size N            image width and height (default 256; at most 16384)\n"
         "  --width N, --height N  image width, height (rectangular images)\n"
         "  --spp N             samples per pixel (default 16)\n"
@@ -322,6 +322,7 @@ Scene<float> scene_from_json(const Args& g, NamedRender<float>& o) {
     if (!g.width_given) o.image.width = std::min(f.view.width, 16384);
     if (!g.height_given) o.image.height = std::min(f.view.height, 16384);
     if (!g.depth_given) o.tracer.max_depth = f.view.max_depth;
+    if (!g.env.empty()) f.scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
     if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
         throw Error(g.scene_file + ": image " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
                     " is above the limit of 2^26 pixels (give --width and --height)");
