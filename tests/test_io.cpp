@@ -266,6 +266,8 @@ TEST_CASE("gltf: metallic-roughness, emission and spot lights map as the header 
     CHECK(spot.cos_outer == doctest::Approx(std::cos(0.6)));
     CHECK(spot.cos_inner == doctest::Approx(std::cos(0.3)));
     CHECK(spot.intensity[2] == doctest::Approx(1.0));
+    f.lights = R"([{"type": "spot", "spot": {"innerConeAngle": 0, "outerConeAngle": 1.5707963267948966}}])";
+    CHECK(load_gltf<float>(f.write_gltf("hemisphere_spot")).point_lights.at(0).cos_outer == 0.0f);
 }
 
 TEST_CASE("gltf: bad input is an error naming the file and the item") {

@@ -323,7 +323,9 @@ void gltf_add_light(const GltfContext& c, Scene<T>& s, int light, const glm::dma
                     ", " + std::to_string(outer));
     const Vec3<T> axis(glm::dvec3(world * glm::dvec4(0, 0, -1, 0)));
     if (!(glm::length(axis) > T(0))) throw Error(where + ": its node's transform collapses the spot's axis");
-    s.point_lights.push_back(PointLight<T>::spot(p, axis, intensity, T(outer), T(inner)));
+    PointLight<T> spot = PointLight<T>::spot(p, axis, intensity, T(outer), T(inner));
+    spot.cos_outer = std::max(spot.cos_outer, T(0));  // outer = pi/2 rounds above it in float
+    s.point_lights.push_back(spot);
 }
 
 /// Adds node `index` and its subtree; `path` holds the nodes above it (a cycle is an error).
