@@ -25,3 +25,17 @@ if(NOT same EQUAL 0)
   message(FATAL_ERROR "the scene file renders differently from the built-in scene")
 endif()
 message(STATUS "--scene-file renders the exported scene byte for byte as the built-in one")
+
+# A glTF file (one triangle, its buffer a base64 data URI; no camera, no light): framed as
+# --mesh frames an OBJ, lit by the sky, and the camera it chose printed.
+file(WRITE ${DIR}/sf_triangle.gltf [=[{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+  "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+  "bufferViews": [{"buffer": 0, "byteLength": 36}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 3}]}]=])
+execute_process(COMMAND ${EXE} --scene-file ${DIR}/sf_triangle.gltf --size 8 --spp 1 --threads 1 --out ${DIR}/sf_triangle.exr
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "rendered .*sf_triangle.gltf" OR NOT err MATCHES "camera: --eye .* --fov 40.1070")
+  message(FATAL_ERROR "the glTF scene did not render as expected (${rc}): ${out} ${err}")
+endif()
+message(STATUS "--scene-file renders a glTF: ${err}")
