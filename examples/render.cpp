@@ -2,9 +2,11 @@
 //
 //   glint-render --scene cornell --size 512 --spp 256 --out cornell.exr
 //   glint-render --mesh ../shared/scenes/bunny.obj --spp 64 --out bunny.exr
+//   glint-render --scene-file room.glb --spp 64 --out room.exr
 //
-// Renders a built-in scene (cornell, cornell-glossy, furnace, arealight, envmap) or an OBJ
-// mesh, writes an OpenEXR file (RGB plus the per-pixel variance layer and the integrator's
+// Renders a built-in scene (cornell, cornell-glossy, furnace, arealight, envmap), an OBJ
+// mesh or a scene file (glTF 2.0, or the JSON that --export-scene writes), prints the camera
+// it used as flags (so that a framed mesh's view can be given again), writes an OpenEXR file (RGB plus the per-pixel variance layer and the integrator's
 // layers, such as correlated sampling's lambda) and a tone-mapped PNG preview next to it, and
 // prints the time and the ray throughput. Policies are chosen by name (the tables of
 // glint/tracer/named_render.hpp and accelerator_choices.hpp), every name checked before any
@@ -27,11 +29,13 @@
 #include <unistd.h>
 
 #include <glint/io/exr.hpp>
+#include <glint/io/gltf.hpp>
 #include <glint/version.hpp>
 #include <glint/io/obj.hpp>
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
+#include <glint/io/scene_json_read.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/progressive.hpp>
@@ -69,10 +73,13 @@ std::string choices(const char* flag, std::span<const Choice<Make>> table) {
 
 void usage() {
     std::string text =
-        "usage: glint-render (--scene NAME | --mesh FILE.obj) [options]   (or --help, --version)\n"
+        "usage: glint-render (--scene NAME | --mesh FILE.obj | --scene-file FILE) [options]   (or --help, --version)\n"
         "  --scene NAME        a built-in scene:\n" + choice_usage(scene_choices<float>()) +
         "  --mesh FILE         an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky\n"
-        "  --env FILE.exr      lat-long environment map (envmap scene or --mesh)\n"
+        "  --scene-file FILE   FILE.gltf or FILE.glb: a glTF 2.0 scene (meshes, materials, the first camera,\n"
+        "                      KHR_lights_punctual lights; a sky if nothing emits); FILE.json: a scene\n"
+        "                      --export-scene wrote (its size and --max-depth unless given)\n"
+        "  --env FILE.exr      lat-long environment map (envmap scene, --mesh or --scene-file)\n"
         "  --size N            image width and height (default 256; at most 16384)\n"
         "  --width N, --height N  image width, height (rectangular images)\n"
         "  --spp N             samples per pixel (default 16)\n"
@@ -115,6 +122,13 @@ void usage() {
     std::fputs(text.c_str(), stdout);
 }
 
+/// A camera that frames `box` from the front and a little above.
+Camera<float> frame_box(const AABB<float>& box) {
+    const Vec3f c = box.center();
+    const float r = glm::length(box.extent()) * 0.5f;
+    return Camera<float>{c + Vec3f(0.0f, 0.3f, 1.0f) * (r * 2.6f), c, Vec3f(0, 1, 0), 0.7f};
+}
+
 /// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
 /// emissive faces as area lights; a sky if nothing emits; camera framing the bounding box.
 Scene<float> scene_from_obj(const std::string& path, const std::string& env_path) {
@@ -140,9 +154,7 @@ Scene<float> scene_from_obj(const std::string& path, const std::string& env_path
     } else if (s.area_lights.empty()) {
         s.environment = default_sky<float>();
     }
-    const Vec3f c = box.center();
-    const float r = glm::length(box.extent()) * 0.5f;
-    s.camera = Camera<float>{c + Vec3f(0.0f, 0.3f, 1.0f) * (r * 2.6f), c, Vec3f(0, 1, 0), 0.7f};
+    s.camera = frame_box(box);
     return s;
 }
 
@@ -205,7 +217,8 @@ void check_writable(const std::string& path) {
 
 /// Everything the command line sets besides the path tracer's NamedRender.
 struct Args {
-    std::string scene_name, mesh, env, out = "out.exr";
+    std::string scene_name, mesh, scene_file, env, out = "out.exr";
+    bool width_given = false, height_given = false, depth_given = false;  // over a scene file's
     std::string insert, export_json;  // --insert-mesh, --export-scene
     std::string accel = "bvh8", tonemap = "clamp";
     float exposure = 0;
@@ -241,10 +254,11 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         if (a == "--version") { std::printf("glint-render %s\n", version_string); return false; }
         else if (a == "--scene") g.scene_name = value();
         else if (a == "--mesh") g.mesh = value();
+        else if (a == "--scene-file") g.scene_file = value();
         else if (a == "--env") g.env = value();
-        else if (a == "--size") o.image.width = o.image.height = int(to_int(a, value(), 1, 16384));
-        else if (a == "--width") o.image.width = int(to_int(a, value(), 1, 16384));
-        else if (a == "--height") o.image.height = int(to_int(a, value(), 1, 16384));
+        else if (a == "--size") { o.image.width = o.image.height = int(to_int(a, value(), 1, 16384)); g.width_given = g.height_given = true; }
+        else if (a == "--width") { o.image.width = int(to_int(a, value(), 1, 16384)); g.width_given = true; }
+        else if (a == "--height") { o.image.height = int(to_int(a, value(), 1, 16384)); g.height_given = true; }
         else if (a == "--spp") o.image.spp = int(to_int(a, value(), 1, 1 << 20));
         else if (a == "--out") g.out = value();
         else if (a == "--roulette") o.roulette = value();
@@ -260,7 +274,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--reduce") o.reduce_continuation = true;
         else if (a == "--pixel-centres") o.image.pixel_jitter = false;
         else if (a == "--exposure") g.exposure = to_float(a, value(), -64.0f, 64.0f);
-        else if (a == "--max-depth") o.tracer.max_depth = int(to_int(a, value(), 1, 1 << 24));
+        else if (a == "--max-depth") { o.tracer.max_depth = int(to_int(a, value(), 1, 1 << 24)); g.depth_given = true; }
         else if (a == "--eye") g.eye = to_vec3(a, value());
         else if (a == "--look-at") g.look_at = to_vec3(a, value());
         else if (a == "--up") g.up = to_vec3(a, value());
@@ -286,16 +300,69 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
     check_names(g, o);
     if (g.time_budget > 0 && g.integrator == "vpl")
         throw Error("--time-budget applies to integrators with passes (path, sppm, photons), not '" + g.integrator + "'");
-    if (g.scene_name.empty() == g.mesh.empty()) throw Error("give exactly one of --scene NAME and --mesh FILE (see --help)");
+    if (int(!g.scene_name.empty()) + int(!g.mesh.empty()) + int(!g.scene_file.empty()) != 1)
+        throw Error("give exactly one of --scene NAME, --mesh FILE and --scene-file FILE (see --help)");
+    if (!g.scene_file.empty() && !ends_with(g.scene_file, ".gltf") && !ends_with(g.scene_file, ".glb") &&
+        !ends_with(g.scene_file, ".json"))
+        throw Error("--scene-file expects FILE.gltf, FILE.glb or FILE.json, got '" + g.scene_file + "'");
     if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
         throw Error("--width x --height = " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
                     " is above the limit of 2^26 pixels");
     if (!ends_with(g.out, ".exr") && !ends_with(g.out, ".png"))
         throw Error("--out expects a file name ending in .exr or .png, got '" + g.out + "'");
     for (const char* ext : {".exr", ".png"}) check_writable(g.out.substr(0, g.out.size() - 4) + ext);
-    for (const std::string& f : {g.mesh, g.env})
+    for (const std::string& f : {g.mesh, g.scene_file, g.env})
         if (!f.empty() && access(f.c_str(), R_OK) != 0) throw Error("cannot read '" + f + "': " + std::strerror(errno));
     return true;
+}
+
+/// --scene-file FILE.json: the exported scene, its image size and depth cap where no flag set them.
+Scene<float> scene_from_json(const Args& g, NamedRender<float>& o) {
+    SceneFile<float> f = read_scene_json<float>(g.scene_file);
+    if (!g.width_given) o.image.width = std::min(f.view.width, 16384);
+    if (!g.height_given) o.image.height = std::min(f.view.height, 16384);
+    if (!g.depth_given) o.tracer.max_depth = f.view.max_depth;
+    if (!g.env.empty()) f.scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
+    if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
+        throw Error(g.scene_file + ": image " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
+                    " is above the limit of 2^26 pixels (give --width and --height)");
+    return std::move(f.scene);
+}
+
+/// --scene-file FILE.gltf / FILE.glb: the glTF scene; its camera's aspect sets the height
+/// where no flag set the size; a framing camera if it has none; a sky if nothing emits.
+Scene<float> scene_from_gltf(const Args& g, NamedRender<float>& o) {
+    GltfScene<float> f = read_gltf<float>(g.scene_file);
+    for (const std::string& w : f.warnings) std::fprintf(stderr, "glint-render: warning: %s\n", w.c_str());
+    if (f.aspect > 0.0f && !g.width_given && !g.height_given)
+        o.image.height = std::clamp(int(std::lround(float(o.image.width) / f.aspect)), 1, 16384);
+    if (!f.has_camera) {
+        AABB<float> box;
+        for (const auto& t : f.scene.triangles)
+            for (const auto& p : t) box.extend(p);
+        f.scene.camera = frame_box(box);
+    }
+    if (!g.env.empty()) f.scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
+    else if (f.scene.area_lights.empty() && f.scene.point_lights.empty()) f.scene.environment = default_sky<float>();
+    return std::move(f.scene);
+}
+
+/// The scene the flags name (the image size and depth cap from a scene file where no flag set them).
+Scene<float> load_scene(const Args& g, NamedRender<float>& o) {
+    if (!g.mesh.empty()) return scene_from_obj(g.mesh, g.env);
+    if (g.scene_file.empty()) {
+        Scene<float> s = builtin_scene<float>(g.scene_name);
+        if (!g.env.empty()) s.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
+        return s;
+    }
+    return ends_with(g.scene_file, ".json") ? scene_from_json(g, o) : scene_from_gltf(g, o);
+}
+
+/// The camera as the flags that give it again.
+void print_camera(const Camera<float>& c) {
+    std::fprintf(stderr, "camera: --eye %.9g,%.9g,%.9g --look-at %.9g,%.9g,%.9g --up %.9g,%.9g,%.9g --fov %.9g\n", c.eye.x,
+                 c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z,
+                 double(c.fov_y) * 180.0 / 3.14159265358979323846);
 }
 
 /// An RGB image's floats, pixel after pixel (an EXR layer's data).
@@ -422,9 +489,9 @@ int main(int argc, char** argv) {
         NamedRender<float> o;
         if (isatty(STDERR_FILENO) != 0) o.image.progress = progress_bar;  // a progress bar only on a terminal
         if (!parse_args(argc, argv, g, o)) return 0;
-        Scene<float> scene = g.mesh.empty() ? builtin_scene<float>(g.scene_name) : scene_from_obj(g.mesh, g.env);
-        if (!g.env.empty() && g.mesh.empty()) scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
+        Scene<float> scene = load_scene(g, o);
         apply_camera(g, scene.camera);
+        print_camera(scene.camera);
         const std::size_t before_insert = g.mesh.empty() ? scene.triangles.size() : 0;  // occluders: the mesh
         if (!g.insert.empty())
             insert_mesh<float>(scene, load_obj(g.insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),

@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${CI_JOBS:-$(nproc)}
-suites=(core intersection sampling occluders cones trees tracer vpl lights photons)
+suites=(core intersection sampling occluders cones trees tracer vpl lights photons io)
 
 t0=$SECONDS
 mkdir -p build-asan build-tsan

@@ -285,11 +285,41 @@ def blender_mask(bpy, sc, scene_json, path):
     np.save(path, ids)
 
 
+def blender_export_gltf(bpy, sc, scene_json, path):
+    """The built scene as a glTF 2.0 binary (Blender's own exporter), its materials first made
+    Principled BSDFs, which the exporter writes as metallic-roughness: Lambertian as base
+    colour kd, metallic 0, roughness 1; mirror as base colour ks, metallic 1, roughness 0;
+    emission as the emission colour and strength. Coordinates stay glint's (no Y-up turn)."""
+    for i, m in enumerate(scene_json['materials']):
+        if m['kind'] not in ('lambertian', 'mirror'):
+            sys.exit('peer_cycles: material %d is %s, which the glTF export does not map' % (i, m['kind']))
+        mat = bpy.data.materials['m%d' % i]
+        nt = mat.node_tree
+        nt.nodes.clear()
+        out = nt.nodes.new('ShaderNodeOutputMaterial')
+        b = nt.nodes.new('ShaderNodeBsdfPrincipled')
+        mirror = m['kind'] == 'mirror'
+        b.inputs['Base Color'].default_value = (*(m['ks'] if mirror else m['kd']), 1.0)
+        b.inputs['Metallic'].default_value = 1.0 if mirror else 0.0
+        b.inputs['Roughness'].default_value = 0.0 if mirror else 1.0
+        peak = max(m['emission'])
+        if peak > 0:
+            b.inputs['Emission'].default_value = (*[c / peak for c in m['emission']], 1.0)
+            b.inputs['Emission Strength'].default_value = peak
+        nt.links.new(b.outputs[0], out.inputs['Surface'])
+    sc.render.resolution_x, sc.render.resolution_y = scene_json['width'], scene_json['height']
+    bpy.ops.export_scene.gltf(filepath=path, export_format='GLB', export_yup=False, export_cameras=True,
+                              export_lights=True)
+
+
 def blender_main(argv):
     import bpy
     job = json.load(open(argv[argv.index('--job') + 1]))
     scene_json = json.load(open(job['scene']))
     sc = blender_build(bpy, scene_json)
+    if job.get('gltf'):
+        blender_export_gltf(bpy, sc, scene_json, job['gltf'])
+        return
     blender_settings(sc, job, scene_json)
     if job.get('mask'):
         blender_mask(bpy, sc, scene_json, job['mask'])
@@ -484,6 +514,40 @@ def comparison(rn, a, scene):
     return {'scene': scene, 'size': a.size, 'ref_spp': a.ref_spp, 'glint_args': a.glint_args, 'regions': regions, 'ladder': rows}
 
 
+def image_mean(path):
+    """Per band: the image mean of a glint-render EXR and its standard error from the
+    per-pixel variance layer."""
+    ch = exr.read_exr(path)
+    img, var = exr.rgb_of(ch).astype(np.float64), exr.rgb_of(ch, 'variance').astype(np.float64)
+    n = img.shape[0] * img.shape[1]
+    return img.reshape(-1, 3).mean(axis=0), np.sqrt(var.reshape(-1, 3).sum(axis=0)) / n
+
+
+def gltf_check(rn, a, scene, spp=64):
+    """Blender exports `scene` (built from glint's JSON) as glTF; glint-render renders that
+    file and the built-in scene with different seeds; prints the image means, their difference
+    in standard errors, and the camera each run printed."""
+    work = os.path.join(a.work, 'gltf_%s_%d' % (scene, a.size))
+    os.makedirs(work, exist_ok=True)
+    sj, glb = os.path.join(work, 'scene.json'), os.path.join(work, scene + '.glb')
+    run([a.glint] + SCENES[scene] + ['--size', str(a.size), '--export-scene', sj])
+    job = os.path.join(work, 'gltf.job.json')
+    json.dump({'scene': sj, 'gltf': glb}, open(job, 'w'))
+    rn.blender(job)
+    runs = {}
+    for name, src, seed in (('built-in', SCENES[scene], 1), ('glTF', ['--scene-file', glb], 2)):
+        out = os.path.join(work, name.replace('-', '') + '.exr')
+        text = run(rn.pin + [a.glint] + src + ['--size', str(a.size), '--spp', str(spp), '--seed', str(seed),
+                                                '--sampler', 'random', '--threads', '1', '--out', out])
+        runs[name] = image_mean(out)
+        print('  %s: %s' % (name, next(l for l in text.splitlines() if l.startswith('camera:'))))
+    (m1, s1), (m2, s2) = runs['built-in'], runs['glTF']
+    z = (m2 - m1) / np.sqrt(s1 ** 2 + s2 ** 2)
+    print('%s from Blender glTF %s: image mean R G B %s (built-in %s), %s standard errors apart, %dx%d, %d spp'
+          % (scene, glb, np.round(m2, 5), np.round(m1, 5), np.round(z, 2), a.size, a.size, spp), flush=True)
+    return float(np.abs(z).max())
+
+
 def markdown(results):
     """The results as the Markdown tables of docs/tracer.md."""
     print('\n| scene | spp | glint MSE·spp | glint s | Cycles MSE·spp | Cycles s | glint / Cycles, image | walls | wall-clock |')
@@ -518,6 +582,9 @@ def main():
     p.add_argument('--work', default=os.path.join(ROOT, 'build', 'peer_cycles'), help='renders and cached references')
     p.add_argument('--json', help='write the results here')
     p.add_argument('--markdown', help='print the tables of a --json file as Markdown and exit')
+    p.add_argument('--gltf-check', action='store_true',
+                   help='instead of the timing: Blender exports each scene as glTF, glint renders it and the '
+                        'built-in scene, and the image means are compared (Lambertian and mirror scenes)')
     a = p.parse_args()
     if a.markdown:
         markdown(json.load(open(a.markdown)))
@@ -541,6 +608,9 @@ def main():
         print('peer_cycles: cornell-bunny skipped: %s not found (--bunny FILE)' % a.bunny)
         scenes.remove('cornell-bunny')
     rn = Runner(a)
+    if a.gltf_check:
+        worst = max(gltf_check(rn, a, s) for s in scenes)
+        return 0 if worst < 4 else 1
     print('glint-render %s (extra flags: %r) against %s, one thread, pinned to core %d'
           % (a.glint, a.glint_args, run([a.blender, '--version']).splitlines()[0], a.core), flush=True)
     results = [comparison(rn, a, s) for s in scenes]

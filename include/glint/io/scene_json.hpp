@@ -2,13 +2,15 @@
 // renderer (tools/peer_cycles.py builds the same scene in Blender's Cycles from it).
 //
 // Written: the triangles (three vertices each, in the tracer's order, whose vertex order
-// gives the geometric normal and so an emitter's front face), the material of each triangle,
+// gives the geometric normal and so an emitter's front face), the material of each triangle
+// (material_of) and its area light (light_of, -1 for none),
 // the materials (kind, kd, ks, Phong exponent, emission, ior: the model of
 // glint/tracer/scene.hpp), the area lights (polygon, emission, unit normal, area), the point
 // lights (kind isotropic | spot | cosine, position, intensity, axis, cos_outer, cos_inner:
 // glint/lights/light.hpp), the pinhole camera (eye, target, up, full vertical field of view
 // fov_y in radians) with the image size and aspect, and the tracer's path-length cap
 // max_depth. Numbers are written with 9 significant digits, which round-trips every float.
+// io/scene_json_read.hpp reads the file back.
 #pragma once
 
 #include <cmath>
@@ -16,6 +18,7 @@
 #include <fstream>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include <glint/core/error.hpp>
 #include <glint/tracer/scene.hpp>
@@ -149,6 +152,14 @@ void json_lights(std::ostream& out, const Scene<T>& s) {
     });
 }
 
+/// Writes "[a, b, ...]" of integers, 32 a line.
+template <class Int>
+void json_integers(std::ostream& out, const std::vector<Int>& v) {
+    out << '[';
+    for (std::size_t i = 0; i < v.size(); ++i) out << (i ? (i % 32 ? ", " : ",\n    ") : "") << v[i];
+    out << ']';
+}
+
 template <Scalar T>
 void json_triangles(std::ostream& out, const Scene<T>& s) {
     out << "  \"triangles\": [\n";
@@ -159,9 +170,11 @@ void json_triangles(std::ostream& out, const Scene<T>& s) {
         json_numbers(out, a, 9, "triangles");
         out << (i + 1 < s.triangles.size() ? ",\n" : "\n");
     }
-    out << "  ],\n  \"material_of\": [";
-    for (std::size_t i = 0; i < s.material_of.size(); ++i) out << (i ? (i % 32 ? ", " : ",\n    ") : "") << s.material_of[i];
-    out << "]\n";
+    out << "  ],\n  \"material_of\": ";
+    json_integers(out, s.material_of);
+    out << ",\n  \"light_of\": ";
+    json_integers(out, s.light_of);
+    out << "\n";
 }
 
 }  // namespace detail

@@ -1,0 +1,390 @@
+// glint/io/gltf.hpp: a glTF 2.0 scene (.gltf with its buffers, or .glb) as a glint Scene,
+// read through tinygltf (Debian libtinygltf-dev, a shared library: link TinyGLTF::TinyGLTF,
+// which glint::io does). The format: the Khronos glTF 2.0 specification (cited as glTF 2.0);
+// lights: its KHR_lights_punctual extension.
+//
+//   Scene<float> s = glint::load_gltf<float>("room.glb");          // the scene alone
+//   GltfScene<float> g = glint::read_gltf<float>("room.gltf");     // plus warnings, camera, aspect
+//
+// What is read, from the default scene (or scene 0; without scenes, every root node):
+//  - nodes: the whole hierarchy, each node's `matrix` or its translation * rotation * scale
+//    (glTF 2.0, §3.5.2), composed from the root; a world matrix of negative determinant
+//    mirrors, so its triangles' vertex order is swapped to keep the front face (§3.7.2.1);
+//  - meshes: primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN (POSITION: VEC3
+//    float; indices: unsigned byte, short or int, or none); NORMAL and TEXCOORD are not read
+//    (glint shades with the geometric normal); emissive triangles become area lights, one
+//    per triangle, emitting from their front face (doubleSided is ignored);
+//  - materials (base = baseColorFactor's RGB, alpha ignored; m = metallic, r = roughness,
+//    alpha = r^2 as glTF 2.0, Appendix B, defines it; F0 = 0.04 for dielectrics, ibid.):
+//      metal (m >= 0.5), r < mirror_roughness: mirror, ks = base;
+//      metal, rougher:                 glossy, kd = base (1 - m), ks = base m + 0.04 (1 - m);
+//      dielectric (m < 0.5), r >= diffuse_roughness: Lambertian, kd = base;
+//      dielectric, smoother:           glossy, kd = 0.96 base, ks = 0.04;
+//      KHR_materials_transmission factor >= 0.5: dielectric, ior from KHR_materials_ior (1.5);
+//    the glossy lobe's Phong exponent n = 2 / alpha^2 - 2 (the Phong-Beckmann correspondence
+//    of Walter et al. 2007, §5.2), clamped to [1, 10^4]; emission = emissiveFactor times
+//    KHR_materials_emissive_strength's factor times emission_scale (radiance, as Blender's
+//    exporter writes an emission strength); textures are ignored with a warning;
+//  - the first perspective camera met in the node walk: eye at the node's origin, looking
+//    down its -Z with +Y up (§3.10), fov_y = yfov; aspectRatio is returned (GltfScene::aspect);
+//  - KHR_lights_punctual point and spot lights at their node, spots along its -Z; intensity
+//    in candela (lm/sr) times watts_per_lumen (default 1/683 W/lm, the candela's definition)
+//    times the colour gives glint's W/sr. Spots: outerConeAngle and innerConeAngle are
+//    glint's cones; glint's spot keeps a cos(theta) factor and a smoothstep edge where the
+//    extension suggests none and a squared linear edge (lights/light.hpp): equal on the axis,
+//    dimmer off it. `range` is ignored (inverse-square everywhere); directional lights are
+//    skipped with a warning (glint has none).
+// Every error is a glint::Error naming the file and the item: a missing or unparsable file,
+// a node cycle, a non-finite transform, a primitive of points or lines, an accessor of the
+// wrong type, out of its buffer, sparse, with an index past the vertices or a non-finite
+// position, an emissive triangle of zero area.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <tiny_gltf.h>
+
+#include <glint/core/error.hpp>
+#include <glint/core/math.hpp>
+#include <glint/core/spectrum.hpp>
+#include <glint/lights/light.hpp>
+#include <glint/tracer/scene.hpp>
+
+namespace glint {
+
+/// How glTF's quantities become glint's (see the file comment).
+struct GltfOptions {
+    double watts_per_lumen = 1.0 / 683.0;  // light intensity: candela to W/sr
+    double emission_scale = 1.0;           // emissive radiance factor
+    double mirror_roughness = 0.1;         // metals smoother than this are mirrors
+    double diffuse_roughness = 0.5;        // dielectrics at least this rough are Lambertian
+};
+
+template <Scalar T>
+struct GltfScene {
+    Scene<T> scene;
+    bool has_camera = false;  // false: scene.camera is the default one
+    T aspect = T(0);          // the camera's aspectRatio (width / height), 0 if not given
+    std::vector<std::string> warnings;
+};
+
+namespace detail {
+
+struct GltfContext {
+    const tinygltf::Model& model;
+    const std::string& file;
+    const GltfOptions& options;
+    std::vector<std::string>& warnings;
+    std::vector<std::int64_t> materials;  // glTF material -> glint material (-1: not yet added)
+};
+
+inline tinygltf::Model gltf_read_model(const std::string& path) {
+    if (!std::ifstream(path, std::ios::binary)) throw Error("load_gltf(" + path + "): cannot read the file");
+    tinygltf::TinyGLTF loader;
+    // Textures are not used: their images are neither decoded nor required to exist.
+    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                             void*) { return true; }, nullptr);
+    tinygltf::Model model;
+    std::string err, warn;
+    const bool glb = path.size() >= 4 && path.compare(path.size() - 4, 4, ".glb") == 0;
+    const bool ok = glb ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
+                        : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    if (!ok) throw Error("load_gltf(" + path + "): " + (err.empty() ? "cannot parse the file" : err));
+    return model;
+}
+
+/// A node's local matrix: `matrix`, or translation * rotation * scale.
+inline glm::dmat4 gltf_local_matrix(const tinygltf::Node& n, const std::string& where) {
+    glm::dmat4 m(1.0);
+    if (n.matrix.size() == 16) {
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 4; ++r) m[c][r] = n.matrix[std::size_t(4 * c + r)];  // column-major
+    } else {
+        if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+        if (n.rotation.size() == 4)  // glTF stores x, y, z, w
+            m *= glm::mat4_cast(glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
+        if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
+    }
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            if (!std::isfinite(m[c][r])) throw Error(where + ": the transform is not finite");
+    return m;
+}
+
+/// An accessor's bytes, checked to lie inside its buffer view and buffer.
+struct GltfElements {
+    const unsigned char* data = nullptr;
+    std::size_t stride = 0, count = 0;
+    int component = 0;
+};
+
+inline GltfElements gltf_elements(const GltfContext& c, int index, int type, const std::string& where) {
+    const std::string at = where + " accessor " + std::to_string(index);
+    if (index < 0 || std::size_t(index) >= c.model.accessors.size()) throw Error(at + ": no such accessor");
+    const tinygltf::Accessor& a = c.model.accessors[std::size_t(index)];
+    if (a.sparse.isSparse) throw Error(at + ": sparse accessors are not supported");
+    if (a.type != type)
+        throw Error(at + ": expected type " + (type == TINYGLTF_TYPE_VEC3 ? "VEC3" : "SCALAR") + ", got type code " + std::to_string(a.type));
+    if (a.bufferView < 0 || std::size_t(a.bufferView) >= c.model.bufferViews.size()) throw Error(at + ": no buffer view");
+    const tinygltf::BufferView& v = c.model.bufferViews[std::size_t(a.bufferView)];
+    if (v.buffer < 0 || std::size_t(v.buffer) >= c.model.buffers.size()) throw Error(at + ": its buffer view has no buffer");
+    const std::vector<unsigned char>& b = c.model.buffers[std::size_t(v.buffer)].data;
+    const int stride = a.ByteStride(v);
+    const int size = tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType)) *
+                     tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
+    if (stride <= 0 || size <= 0) throw Error(at + ": invalid component type or stride");
+    // In bounds: byteOffset + stride (count - 1) + size <= byteLength, written without overflow.
+    const bool inside = v.byteOffset <= b.size() && v.byteLength <= b.size() - v.byteOffset &&
+                        (a.count == 0 || (a.byteOffset <= v.byteLength && std::size_t(size) <= v.byteLength - a.byteOffset &&
+                                          a.count - 1 <= (v.byteLength - a.byteOffset - std::size_t(size)) / std::size_t(stride)));
+    if (!inside) throw Error(at + ": " + std::to_string(a.count) + " elements reach past the end of its buffer");
+    return {b.data() + v.byteOffset + a.byteOffset, std::size_t(stride), a.count, a.componentType};
+}
+
+inline std::vector<glm::dvec3> gltf_positions(const GltfContext& c, int index, const std::string& where) {
+    const GltfElements e = gltf_elements(c, index, TINYGLTF_TYPE_VEC3, where + ", POSITION");
+    if (e.component != TINYGLTF_COMPONENT_TYPE_FLOAT)
+        throw Error(where + ", POSITION accessor " + std::to_string(index) + ": positions must be floats");
+    std::vector<glm::dvec3> out(e.count);
+    for (std::size_t i = 0; i < e.count; ++i) {
+        float p[3];
+        std::memcpy(p, e.data + i * e.stride, sizeof(p));
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+            throw Error(where + ", POSITION accessor " + std::to_string(index) + ": position " + std::to_string(i) +
+                        " is not finite");
+        out[i] = glm::dvec3(p[0], p[1], p[2]);
+    }
+    return out;
+}
+
+/// The vertex indices of a primitive (0, 1, ... without an indices accessor), each checked.
+inline std::vector<std::uint32_t> gltf_indices(const GltfContext& c, int index, std::size_t vertices, const std::string& where) {
+    std::vector<std::uint32_t> out;
+    if (index < 0) {
+        for (std::size_t i = 0; i < vertices; ++i) out.push_back(std::uint32_t(i));
+        return out;
+    }
+    const GltfElements e = gltf_elements(c, index, TINYGLTF_TYPE_SCALAR, where + ", indices");
+    for (std::size_t i = 0; i < e.count; ++i) {
+        const unsigned char* p = e.data + i * e.stride;
+        std::uint32_t v = 0;
+        if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) v = *p;
+        else if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) { std::uint16_t s; std::memcpy(&s, p, 2); v = s; }
+        else if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) std::memcpy(&v, p, 4);
+        else throw Error(where + ", indices accessor " + std::to_string(index) + ": indices must be unsigned integers");
+        if (v >= vertices)
+            throw Error(where + ", indices accessor " + std::to_string(index) + ": index " + std::to_string(i) + " = " +
+                        std::to_string(v) + " is past the " + std::to_string(vertices) + " vertices");
+        out.push_back(v);
+    }
+    return out;
+}
+
+/// Triangles of a TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive (glTF 2.0, §3.7.2.1).
+inline std::vector<std::array<std::uint32_t, 3>> gltf_triangles(int mode, const std::vector<std::uint32_t>& idx,
+                                                                const std::string& where) {
+    std::vector<std::array<std::uint32_t, 3>> out;
+    if (mode == TINYGLTF_MODE_TRIANGLES || mode == -1) {
+        for (std::size_t i = 0; i + 2 < idx.size(); i += 3) out.push_back({idx[i], idx[i + 1], idx[i + 2]});
+    } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        for (std::size_t i = 0; i + 2 < idx.size(); ++i)
+            out.push_back(i % 2 ? std::array{idx[i + 1], idx[i], idx[i + 2]} : std::array{idx[i], idx[i + 1], idx[i + 2]});
+    } else if (mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+        for (std::size_t i = 1; i + 1 < idx.size(); ++i) out.push_back({idx[0], idx[i], idx[i + 1]});
+    } else {
+        throw Error(where + ": primitive mode " + std::to_string(mode) +
+                    " (points or lines) is not triangles; glint renders triangle meshes only");
+    }
+    return out;
+}
+
+/// A number from an extension object's field, or `fallback`.
+inline double gltf_extension_number(const tinygltf::ExtensionMap& ext, const char* name, const char* field, double fallback) {
+    const auto it = ext.find(name);
+    if (it == ext.end() || !it->second.IsObject() || !it->second.Has(field)) return fallback;
+    const tinygltf::Value& v = it->second.Get(field);
+    return v.IsNumber() ? v.GetNumberAsDouble() : fallback;
+}
+
+/// glTF's metallic-roughness material as glint's (the mapping of the file comment).
+template <Scalar T>
+Material<T> gltf_material(const GltfContext& c, int index) {
+    const tinygltf::Material g = index >= 0 ? c.model.materials[std::size_t(index)] : tinygltf::Material{};
+    const std::string where = c.file + ": material " + std::to_string(index) + " ('" + g.name + "')";
+    const auto& pbr = g.pbrMetallicRoughness;
+    auto rgb = [&](const std::vector<double>& v, double fallback, const char* what) {
+        Rgb<T> out{T(fallback)};
+        for (std::size_t k = 0; k < 3 && k < v.size(); ++k) out[k] = T(v[k]);
+        if (!out.is_finite() || out.min() < T(0)) throw Error(where + ": " + what + " is negative or not finite");
+        return out;
+    };
+    const Rgb<T> base = min(rgb(pbr.baseColorFactor, 1.0, "baseColorFactor"), Rgb<T>(T(1)));
+    const double strength = gltf_extension_number(g.extensions, "KHR_materials_emissive_strength", "emissiveStrength", 1.0);
+    const Rgb<T> emission = rgb(g.emissiveFactor, 0.0, "emissiveFactor") * T(strength * c.options.emission_scale);
+    const double m = std::clamp(pbr.metallicFactor, 0.0, 1.0), r = std::clamp(pbr.roughnessFactor, 0.0, 1.0);
+    if (pbr.baseColorTexture.index >= 0 || g.emissiveTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0)
+        c.warnings.push_back(where + ": textures are ignored (the factors are used)");
+    const double alpha = std::max(r * r, 1e-4);
+    const T n = T(std::clamp(2.0 / (alpha * alpha) - 2.0, 1.0, 1e4));
+    Material<T> out;
+    if (gltf_extension_number(g.extensions, "KHR_materials_transmission", "transmissionFactor", 0.0) >= 0.5)
+        out = Material<T>::dielectric(T(gltf_extension_number(g.extensions, "KHR_materials_ior", "ior", 1.5)));
+    else if (m >= 0.5 && r < c.options.mirror_roughness) out = Material<T>::mirror(base);
+    else if (m >= 0.5) out = Material<T>::glossy(base * T(1 - m), base * T(m) + Rgb<T>(T(0.04 * (1 - m))), n);
+    else if (r >= c.options.diffuse_roughness) out = Material<T>::lambertian(base);
+    else out = Material<T>::glossy(base * T(0.96), Rgb<T>(T(0.04)), n);
+    out.emission = emission;
+    return out;
+}
+
+template <Scalar T>
+std::uint32_t gltf_material_index(GltfContext& c, Scene<T>& s, int index, const std::string& where) {
+    if (index < -1 || index >= int(c.model.materials.size()))
+        throw Error(where + ": material " + std::to_string(index) + " does not exist");
+    const std::size_t slot = std::size_t(index + 1);  // slot 0: the default material
+    if (c.materials.empty()) c.materials.assign(c.model.materials.size() + 1, -1);
+    if (c.materials[slot] < 0) c.materials[slot] = s.add_material(gltf_material<T>(c, index));
+    return std::uint32_t(c.materials[slot]);
+}
+
+template <Scalar T>
+void gltf_add_mesh(GltfContext& c, Scene<T>& s, int mesh, const glm::dmat4& world) {
+    if (mesh < 0 || std::size_t(mesh) >= c.model.meshes.size()) throw Error(c.file + ": mesh " + std::to_string(mesh) + " does not exist");
+    const bool mirrored = glm::determinant(world) < 0.0;
+    const auto& prims = c.model.meshes[std::size_t(mesh)].primitives;
+    for (std::size_t p = 0; p < prims.size(); ++p) {
+        const std::string where = c.file + ": mesh " + std::to_string(mesh) + ", primitive " + std::to_string(p);
+        const auto pos = prims[p].attributes.find("POSITION");
+        if (pos == prims[p].attributes.end()) throw Error(where + ": no POSITION attribute");
+        const std::vector<glm::dvec3> v = gltf_positions(c, pos->second, where);
+        const auto tris = gltf_triangles(prims[p].mode, gltf_indices(c, prims[p].indices, v.size(), where), where);
+        const std::uint32_t m = gltf_material_index(c, s, prims[p].material, where);
+        for (std::size_t t = 0; t < tris.size(); ++t) {
+            std::array<Vec3<T>, 3> tri;
+            for (int k = 0; k < 3; ++k) tri[std::size_t(k)] = Vec3<T>(glm::dvec3(world * glm::dvec4(v[tris[t][std::size_t(k)]], 1.0)));
+            if (mirrored) std::swap(tri[1], tri[2]);
+            if (s.materials[m].emissive() && !(glm::length(glm::cross(tri[1] - tri[0], tri[2] - tri[0])) > T(0)))
+                throw Error(where + ": emissive triangle " + std::to_string(t) + " has zero area");
+            s.add_polygon(tri, m);
+        }
+    }
+}
+
+template <Scalar T>
+void gltf_set_camera(const GltfContext& c, GltfScene<T>& out, int camera, const glm::dmat4& world) {
+    const std::string where = c.file + ": camera " + std::to_string(camera);
+    if (camera < 0 || std::size_t(camera) >= c.model.cameras.size()) throw Error(where + " does not exist");
+    const tinygltf::Camera& cam = c.model.cameras[std::size_t(camera)];
+    if (cam.type != "perspective") {
+        c.warnings.push_back(where + ": a " + cam.type + " camera is skipped (glint's camera is a pinhole)");
+        return;
+    }
+    const double yfov = cam.perspective.yfov;
+    if (!(yfov > 0.0 && yfov < 3.14159265358979)) throw Error(where + ": yfov " + std::to_string(yfov) + " is not in (0, pi)");
+    const glm::dvec3 eye(world * glm::dvec4(0, 0, 0, 1)), ahead(world * glm::dvec4(0, 0, -1, 0)), up(world * glm::dvec4(0, 1, 0, 0));
+    if (!(glm::length(ahead) > 0.0) || !(glm::length(glm::cross(ahead, up)) > 0.0))
+        throw Error(where + ": its node's transform collapses the view direction");
+    out.scene.camera = Camera<T>{Vec3<T>(eye), Vec3<T>(eye + glm::normalize(ahead)), Vec3<T>(glm::normalize(up)), T(yfov)};
+    out.aspect = T(cam.perspective.aspectRatio > 0.0 ? cam.perspective.aspectRatio : 0.0);
+    out.has_camera = true;
+}
+
+template <Scalar T>
+void gltf_add_light(const GltfContext& c, Scene<T>& s, int light, const glm::dmat4& world) {
+    const std::string where = c.file + ": KHR_lights_punctual light " + std::to_string(light);
+    if (light < 0 || std::size_t(light) >= c.model.lights.size()) throw Error(where + " does not exist");
+    const tinygltf::Light& l = c.model.lights[std::size_t(light)];
+    if (l.type == "directional") {
+        c.warnings.push_back(where + ": a directional light is skipped (glint has none)");
+        return;
+    }
+    if (l.type != "point" && l.type != "spot") throw Error(where + ": unknown type '" + l.type + "'");
+    Rgb<T> colour(T(1));
+    for (std::size_t k = 0; k < 3 && k < l.color.size(); ++k) colour[k] = T(l.color[k]);
+    const Rgb<T> intensity = colour * T(l.intensity * c.options.watts_per_lumen);
+    if (!intensity.is_finite() || intensity.min() < T(0)) throw Error(where + ": colour or intensity is negative or not finite");
+    const Vec3<T> p(glm::dvec3(world * glm::dvec4(0, 0, 0, 1)));
+    if (l.type == "point") {
+        s.point_lights.push_back(PointLight<T>::isotropic(p, intensity));
+        return;
+    }
+    const double outer = l.spot.outerConeAngle, inner = l.spot.innerConeAngle;
+    if (!(outer > 0.0 && outer <= 1.5707963267949 && inner >= 0.0 && inner <= outer))  // equal: Blender's blend 0
+        throw Error(where + ": spot cones need 0 <= innerConeAngle <= outerConeAngle <= pi/2, got " + std::to_string(inner) +
+                    ", " + std::to_string(outer));
+    const Vec3<T> axis(glm::dvec3(world * glm::dvec4(0, 0, -1, 0)));
+    if (!(glm::length(axis) > T(0))) throw Error(where + ": its node's transform collapses the spot's axis");
+    PointLight<T> spot = PointLight<T>::spot(p, axis, intensity, T(outer), T(inner));
+    spot.cos_outer = std::max(spot.cos_outer, T(0));  // outer = pi/2 rounds above it in float
+    s.point_lights.push_back(spot);
+}
+
+/// Adds node `index` and its subtree; `path` holds the nodes above it (a cycle is an error).
+template <Scalar T>
+void gltf_visit(GltfContext& c, GltfScene<T>& out, int index, const glm::dmat4& parent, std::vector<int>& path) {
+    const std::string where = c.file + ": node " + std::to_string(index);
+    if (index < 0 || std::size_t(index) >= c.model.nodes.size()) throw Error(where + " does not exist");
+    if (std::find(path.begin(), path.end(), index) != path.end()) throw Error(where + " is its own ancestor (a cycle)");
+    const tinygltf::Node& n = c.model.nodes[std::size_t(index)];
+    const glm::dmat4 world = parent * gltf_local_matrix(n, where);
+    if (n.mesh >= 0) gltf_add_mesh(c, out.scene, n.mesh, world);
+    if (n.camera >= 0 && !out.has_camera) gltf_set_camera(c, out, n.camera, world);
+    const auto ext = n.extensions.find("KHR_lights_punctual");
+    if (ext != n.extensions.end() && ext->second.IsObject() && ext->second.Has("light"))
+        gltf_add_light(c, out.scene, ext->second.Get("light").GetNumberAsInt(), world);
+    path.push_back(index);
+    for (int child : n.children) gltf_visit(c, out, child, world, path);
+    path.pop_back();
+}
+
+/// The root nodes: the default scene's (or scene 0's), or, without scenes, every node that
+/// is no node's child.
+inline std::vector<int> gltf_roots(const tinygltf::Model& m, const std::string& file) {
+    if (!m.scenes.empty()) {
+        const int s = m.defaultScene >= 0 ? m.defaultScene : 0;
+        if (std::size_t(s) >= m.scenes.size()) throw Error(file + ": default scene " + std::to_string(s) + " does not exist");
+        return m.scenes[std::size_t(s)].nodes;
+    }
+    std::vector<bool> child(m.nodes.size(), false);
+    for (const auto& n : m.nodes)
+        for (int k : n.children)
+            if (k >= 0 && std::size_t(k) < child.size()) child[std::size_t(k)] = true;
+    std::vector<int> roots;
+    for (std::size_t i = 0; i < child.size(); ++i)
+        if (!child[i]) roots.push_back(int(i));
+    return roots;
+}
+
+}  // namespace detail
+
+/// Reads the glTF 2.0 file `path` (.glb binary, otherwise JSON .gltf) as a scene, with the
+/// warnings and the camera's aspect ratio (see the file comment). Throws glint::Error.
+template <Scalar T>
+GltfScene<T> read_gltf(const std::string& path, const GltfOptions& options = {}) {
+    const tinygltf::Model model = detail::gltf_read_model(path);
+    GltfScene<T> out;
+    out.scene.name = path;
+    detail::GltfContext c{model, path, options, out.warnings, {}};
+    std::vector<int> stack;
+    for (int root : detail::gltf_roots(model, path)) detail::gltf_visit(c, out, root, glm::dmat4(1.0), stack);
+    if (out.scene.triangles.empty()) throw Error("load_gltf(" + path + "): the scene has no triangles");
+    out.scene.validate();
+    return out;
+}
+
+/// The scene of the glTF 2.0 file `path` alone (read_gltf without the warnings and aspect).
+template <Scalar T>
+Scene<T> load_gltf(const std::string& path, const GltfOptions& options = {}) {
+    return read_gltf<T>(path, options).scene;
+}
+
+}  // namespace glint

@@ -1,0 +1,411 @@
+// Tests for glint/io's scene files: a glTF 2.0 scene the test writes itself (a quad under a
+// two-level node transform, a camera, a KHR_lights_punctual point light; .gltf with a base64
+// buffer and .glb) loads with the right geometry, camera and light and renders the same as
+// the scene built in C++ within standard errors; the material mapping; bad glTF input named
+// by file and item; the scene JSON of --export-scene read back exactly.
+#define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <glint/io/gltf.hpp>
+#include <glint/io/json.hpp>
+#include <glint/io/scene_json.hpp>
+#include <glint/io/scene_json_read.hpp>
+#include <glint/tracer/accelerator_choices.hpp>
+#include <glint/tracer/named_render.hpp>
+#include <glint/tracer/scenes.hpp>
+
+using namespace glint;
+
+namespace {
+
+std::string temp_path(const std::string& name) {
+    return (std::filesystem::temp_directory_path() / ("glint_test_io_" + name)).string();
+}
+
+std::string base64(const std::vector<unsigned char>& in) {
+    static const char* abc = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (std::size_t i = 0; i < in.size(); i += 3) {
+        const std::uint32_t n = std::uint32_t(in[i]) << 16 | (i + 1 < in.size() ? std::uint32_t(in[i + 1]) << 8 : 0u) |
+                                (i + 2 < in.size() ? std::uint32_t(in[i + 2]) : 0u);
+        out += abc[(n >> 18) & 63];
+        out += abc[(n >> 12) & 63];
+        out += i + 1 < in.size() ? abc[(n >> 6) & 63] : '=';
+        out += i + 2 < in.size() ? abc[n & 63] : '=';
+    }
+    return out;
+}
+
+/// The pieces of the test's glTF: a quad (x, y in [-1, 1], z = 0, counter-clockwise seen
+/// from +z) of `material` under node 1 (rotated -90 degrees about x, scaled by 2) under node
+/// 0 (moved to y = -1): in the world the floor y = -1, x and z in [-2, 2], facing +y. A
+/// camera at (0, 1, 4) looking down -z; a point light of 3415 cd (5 W/sr) at (0, 1, 0).
+struct GltfFixture {
+    std::vector<float> positions{-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    std::vector<std::uint16_t> indices{0, 1, 2, 0, 2, 3};
+    int mode = 4;
+    std::size_t position_count = 4;  // the POSITION accessor's count
+    std::string extra;               // more top-level members, after a comma
+    int position_accessor = 0;
+    std::string material = R"({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "metallicFactor": 0, "roughnessFactor": 1}})";
+    std::string nodes = R"([{"translation": [0, -1, 0], "children": [1]},
+        {"mesh": 0, "rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752], "scale": [2, 2, 2]},
+        {"camera": 0, "translation": [0, 1, 4]},
+        {"translation": [0, 1, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}])";
+    std::string lights = R"([{"type": "point", "color": [1, 1, 1], "intensity": 3415}])";
+
+    std::vector<unsigned char> buffer() const {
+        std::vector<unsigned char> b(positions.size() * 4 + indices.size() * 2);
+        std::memcpy(b.data(), positions.data(), positions.size() * 4);
+        std::memcpy(b.data() + positions.size() * 4, indices.data(), indices.size() * 2);
+        return b;
+    }
+
+    /// The JSON; `uri` empty: the buffer is a .glb's BIN chunk.
+    std::string json(const std::string& uri) const {
+        const std::size_t pb = positions.size() * 4, ib = indices.size() * 2;
+        std::ostringstream j;
+        j << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 2, 3]}], "nodes": )" << nodes
+          << R"(, "meshes": [{"primitives": [{"attributes": {"POSITION": )" << position_accessor
+          << R"(}, "indices": 1, "material": 0, "mode": )" << mode
+          << R"(}]}], "materials": [)" << material << R"(], "cameras": [{"type": "perspective", "perspective": )"
+          << R"({"yfov": 0.8, "aspectRatio": 1.5, "znear": 0.01}}], "extensionsUsed": ["KHR_lights_punctual"], )"
+          << R"("extensions": {"KHR_lights_punctual": {"lights": )" << lights << "}}, \"buffers\": [{\"byteLength\": " << pb + ib
+          << (uri.empty() ? "" : ", \"uri\": \"" + uri + "\"") << R"(}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": )"
+          << pb << R"(}, {"buffer": 0, "byteOffset": )" << pb << R"(, "byteLength": )" << ib
+          << R"(}], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << position_count
+          << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}]" << extra << "}";
+        return j.str();
+    }
+
+    /// Writes name.gltf (buffer as a base64 data URI) and returns its path.
+    std::string write_gltf(const std::string& name) const {
+        const std::string path = temp_path(name + ".gltf");
+        std::ofstream(path) << json("data:application/octet-stream;base64," + base64(buffer()));
+        return path;
+    }
+
+    /// Writes name.glb (glTF 2.0, §4.4: a 12-byte header, a JSON chunk, a BIN chunk).
+    std::string write_glb(const std::string& name) const {
+        std::string text = json("");
+        while (text.size() % 4) text += ' ';
+        std::vector<unsigned char> bin = buffer();
+        while (bin.size() % 4) bin.push_back(0);
+        const auto u32 = [](std::ofstream& f, std::uint32_t v) { f.write(reinterpret_cast<const char*>(&v), 4); };
+        const std::string path = temp_path(name + ".glb");
+        std::ofstream f(path, std::ios::binary);
+        u32(f, 0x46546C67u), u32(f, 2), u32(f, std::uint32_t(12 + 8 + text.size() + 8 + bin.size()));
+        u32(f, std::uint32_t(text.size())), u32(f, 0x4E4F534Au);
+        f.write(text.data(), std::streamsize(text.size()));
+        u32(f, std::uint32_t(bin.size())), u32(f, 0x004E4942u);
+        f.write(reinterpret_cast<const char*>(bin.data()), std::streamsize(bin.size()));
+        return path;
+    }
+};
+
+/// The fixture's scene built in C++ (kd scaled by `kd_scale`).
+Scene<float> fixture_scene(float kd_scale = 1.0f) {
+    Scene<float> s;
+    const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.8f, 0.6f, 0.4f) * kd_scale));
+    s.add_quad({-2, -1, 2}, {2, -1, 2}, {2, -1, -2}, {-2, -1, -2}, m);
+    s.point_lights.push_back(PointLight<float>::isotropic({0, 1, 0}, Rgb<float>(5.0f)));
+    s.camera = Camera<float>{{0, 1, 4}, {0, 1, 3}, {0, 1, 0}, 0.8f};
+    return s;
+}
+
+RenderResult render(const Scene<float>& s, std::uint64_t seed, const std::string& sampler = "random") {
+    NamedRender<float> o;
+    o.image.width = o.image.height = 24;
+    o.image.spp = 16;
+    o.image.threads = 1;
+    o.sampler = sampler;
+    o.seed = seed;
+    const DefaultAccel accel(s.triangles);
+    return render_named(s, accel, o);
+}
+
+/// The largest |mean_a - mean_b| / its standard error over the bands (independent renders).
+double mean_difference_z(const RenderResult& a, const RenderResult& b) {
+    const double n = double(a.image.size());
+    double z = 0;
+    for (std::size_t c = 0; c < 3; ++c) {
+        double ma = 0, mb = 0, var = 0;
+        for (std::size_t i = 0; i < a.image.size(); ++i) {
+            ma += a.image.pixels[i][c] / n;
+            mb += b.image.pixels[i][c] / n;
+            var += (a.variance.pixels[i][c] + b.variance.pixels[i][c]) / (n * n);
+        }
+        REQUIRE(ma > 0.0);
+        z = std::max(z, std::abs(ma - mb) / std::sqrt(var));
+    }
+    return z;
+}
+
+void require_close(const Vec3f& a, const Vec3f& b) {
+    INFO(a.x << "," << a.y << "," << a.z << " vs " << b.x << "," << b.y << "," << b.z);
+    REQUIRE(glm::length(a - b) < 1e-5f);
+}
+
+/// The message load_gltf throws for the fixture, written as a .gltf.
+std::string gltf_error(const GltfFixture& f, const std::string& name) {
+    try {
+        load_gltf<float>(f.write_gltf(name));
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+}  // namespace
+
+TEST_CASE("gltf: the quad, its node transforms, the camera and the point light load as written") {
+    const GltfFixture f;
+    for (const std::string& path : {f.write_gltf("quad"), f.write_glb("quad")}) {
+        INFO(path);
+        const GltfScene<float> g = read_gltf<float>(path);
+        const Scene<float> want = fixture_scene();
+        REQUIRE(g.scene.triangles.size() == 2);
+        for (std::size_t t = 0; t < 2; ++t)
+            for (std::size_t k = 0; k < 3; ++k) require_close(g.scene.triangles[t][k], want.triangles[t][k]);
+        require_close(g.scene.normal(0), {0, 1, 0});
+        REQUIRE(g.scene.materials.size() == 1);
+        CHECK(g.scene.materials[0].kind == MaterialKind::lambertian);
+        CHECK(g.scene.materials[0].kd[1] == doctest::Approx(0.6));
+        REQUIRE(g.scene.point_lights.size() == 1);
+        require_close(g.scene.point_lights[0].position, {0, 1, 0});
+        CHECK(g.scene.point_lights[0].intensity[0] == doctest::Approx(5.0));  // 3415 cd / 683 lm/W
+        CHECK(g.has_camera);
+        CHECK(g.aspect == doctest::Approx(1.5));
+        require_close(g.scene.camera.eye, {0, 1, 4});
+        require_close(glm::normalize(g.scene.camera.target - g.scene.camera.eye), {0, 0, -1});
+        require_close(g.scene.camera.up, {0, 1, 0});
+        CHECK(g.scene.camera.fov_y == doctest::Approx(0.8));
+        CHECK(g.warnings.empty());
+    }
+}
+
+TEST_CASE("gltf: the loaded scene renders as the scene built in C++, within standard errors") {
+    const Scene<float> loaded = load_gltf<float>(GltfFixture{}.write_gltf("render"));
+    const RenderResult a = render(loaded, 1), b = render(fixture_scene(), 2);
+    const double z = mean_difference_z(a, b);
+    MESSAGE("glTF against C++: " << z << " standard errors apart");
+    CHECK(z < 4.0);
+    // The comparison can fail: a 10 % darker floor is told apart.
+    const double darker = mean_difference_z(a, render(fixture_scene(0.9f), 2));
+    MESSAGE("against a 10 % darker floor: " << darker << " standard errors apart");
+    CHECK(darker > 4.0);
+}
+
+TEST_CASE("gltf: a mirroring transform keeps the front face; strips and fans are triangles") {
+    GltfFixture f;
+    f.nodes = R"([{"translation": [0, -1, 0], "children": [1]},
+        {"mesh": 0, "matrix": [2,0,0,0, 0,0,-2,0, 0,2,0,0, 0,0,0,1]}, {"camera": 0}, {}])";
+    const Scene<float> s = load_gltf<float>(f.write_gltf("matrix"));
+    require_close(s.normal(0), {0, 1, 0});  // the matrix (2x, 2z, -2y) maps +z to +y, determinant 8
+    f.nodes = R"([{"translation": [0, -1, 0], "children": [1]}, {"mesh": 0, "scale": [1, 1, -1]}, {}, {}])";
+    // z -> -z mirrors: the front face, +z in the node's frame, becomes -z, though the
+    // positions (z = 0) do not move.
+    require_close(load_gltf<float>(f.write_gltf("mirror")).normal(0), {0, 0, -1});
+    f = GltfFixture{};
+    f.mode = 6;  // a fan 0 1 2 3: (0 1 2), (0 2 3)
+    f.indices = {0, 1, 2, 3};
+    const Scene<float> fan = load_gltf<float>(f.write_gltf("fan"));
+    REQUIRE(fan.triangles.size() == 2);
+    require_close(fan.normal(1), {0, 1, 0});
+    f.mode = 5;  // a strip 0 1 3 2: (0 1 3), then (3 1 2) in the same orientation
+    f.indices = {0, 1, 3, 2};
+    const Scene<float> strip = load_gltf<float>(f.write_gltf("strip"));
+    REQUIRE(strip.triangles.size() == 2);
+    require_close(strip.normal(0), {0, 1, 0});
+    require_close(strip.normal(1), {0, 1, 0});
+}
+
+TEST_CASE("gltf: metallic-roughness, emission and spot lights map as the header states") {
+    GltfFixture f;
+    auto material = [&](const std::string& m) {
+        f.material = m;
+        return load_gltf<float>(f.write_gltf("material")).materials.at(0);
+    };
+    CHECK(material(R"({"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.05}})").kind == MaterialKind::mirror);
+    const Material<float> metal = material(R"({"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "roughnessFactor": 0.5}})");
+    CHECK(metal.kind == MaterialKind::glossy);
+    CHECK(metal.exponent == doctest::Approx(2.0 / 0.0625 - 2.0));
+    CHECK(metal.ks[0] == doctest::Approx(0.5));
+    CHECK(metal.kd[0] == doctest::Approx(0.0));
+    const Material<float> plastic = material(R"({"pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.3}})");
+    CHECK(plastic.kind == MaterialKind::glossy);
+    CHECK(plastic.ks[0] == doctest::Approx(0.04));
+    CHECK(material(R"({"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_ior": {"ior": 1.33}}})").ior ==
+          doctest::Approx(1.33));
+    f.material = R"({"emissiveFactor": [1, 0.5, 0.25], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}}})";
+    const Scene<float> lamp = load_gltf<float>(f.write_gltf("emissive"));
+    CHECK(lamp.area_lights.size() == 2);
+    CHECK(lamp.area_lights[0].emission[1] == doctest::Approx(2.0));
+    f.material = R"({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0}})";
+    f.extra = R"(, "textures": [{"source": 0}], "images": [{"uri": "no_such_image.png"}])";
+    const GltfScene<float> textured = read_gltf<float>(f.write_gltf("texture"));  // the image need not exist
+    REQUIRE(textured.warnings.size() == 1);
+    CHECK(textured.warnings[0].find("material 0 (''): textures are ignored") != std::string::npos);
+    CHECK(textured.scene.materials.at(0).kind == MaterialKind::lambertian);
+    f.lights = R"([{"type": "spot", "intensity": 683, "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}}])";
+    f.nodes = R"([{"children": [1]}, {"mesh": 0}, {"camera": 0}, {"rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752],
+        "extensions": {"KHR_lights_punctual": {"light": 0}}}])";
+    const PointLight<float> spot = load_gltf<float>(f.write_gltf("spot")).point_lights.at(0);
+    CHECK(spot.kind == PointLightKind::spot);
+    require_close(spot.axis, {0, -1, 0});  // -z turned -90 degrees about x
+    CHECK(spot.cos_outer == doctest::Approx(std::cos(0.6)));
+    CHECK(spot.cos_inner == doctest::Approx(std::cos(0.3)));
+    CHECK(spot.intensity[2] == doctest::Approx(1.0));
+    f.lights = R"([{"type": "spot", "spot": {"innerConeAngle": 0, "outerConeAngle": 1.5707963267948966}}])";
+    CHECK(load_gltf<float>(f.write_gltf("hemisphere_spot")).point_lights.at(0).cos_outer == 0.0f);
+}
+
+TEST_CASE("gltf: bad input is an error naming the file and the item") {
+    auto contains = [](const std::string& msg, const std::string& part) {
+        INFO(msg);
+        CHECK(msg.find(part) != std::string::npos);
+    };
+    try {
+        load_gltf<float>(temp_path("no_such_file.gltf"));
+        FAIL("no error");
+    } catch (const Error& e) {
+        contains(e.what(), "no_such_file.gltf");
+    }
+    GltfFixture f;
+    f.mode = 1;  // LINES
+    contains(gltf_error(f, "lines"), "mesh 0, primitive 0: primitive mode 1");
+    f = GltfFixture{};
+    f.positions[7] = std::numeric_limits<float>::quiet_NaN();
+    const std::string nan = gltf_error(f, "nan");
+    contains(nan, "glint_test_io_nan.gltf");
+    contains(nan, "POSITION accessor 0: position 2 is not finite");
+    f = GltfFixture{};
+    f.indices[4] = 9;
+    contains(gltf_error(f, "index"), "indices accessor 1: index 4 = 9 is past the 4 vertices");
+    f = GltfFixture{};
+    f.position_accessor = 1;
+    contains(gltf_error(f, "scalar_positions"), "mesh 0, primitive 0, POSITION accessor 1: expected type VEC3");
+    f = GltfFixture{};
+    f.position_count = 5;
+    contains(gltf_error(f, "past_buffer"), "POSITION accessor 0: 5 elements reach past the end of its buffer");
+    f.position_count = std::size_t(1) << 62;  // stride * count overflows
+    contains(gltf_error(f, "overflow"), "elements reach past the end of its buffer");
+    f = GltfFixture{};
+    f.nodes = R"([{"children": [1]}, {"mesh": 0, "children": [0]}, {}, {}])";
+    contains(gltf_error(f, "cycle"), "node 0 is its own ancestor");
+    f = GltfFixture{};
+    f.material = R"({"emissiveFactor": [1, 1, 1]})";
+    f.positions = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0};
+    contains(gltf_error(f, "flat_emitter"), "emissive triangle 0 has zero area");
+    f = GltfFixture{};
+    f.lights = R"([{"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 2.0}}])";
+    contains(gltf_error(f, "wide_spot"), "KHR_lights_punctual light 0: spot cones");
+    std::ofstream(temp_path("broken.gltf")) << "{\"asset\": {\"version\": \"2.0\"}, ";
+    try {
+        load_gltf<float>(temp_path("broken.gltf"));
+        FAIL("no error");
+    } catch (const Error& e) {
+        contains(e.what(), "broken.gltf");
+    }
+}
+
+TEST_CASE("scene json: an exported scene reads back exactly and renders bit for bit the same") {
+    for (const char* name : {"cornell", "cornell-glossy", "arealight"}) {
+        INFO(name);
+        const Scene<float> s = builtin_scene<float>(name);
+        std::ostringstream text;
+        write_scene_json(text, s, SceneJsonView{40, 30, 77});
+        const SceneFile<float> f = parse_scene_json<float>(text.str(), "exported.json");
+        const Scene<float>& r = f.scene;
+        CHECK(f.view.width == 40);
+        CHECK(f.view.height == 30);
+        CHECK(f.view.max_depth == 77);
+        CHECK(r.name == s.name);
+        REQUIRE(r.triangles.size() == s.triangles.size());
+        CHECK(std::memcmp(r.triangles.data(), s.triangles.data(), s.triangles.size() * sizeof(s.triangles[0])) == 0);
+        CHECK(r.material_of == s.material_of);
+        CHECK(r.light_of == s.light_of);
+        REQUIRE(r.materials.size() == s.materials.size());
+        for (std::size_t i = 0; i < s.materials.size(); ++i) {
+            CHECK(r.materials[i].kind == s.materials[i].kind);
+            CHECK(r.materials[i].kd == s.materials[i].kd);
+            CHECK(r.materials[i].emission == s.materials[i].emission);
+            CHECK(r.materials[i].exponent == s.materials[i].exponent);
+        }
+        REQUIRE(r.area_lights.size() == s.area_lights.size());
+        for (std::size_t i = 0; i < s.area_lights.size(); ++i) {
+            CHECK(r.area_lights[i].vertices == s.area_lights[i].vertices);
+            CHECK(r.area_lights[i].area == s.area_lights[i].area);
+        }
+        CHECK(r.camera.eye == s.camera.eye);
+        CHECK(r.camera.fov_y == s.camera.fov_y);
+        const RenderResult a = render(s, 3, "halton"), b = render(r, 3, "halton");
+        CHECK(std::memcmp(a.image.pixels.data(), b.image.pixels.data(), a.image.size() * sizeof(a.image.pixels[0])) == 0);
+        // A file without light_of (written before it was exported) gets it rebuilt.
+        std::string old = text.str();
+        old.erase(old.find(",\n  \"light_of\""), std::string::npos);
+        CHECK(parse_scene_json<float>(old + "\n}\n", "old.json").scene.light_of == s.light_of);
+    }
+}
+
+TEST_CASE("scene json: bad files are errors naming the file and the line") {
+    auto error = [](const std::string& text) -> std::string {
+        try {
+            parse_scene_json<float>(text, "bad.json");
+        } catch (const Error& e) {
+            return e.what();
+        }
+        return "(no error)";
+    };
+    std::ostringstream text;
+    write_scene_json(text, builtin_scene<float>("cornell"), SceneJsonView{});
+    const std::string good = text.str();
+    CHECK(error(good) == "(no error)");
+    std::string s = good;
+    s.replace(s.find("\"fov_y\""), 7, "\"fov_x\"");
+    CHECK(error(s).find("bad.json:7: member 'fov_y' is missing") != std::string::npos);
+    s = good;
+    s.replace(s.find("\"lambertian\""), 12, "\"velvet\"");
+    CHECK(error(s).find("kind 'velvet' is not one of") != std::string::npos);
+    CHECK(error(good + "x").find("text after the end") != std::string::npos);
+    CHECK(error("{\"width\": 4,\n \"height\": [1}").find("bad.json:2:") == 0);
+    s = good;
+    s.replace(s.find("\"material_of\": [") + 16, 1, "99");
+    CHECK(error(s).find("material_of = 99") != std::string::npos);
+    CHECK(parse_json("[\"a\\u00e9\\ud83d\\ude00\"]", "x").items.at(0).string == "a\xc3\xa9\xf0\x9f\x98\x80");
+}
+
+TEST_CASE("scene json: meshes by path, relative to the scene file") {
+    std::ofstream(temp_path("mesh.obj")) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    const std::string head = R"({"width": 8, "height": 6, "max_depth": 4,
+        "camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 0.8},
+        "materials": [{"kind": "lambertian", "kd": [0.5, 0.5, 0.5], "ks": [0, 0, 0], "exponent": 1, "emission": [0, 0, 0], "ior": 1.5},
+                      {"kind": "lambertian", "kd": [0, 0, 0], "ks": [0, 0, 0], "exponent": 1, "emission": [2, 2, 2], "ior": 1.5}],
+        "area_lights": [], "point_lights": [],
+        "meshes": [{"path": "glint_test_io_mesh.obj", "material": 0}, {"path": )";
+    const std::string path = temp_path("meshes.json");
+    std::ofstream(path) << head << R"("glint_test_io_mesh.obj", "material": 1}]})";
+    const SceneFile<float> f = read_scene_json<float>(path);
+    REQUIRE(f.scene.triangles.size() == 4);
+    CHECK(f.scene.material_of == std::vector<std::uint32_t>{0, 0, 1, 1});
+    CHECK(f.scene.light_of == std::vector<std::int32_t>{-1, -1, 0, 1});
+    CHECK(f.scene.area_lights.size() == 2);
+    CHECK(f.scene.triangles[2][2] == Vec3f(1, 1, 0));
+    std::ofstream(path) << head << R"("no_such_mesh.obj", "material": 1}]})";
+    try {
+        read_scene_json<float>(path);
+        FAIL("no error");
+    } catch (const Error& e) {
+        CHECK(std::string(e.what()).find("no_such_mesh.obj") != std::string::npos);
+    }
+}
