@@ -66,6 +66,7 @@
 
 #include "support/args.hpp"
 #include "support/intersector_names.hpp"
+#include "support/user_meshes.hpp"
 #include "tree_scenes.hpp"
 
 #ifdef GLINT_HAVE_EMBREE
@@ -266,6 +267,10 @@ struct Options {
     std::size_t rays = 1'000'000;
     int reps = 3;
     KdBuildOptions kd{};  // --ki, --empty-bonus: the kd-tree's SAH constants (K_T = 1)
+    bool user_meshes = false;  // --user-meshes: support/user_meshes.hpp's mode
+    std::string scenes_dir = GLINT_BENCH_SCENES;  // --scenes DIR
+    int primary = 384;                            // --primary N: N x N primary rays (--user-meshes)
+    bool rays_set = false, reps_set = false;
 };
 
 struct Row {
@@ -588,8 +593,11 @@ Options parse(int argc, char** argv) {
         else if (a == "--bvh-block") o.bvh.leaf_block = args.number<std::uint32_t>();
         else if (a == "--bvh-leaf") o.bvh.max_leaf = args.number<std::uint32_t>();
         else if (a == "--bvh-bins") o.bvh.bins = args.number<std::uint32_t>();
-        else if (a == "--rays") o.rays = args.number<std::size_t>(1, std::size_t(1) << 40);
-        else if (a == "--reps") o.reps = args.number(1, 1000);
+        else if (a == "--rays") o.rays = args.number<std::size_t>(1, std::size_t(1) << 40), o.rays_set = true;
+        else if (a == "--user-meshes") o.user_meshes = true;
+        else if (a == "--scenes") o.scenes_dir = args.value();
+        else if (a == "--primary") o.primary = args.number(1, 8192);
+        else if (a == "--reps") o.reps = args.number(1, 1000), o.reps_set = true;
         else if (a == "--ki") o.kd.intersection_cost = args.number<double>();
         else if (a == "--empty-bonus") o.kd.empty_bonus = args.number<double>();
         else if (a == "--help" || a == "-h") {
@@ -606,10 +614,41 @@ Options parse(int argc, char** argv) {
     return o;
 }
 
+/// --user-meshes: every mesh of --scenes through MeshBvh's public calls against Embree HIGH and
+/// MEDIUM (support/user_meshes.hpp); --csv rows carry api, embree_quality and query.
+int user_meshes_main(const Options& opt) {
+#ifdef GLINT_HAVE_EMBREE
+    bench::UserMeshOptions u;
+    u.scenes = opt.scenes_dir;
+    u.only = opt.only;
+    u.generated = opt.generated;
+    u.primary = opt.primary;
+    u.rays = opt.rays_set ? opt.rays : 200'000;
+    u.reps = opt.reps_set ? opt.reps : 5;
+    const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return read_obj(f); });
+    if (!opt.csv.empty()) {
+        std::ofstream out(opt.csv);
+        if (!out) throw Error("cannot write '" + opt.csv + "'");
+        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,"
+               "build_threads,api,embree_quality,query\n";
+        for (const auto& r : rows)
+            out << r.scene << ',' << r.query << ",bvh8,soa,moller-trumbore," << r.glint_mrays << ',' << r.build_s << ','
+                << r.node_bytes << ',' << double(r.node_bytes) / double(r.triangles) << ',' << r.embree_mrays
+                << ",1,meshbvh," << r.quality << ',' << (r.query == "shadow" ? "any_hit" : "closest_hit") << '\n';
+        std::printf("# wrote %s (%zu rows)\n", opt.csv.c_str(), rows.size());
+    }
+    return 0;
+#else
+    (void)opt;
+    throw Error("--user-meshes needs Embree 3 (not found at configure time)");
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
     const Options opt = parse(argc, argv);
+    if (opt.user_meshes) return user_meshes_main(opt);
     std::vector<Scene> scenes;
     if (opt.generated) {
         scenes.push_back({"torus-knot", make_torus_knot<float>(), {}});
@@ -696,12 +735,13 @@ int main(int argc, char** argv) try {
     if (!opt.csv.empty()) {
         std::ofstream out(opt.csv);
         if (!out) throw Error("cannot write '" + opt.csv + "'");
-        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,build_threads\n";
+        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,"
+               "build_threads,api,embree_quality,query\n";
         for (const Row& r : rows) {
             out << r.scene << ',' << r.rays << ',' << r.tree << ',' << r.layout << ',' << r.intersector << ',' << r.mrays
                 << ',' << r.build_s << ',' << r.node_bytes << ',' << r.bytes_per_tri << ',';
             if (r.embree > 0) out << r.embree;
-            out << ',' << r.build_threads << '\n';
+            out << ',' << r.build_threads << ",internal,medium,closest_hit\n";
         }
         std::printf("# wrote %s (%zu rows)\n", opt.csv.c_str(), rows.size());
     }

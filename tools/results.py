@@ -271,6 +271,24 @@ def job_trees(c, rep):
     return parse_bench_trees(text)
 
 
+def parse_bench_trees_user(text):
+    """bench_trees --user-meshes: {(set, query, quality): geometric mean of Embree time / glint time}."""
+    out = {(m.group(1), m.group(2), m.group(3)): float(m.group(4))
+           for m in re.finditer(r'^# geomean (\S+) (\S+) Embree (\S+): ([0-9.]+) x', text, re.M)}
+    # Hit-count disagreements (a ray or two on a grazing edge) are printed as DISAGREE rows, not hidden.
+    return need(out, 'geometric means ("# geomean ...")')
+
+
+def job_trees_user(c, rep):
+    argv = [c.exe('bench_trees'), '--user-meshes', '--scenes', c.scenes]
+    if c.a.quick:
+        argv += ['--only', 'bunny', '--rays', '2000', '--primary', '32', '--reps', '1', '--no-generated']
+    text = c.run('bench_trees_user', argv, rep)
+    if 'Embree' not in text:
+        raise Skip('bench_trees was built without Embree 3 (the peer): install it and rebuild')
+    return parse_bench_trees_user(text)
+
+
 def job_memory(c, rep):
     argv = [c.exe('bench_trees'), '--memory']
     if not c.a.quick and c.mesh('bunny.obj'):
@@ -473,6 +491,16 @@ row('trees', 'wide BVH, closest hit, incoherent and primary rays, 8 scenes (36�
               'Embree\'s time ([trees.md](docs/trees.md#measured))' % (m('throughput ratio, range over scenes and ray sets'), m.spread_note(),
                                       m('glint bytes per triangle'), m('Embree bytes per triangle'),
                                       m('one-thread build / Embree')), 8)
+
+row('trees_user', 'MeshBvh (public API, defaults), every mesh of ../shared/scenes, geometric mean',
+    'Embree 3 HIGH, FTZ/DAZ, `rtcIntersect1` / `rtcOccluded1`, same rays',
+    '**0.99 / 1.30 / 0.97×** Embree HIGH\'s throughput (incoherent / primary / any hit, geometric mean)', 1,
+    [Check('incoherent closest hit / Embree HIGH', '0.99', lambda c, r: job_trees_user(c, r)[('shared', 'incoherent', 'high')]),
+     Check('primary closest hit / Embree HIGH', '1.30', lambda c, r: job_trees_user(c, r)[('shared', 'primary', 'high')]),
+     Check('any hit / Embree HIGH', '0.97', lambda c, r: job_trees_user(c, r)[('shared', 'shadow', 'high')])],
+    lambda m: '**%s / %s / %s×** Embree HIGH\'s throughput (incoherent / primary / any hit, geometric mean)'
+              % (m('incoherent closest hit / Embree HIGH'), m('primary closest hit / Embree HIGH'),
+                 m('any hit / Embree HIGH')), 4)
 
 row('ivm', 'IVM triangle test, scalar', 'Möller–Trumbore',
     '**0.80–0.86×** the time; equal in the 8-wide batch kernels ([intersection.md](docs/intersection.md))', 3,

@@ -1,0 +1,273 @@
+// benchmarks/support/user_meshes.hpp: bench_trees --user-meshes, glint as a user gets it
+// (MeshBvh<MollerTrumbore<float>, 8>, default build options, threads = 1, closest_hit and
+// any_hit single rays) against Embree 3 (rtcIntersect1 / rtcOccluded1, FTZ and DAZ set as
+// Embree's documentation asks, build quality HIGH and MEDIUM) on every mesh of a folder.
+// Passes alternate glint, Embree HIGH, Embree MEDIUM; the ratio printed is the median over
+// passes of Embree's time / glint's (above 1: glint is faster). Hit counts are compared.
+#pragma once
+
+#ifdef GLINT_HAVE_EMBREE
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <embree3/rtcore.h>
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+
+#include <glint/core/error.hpp>
+#include <glint/intersection/moller_trumbore.hpp>
+#include <glint/trees/mesh_bvh.hpp>
+
+#include "tree_scenes.hpp"
+
+namespace glint::bench {
+
+/// One Embree scene over a triangle soup, one build quality, one thread.
+class EmbreeQ {
+public:
+    EmbreeQ(const std::vector<TriangleVertices<float>>& m, RTCBuildQuality q) {
+        dev_ = rtcNewDevice("threads=1");
+        if (!dev_) throw Error("rtcNewDevice failed");
+        const auto t0 = std::chrono::steady_clock::now();
+        scene_ = rtcNewScene(dev_);
+        rtcSetSceneBuildQuality(scene_, q);
+        RTCGeometry g = rtcNewGeometry(dev_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        rtcSetGeometryBuildQuality(g, q);
+        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), 3 * m.size()));
+        auto* ib = static_cast<unsigned*>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), m.size()));
+        for (std::size_t i = 0; i < m.size(); ++i)
+            for (int k = 0; k < 3; ++k) {
+                for (int c = 0; c < 3; ++c) vb[9 * i + 3 * k + c] = m[i][k][c];
+                ib[3 * i + k] = unsigned(3 * i + k);
+            }
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(scene_, g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(scene_);
+        build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    ~EmbreeQ() {
+        rtcReleaseScene(scene_);
+        rtcReleaseDevice(dev_);
+    }
+    EmbreeQ(const EmbreeQ&) = delete;
+    EmbreeQ& operator=(const EmbreeQ&) = delete;
+
+    static RTCRay to_rtc(const Ray<float>& r) {
+        RTCRay x{};
+        x.org_x = r.origin.x, x.org_y = r.origin.y, x.org_z = r.origin.z;
+        x.dir_x = r.direction.x, x.dir_y = r.direction.y, x.dir_z = r.direction.z;
+        x.tnear = r.tmin, x.tfar = r.tmax, x.mask = 0xffffffffu;
+        return x;
+    }
+    std::size_t closest(const std::vector<Ray<float>>& rays) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        std::size_t hits = 0;
+        for (const auto& r : rays) {
+            RTCRayHit rh{};
+            rh.ray = to_rtc(r);
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(scene_, &ctx, &rh);
+            hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        }
+        return hits;
+    }
+    std::size_t occluded(const std::vector<Ray<float>>& rays) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        std::size_t hits = 0;
+        for (const auto& r : rays) {
+            RTCRay x = to_rtc(r);
+            rtcOccluded1(scene_, &ctx, &x);
+            hits += x.tfar < 0;  // Embree sets tfar to -inf when occluded
+        }
+        return hits;
+    }
+    double build_s = 0;
+
+private:
+    RTCDevice dev_ = nullptr;
+    RTCScene scene_ = nullptr;
+};
+
+struct UserMeshOptions {
+    std::string scenes;            // --scenes DIR
+    std::string only;              // --only STEM
+    std::size_t rays = 200'000;    // incoherent and shadow rays
+    int primary = 384;             // primary rays: primary x primary
+    int reps = 5;                  // alternating passes
+    bool generated = true;         // also the generated scenes, reported apart
+};
+
+/// One CSV row of the mode (bench_trees' columns plus api, embree_quality, query).
+struct UserRow {
+    std::string scene, query, quality;
+    double glint_mrays = 0, embree_mrays = 0, ratio = 0, build_s = 0;
+    std::size_t node_bytes = 0, triangles = 0;
+};
+
+inline double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+/// Times one query: passes alternate glint, Embree HIGH, Embree MEDIUM; prints the median
+/// ratios and the hit counts; appends two rows.
+template <class G, class EH, class EM>
+void user_query(const std::string& name, const char* query, std::size_t nrays, int reps, G&& glint, EH&& high,
+                EM&& medium, std::size_t tris, double build_s, std::size_t bytes, std::vector<UserRow>& rows,
+                bool& disagree) {
+    using C = std::chrono::steady_clock;
+    std::vector<double> tg, th, tm, rh, rm;
+    std::size_t hg = 0, hh = 0, hm = 0;
+    for (int p = 0; p < reps; ++p) {
+        auto t0 = C::now();
+        hg = glint();
+        auto t1 = C::now();
+        hh = high();
+        auto t2 = C::now();
+        hm = medium();
+        auto t3 = C::now();
+        tg.push_back(std::chrono::duration<double>(t1 - t0).count());
+        th.push_back(std::chrono::duration<double>(t2 - t1).count());
+        tm.push_back(std::chrono::duration<double>(t3 - t2).count());
+        rh.push_back(th.back() / tg.back());
+        rm.push_back(tm.back() / tg.back());
+    }
+    const bool same = hg == hh && hg == hm;
+    disagree |= !same;
+    std::printf("| %s | %s | %zu | %.3f | %.3f | %.3f | %zu / %zu / %zu%s |\n", name.c_str(), query, tris,
+                median(tg) > 0 ? 1e-6 * double(nrays) / median(tg) : 0.0, median(rh), median(rm), hg, hh, hm,
+                same ? "" : " DISAGREE");
+    const double gm = 1e-6 * double(nrays) / median(tg);
+    rows.push_back({name, query, "high", gm, 1e-6 * double(nrays) / median(th), median(rh), build_s, bytes, tris});
+    rows.push_back({name, query, "medium", gm, 1e-6 * double(nrays) / median(tm), median(rm), build_s, bytes, tris});
+}
+
+/// Runs every query on one mesh; returns its rows through `rows`.
+inline void user_mesh(const std::string& name, const std::vector<TriangleVertices<float>>& soup,
+                      const UserMeshOptions& opt, std::vector<UserRow>& rows, bool& disagree) {
+    // As a user would: an indexed mesh over their vertex array.
+    std::vector<float> pos(9 * soup.size());
+    std::vector<std::uint32_t> idx(3 * soup.size());
+    for (std::size_t i = 0; i < soup.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            for (int c = 0; c < 3; ++c) pos[9 * i + 3 * k + c] = soup[i][k][c];
+            idx[3 * i + k] = std::uint32_t(3 * i + k);
+        }
+    const IndexedMesh<float> mesh{pos.data(), 3 * soup.size(), 3 * sizeof(float), idx.data(), soup.size()};
+    std::vector<double> bg, bh, bm;
+    for (int p = 0; p < 3; ++p) {  // builds alternate too
+        const auto t0 = std::chrono::steady_clock::now();
+        const MeshBvh<MollerTrumbore<float>, 8> b(mesh, {.threads = 1});
+        bg.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        bh.push_back(EmbreeQ(soup, RTC_BUILD_QUALITY_HIGH).build_s);
+        bm.push_back(EmbreeQ(soup, RTC_BUILD_QUALITY_MEDIUM).build_s);
+    }
+    const MeshBvh<MollerTrumbore<float>, 8> bvh(mesh, {.threads = 1});
+    const EmbreeQ high(soup, RTC_BUILD_QUALITY_HIGH), medium(soup, RTC_BUILD_QUALITY_MEDIUM);
+    std::printf("# %s build: glint %.4f s (SAH %.2f), Embree HIGH %.4f s, MEDIUM %.4f s (Embree SAH n/a); "
+                "glint / HIGH %.2f, glint / MEDIUM %.2f\n",
+                name.c_str(), median(bg), double(bvh.bvh().stats().sah_cost), median(bh), median(bm),
+                median(bg) / median(bh), median(bg) / median(bm));
+    const std::span<const TriangleVertices<float>> s(soup);
+    const auto incoherent = make_incoherent_rays<float>(s, opt.rays);
+    const auto primary = make_primary_rays<float>(s, opt.primary, opt.primary);
+    auto shadow = make_incoherent_rays<float>(s, opt.rays, 13);
+    const AABB<float> box = mesh_bounds(s);
+    const float cut = 0.2f * glm::length(box.extent());
+    for (auto& r : shadow) r.tmax = cut;
+    const std::size_t bytes = bvh.total_bytes();
+    const double build = median(bg);
+    for (auto [q, rays] : {std::pair{"incoherent", &incoherent}, std::pair{"primary", &primary}}) {
+        const auto g = [&] {
+            std::size_t h = 0;
+            for (const auto& r : *rays) {
+                StoreHit<float> hit;
+                h += bvh.closest_hit(r, hit);
+            }
+            return h;
+        };
+        user_query(name, q, rays->size(), opt.reps, g, [&] { return high.closest(*rays); },
+                   [&] { return medium.closest(*rays); }, soup.size(), build, bytes, rows, disagree);
+        WideBvhCounters cnt;
+        for (const auto& r : *rays) {
+            StoreHit<float> hit;
+            bvh.closest_hit(r, hit, cnt);
+        }
+        const double n = double(rays->size());
+        std::printf("#   glint per %s ray: %.1f nodes, %.2f leaves, %.1f records\n", q, double(cnt.nodes) / n,
+                    double(cnt.leaves) / n, double(cnt.records) / n);
+    }
+    const auto g = [&] {
+        std::size_t h = 0;
+        for (const auto& r : shadow) h += bvh.any_hit(r);
+        return h;
+    };
+    user_query(name, "shadow", shadow.size(), opt.reps, g, [&] { return high.occluded(shadow); },
+               [&] { return medium.occluded(shadow); }, soup.size(), build, bytes, rows, disagree);
+}
+
+/// Geometric mean of `ratio` over rows of one query and quality among `names`.
+inline void print_geomeans(const char* label, const std::vector<UserRow>& rows, const std::vector<std::string>& names) {
+    for (const char* q : {"incoherent", "primary", "shadow"})
+        for (const char* e : {"high", "medium"}) {
+            double s = 0;
+            int n = 0;
+            for (const auto& r : rows)
+                if (r.query == q && r.quality == e && std::find(names.begin(), names.end(), r.scene) != names.end())
+                    s += std::log(r.ratio), ++n;
+            if (n) std::printf("# geomean %s %s Embree %s: %.3f x over %d scenes\n", label, q, e, std::exp(s / n), n);
+        }
+}
+
+/// The mode: every .obj of opt.scenes (sorted), then the generated scenes apart.
+inline std::vector<UserRow> run_user_meshes(
+    const UserMeshOptions& opt, const std::function<std::vector<TriangleVertices<float>>(const std::string&)>& read) {
+    namespace fs = std::filesystem;
+    if (!fs::is_directory(opt.scenes))
+        throw Error("--user-meshes: scenes folder '" + opt.scenes + "' not found (give --scenes DIR)");
+    std::vector<std::string> files;
+    for (const auto& e : fs::directory_iterator(opt.scenes))
+        if (e.path().extension() == ".obj" && (opt.only.empty() || e.path().stem() == opt.only))
+            files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    if (files.empty()) throw Error("--user-meshes: no .obj in '" + opt.scenes + "'");
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);  // as Embree's documentation asks
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+    std::printf("# Embree %d.%d.%d, FTZ/DAZ on, threads=1; ratio = Embree time / glint time, median of %d "
+                "alternating passes\n",
+                RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, opt.reps);
+    std::puts("| mesh | query | triangles | glint Mrays/s | x Embree HIGH | x Embree MEDIUM | hits glint / HIGH / MEDIUM |");
+    std::puts("|---|---|---|---|---|---|---|");
+    std::vector<UserRow> rows;
+    std::vector<std::string> shared, generated;
+    bool disagree = false;
+    for (const auto& f : files) {
+        const std::string name = fs::path(f).stem().string();
+        user_mesh(name, read(f), opt, rows, disagree);
+        shared.push_back(name);
+    }
+    if (opt.generated && opt.only.empty()) {
+        user_mesh("torus-knot", make_torus_knot<float>(), opt, rows, disagree);
+        user_mesh("stadium", make_teapot_in_stadium<float>(), opt, rows, disagree);
+        generated = {"torus-knot", "stadium"};
+    }
+    print_geomeans("shared", rows, shared);
+    print_geomeans("generated", rows, generated);
+    if (disagree) std::puts("# WARNING: hit counts disagree with Embree on some rows (DISAGREE above)");
+    return rows;
+}
+
+}  // namespace glint::bench
+#endif
