@@ -873,9 +873,20 @@ void check_kernels(const Scene& sc) {
             differ += best.any_hit(r) != other.any_hit(r);
         }
     }
+    // The counted queries answer as the plain ones, and count what they test.
+    WideBvhCounters closest_counts, any_counts;
+    for (const Ray<float>& r : sc.rays) {
+        StoreHit<float> a, b;
+        differ += best.closest_hit(r, a) != best.closest_hit(r, b, closest_counts) || a.t != b.t || a.id != b.id;
+        differ += best.any_hit(r) != best.any_hit(r, any_counts);
+    }
     INFO(sc.name << " " << type_label<Bvh>() << " best kernels " << std::string(isa_name(best.isa())));
     CHECK(kernels >= 1);
     CHECK(differ == 0);
+    CHECK(closest_counts.nodes >= sc.rays.size() / 2);  // most rays enter the root
+    CHECK(any_counts.nodes > 0);
+    CHECK(any_counts.leaves <= closest_counts.leaves);  // any hit stops at the first leaf that hits
+    CHECK(any_counts.records <= closest_counts.records);
 }
 }  // namespace
 

@@ -154,6 +154,13 @@ void user_query(const std::string& name, const char* query, std::size_t nrays, i
     rows.push_back({name, query, "medium", gm, 1e-6 * double(nrays) / median(tm), median(rm), build_s, bytes, tris});
 }
 
+/// glint's nodes, leaves and triangle records per ray of one query.
+inline void print_counts(const char* query, const WideBvhCounters& c, std::size_t rays) {
+    const double n = double(rays);
+    std::printf("#   glint per %s ray: %.1f nodes, %.2f leaves, %.1f records\n", query, double(c.nodes) / n,
+                double(c.leaves) / n, double(c.records) / n);
+}
+
 /// Runs every query on one mesh; returns its rows through `rows`.
 inline void user_mesh(const std::string& name, const std::vector<TriangleVertices<float>>& soup,
                       const UserMeshOptions& opt, std::vector<UserRow>& rows, bool& disagree) {
@@ -205,9 +212,7 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
             StoreHit<float> hit;
             bvh.closest_hit(r, hit, cnt);
         }
-        const double n = double(rays->size());
-        std::printf("#   glint per %s ray: %.1f nodes, %.2f leaves, %.1f records\n", q, double(cnt.nodes) / n,
-                    double(cnt.leaves) / n, double(cnt.records) / n);
+        print_counts(q, cnt, rays->size());
     }
     const auto g = [&] {
         std::size_t h = 0;
@@ -216,6 +221,9 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
     };
     user_query(name, "shadow", shadow.size(), opt.reps, g, [&] { return high.occluded(shadow); },
                [&] { return medium.occluded(shadow); }, soup.size(), build, bytes, rows, disagree);
+    WideBvhCounters cnt;
+    for (const auto& r : shadow) bvh.any_hit(r, cnt);
+    print_counts("shadow", cnt, shadow.size());
 }
 
 /// Geometric mean of `ratio` over rows of one query and quality among `names`.

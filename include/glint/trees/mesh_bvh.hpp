@@ -93,19 +93,18 @@ public:
     /// closest_hit(), counting the nodes, leaves and records it tests into `counters`.
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit, WideBvhCounters& counters) const {
         return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
-            const auto counted = [&](auto& leaf) {
-                return [&](std::uint32_t first, std::uint32_t count) {
-                    ++counters.leaves;
-                    counters.records += leaves_.records(first, count);
-                    return leaf(first, count);
-                };
-            };
-            return closest(kernels, ray, hit, counted, [&] { ++counters.nodes; });
+            return closest(kernels, ray, hit, counting(counters), [&] { ++counters.nodes; });
         });
     }
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax) (shadow rays).
     bool any_hit(const Ray<float>& ray) const {
-        return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) { return any(kernels, ray); });
+        return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) { return any(kernels, ray, uncounted, NoNodeHook{}); });
+    }
+    /// any_hit(), counting the nodes, leaves and records it tests into `counters`.
+    bool any_hit(const Ray<float>& ray, WideBvhCounters& counters) const {
+        return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            return any(kernels, ray, counting(counters), [&] { ++counters.nodes; });
+        });
     }
 
     /// The kernels queries run (core/isa.hpp): the best this CPU supports, checked when the
@@ -122,7 +121,7 @@ public:
 private:
     [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit) const {
         return bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
-            return closest(kernels, ray, hit, [](auto& leaf) -> auto& { return leaf; }, NoNodeHook{});
+            return closest(kernels, ray, hit, uncounted, NoNodeHook{});
         });
     }
     /// The queries with kernels I (inside the tree's dispatch); `wrap(leaf)` gives the leaf
@@ -140,13 +139,24 @@ private:
         hit = leaf.hit();
         return true;
     }
-    template <Isa I>
-    [[gnu::always_inline]] bool any(IsaTag<I> kernels, const Ray<float>& ray) const {
+    template <Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] bool any(IsaTag<I> kernels, const Ray<float>& ray, Wrap&& wrap, Hook&& node_hook) const {
         Ray<float> r = ray;
         StoreHit<float> h;
         const auto world = leaves_.prepare(r);
         LeafQuery<P, true> leaf(leaves_, r, world, h);
-        return bvh_.template intersect<true>(kernels, r, leaf);
+        return bvh_.template intersect<true>(kernels, r, wrap(leaf), node_hook);
+    }
+    /// The leaf tests of a query as they are, or counted into `c`.
+    static constexpr auto uncounted = [](auto& leaf) -> auto& { return leaf; };
+    auto counting(WideBvhCounters& c) const {
+        return [this, &c](auto& leaf) {
+            return [this, &c, &leaf](std::uint32_t first, std::uint32_t count) {
+                ++c.leaves;
+                c.records += leaves_.records(first, count);
+                return leaf(first, count);
+            };
+        };
     }
 
     template <class Get>
