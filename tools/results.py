@@ -280,6 +280,8 @@ def parse_bench_trees_user(text):
 
 
 def job_trees_user(c, rep):
+    if not os.path.isdir(c.scenes):
+        raise Skip('the shared meshes are not beside the repository (%s)' % c.scenes)
     argv = [c.exe('bench_trees'), '--user-meshes', '--scenes', c.scenes]
     if c.a.quick:
         argv += ['--only', 'bunny', '--rays', '2000', '--primary', '32', '--reps', '1', '--no-generated']
