@@ -41,17 +41,7 @@ namespace detail {
 /// VEX); the portable loop (a chain of dependent scalar compares) otherwise.
 template <class T>
 [[gnu::always_inline]] inline int nearest_lane(const T* ts, T limit) {
-#if defined(__AVX__)
-    if constexpr (std::is_same_v<T, float> && batch_width == 8) {
-        const __m256 t = _mm256_loadu_ps(ts);
-        const int below = _mm256_movemask_ps(_mm256_cmp_ps(t, _mm256_set1_ps(limit), _CMP_LT_OQ));
-        if (below == 0) return -1;
-        __m256 m = _mm256_min_ps(t, _mm256_permute2f128_ps(t, t, 1));
-        m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
-        m = _mm256_min_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
-        return std::countr_zero(unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t, m, _CMP_EQ_OQ)) & below));
-    }
-#elif GLINT_X86
+#if GLINT_X86
     if constexpr (std::is_same_v<T, float> && batch_width == 8) {
         const __m128 a = _mm_loadu_ps(ts), b = _mm_loadu_ps(ts + 4), lim = _mm_set1_ps(limit);
         const int below = _mm_movemask_ps(_mm_cmplt_ps(a, lim)) | _mm_movemask_ps(_mm_cmplt_ps(b, lim)) << 4;
