@@ -65,6 +65,7 @@
 #include <glint/trees/traversal.hpp>
 
 #include "support/args.hpp"
+#include "support/embree_scene.hpp"
 #include "support/intersector_names.hpp"
 #include "support/user_meshes.hpp"
 #include "tree_scenes.hpp"
@@ -186,21 +187,7 @@ public:
             },
             &bytes);
         const auto t0 = Clock::now();
-        scene_ = rtcNewScene(device_);
-        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vb = static_cast<float*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * m.size()));
-        auto* ib = static_cast<unsigned*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), m.size()));
-        for (std::size_t i = 0; i < m.size(); ++i)
-            for (int k = 0; k < 3; ++k) {
-                for (int c = 0; c < 3; ++c) vb[9 * i + 3 * k + c] = m[i][k][c];
-                ib[3 * i + k] = unsigned(3 * i + k);
-            }
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene_, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(scene_);
+        scene_ = bench::embree_triangle_scene(device_, m, RTC_BUILD_QUALITY_MEDIUM);  // Embree's default
         build_seconds = seconds_since(t0);
     }
     ~Embree() {

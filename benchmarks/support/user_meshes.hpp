@@ -17,6 +17,8 @@
 #include <vector>
 
 #include <embree3/rtcore.h>
+
+#include "support/embree_scene.hpp"
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
@@ -35,23 +37,7 @@ public:
         dev_ = rtcNewDevice("threads=1");
         if (!dev_) throw Error("rtcNewDevice failed");
         const auto t0 = std::chrono::steady_clock::now();
-        scene_ = rtcNewScene(dev_);
-        rtcSetSceneBuildQuality(scene_, q);
-        RTCGeometry g = rtcNewGeometry(dev_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetGeometryBuildQuality(g, q);
-        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), 3 * m.size()));
-        auto* ib = static_cast<unsigned*>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), m.size()));
-        for (std::size_t i = 0; i < m.size(); ++i)
-            for (int k = 0; k < 3; ++k) {
-                for (int c = 0; c < 3; ++c) vb[9 * i + 3 * k + c] = m[i][k][c];
-                ib[3 * i + k] = unsigned(3 * i + k);
-            }
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene_, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(scene_);
+        scene_ = embree_triangle_scene(dev_, m, q);
         build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     ~EmbreeQ() {
