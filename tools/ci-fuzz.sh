@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # CI fuzz step: builds the libFuzzer targets of tests/fuzz (clang, ASan+UBSan) in build-fuzz
-# and runs each for SECONDS seconds (first argument; default 60) from its committed seed
+# and runs each for SECONDS seconds (first argument; default 30) from its committed seed
 # corpus (tests/fuzz/corpus/<name>, read only: new inputs go to build-fuzz/corpus/<name>).
 # Prints one line per target with libFuzzer's execs, coverage and corpus; any crash,
 # sanitizer report, timeout or out-of-memory fails the step. Longer runs:
 #   GLINT_FUZZ_SECONDS=600 bash .ci/run    or    bash tools/ci-fuzz.sh 600
 set -euo pipefail
 cd "$(dirname "$0")/.."
-seconds=${1:-60}
+seconds=${1:-30}
 jobs=${CI_JOBS:-$(nproc)}
 t0=$SECONDS
 mkdir -p build-fuzz

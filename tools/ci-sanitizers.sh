@@ -14,7 +14,7 @@ t0=$SECONDS
 mkdir -p build-asan build-tsan
 cmake -S . -B build-asan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DGLINT_NATIVE=OFF \
       -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_EXAMPLES=OFF \
-      -DCMAKE_CXX_FLAGS="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=all -DGLINT_SANITIZER_TESTS" \
+      -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=all -DGLINT_SANITIZER_TESTS" \
       -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" > build-asan/ci.log
 targets=()
 for s in "${suites[@]}"; do targets+=(--target "test_$s"); done
@@ -36,7 +36,7 @@ echo "ci-sanitizers: suites ran in $((SECONDS - t)) s"
 t0=$SECONDS
 cmake -S . -B build-tsan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DGLINT_NATIVE=OFF \
       -DGLINT_BUILD_TESTS=OFF -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_EXAMPLES=ON \
-      -DCMAKE_CXX_FLAGS="-O1 -g -fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" > build-tsan/ci.log
+      -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only -fsanitize=thread" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" > build-tsan/ci.log
 cmake --build build-tsan -j"$jobs" --target glint-render >> build-tsan/ci.log
 export TSAN_OPTIONS=halt_on_error=1
 ./build-tsan/examples/glint-render --scene cornell --size 32 --spp 4 --threads 4 --direct combined \
