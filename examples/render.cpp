@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <span>
@@ -74,6 +75,7 @@ std::string choices(const char* flag, std::span<const Choice<Make>> table) {
 void usage() {
     std::string text =
         "usage: glint-render (--scene NAME | --mesh FILE.obj | --scene-file FILE) [options]   (or --help, --version)\n"
+        "  (a flag's value may follow it or be joined to it: --spp 64 or --spp=64)\n"
         "  --scene NAME        a built-in scene:\n" + choice_usage(scene_choices<float>()) +
         "  --mesh FILE         an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky\n"
         "  --scene-file FILE   FILE.gltf or FILE.glb: a glTF 2.0 scene (meshes, materials, the first camera,\n"
@@ -106,7 +108,8 @@ void usage() {
         "  --seed N            random seed (default 0)\n"
         "  --time-budget S     progressive passes until S seconds are spent (path, sppm, photons); prints\n"
         "                      the passes done\n"
-        "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor\n"
+        "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor (cornell,\n"
+        "                      cornell-glossy)\n"
         "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n" +
         choices("  --integrator NAME   integrator", std::span<const Choice<IntegratorKind>>(integrators)) +
         "  --vpls N            vpl: shooting walks (default 1024)\n" +
@@ -129,11 +132,17 @@ Camera<float> frame_box(const AABB<float>& box) {
     return Camera<float>{c + Vec3f(0.0f, 0.3f, 1.0f) * (r * 2.6f), c, Vec3f(0, 1, 0), 0.7f};
 }
 
+/// load_obj, its warnings printed.
+ObjMesh load_obj_warning(const std::string& path) {
+    ObjMesh mesh = load_obj(path);
+    for (const std::string& w : mesh.warnings) std::fprintf(stderr, "glint-render: warning: %s\n", w.c_str());
+    return mesh;
+}
+
 /// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
 /// emissive faces as area lights; a sky if nothing emits; camera framing the bounding box.
 Scene<float> scene_from_obj(const std::string& path, const std::string& env_path) {
-    const ObjMesh mesh = load_obj(path);
-    for (const std::string& w : mesh.warnings) std::fprintf(stderr, "glint-render: warning: %s\n", w.c_str());
+    const ObjMesh mesh = load_obj_warning(path);
     Scene<float> s;
     s.name = path;
     for (const ObjMaterial& m : mesh.materials) {
@@ -211,6 +220,7 @@ void check_writable(const std::string& path) {
     const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
     if (access(dir.c_str(), W_OK) != 0)
         throw Error("cannot write '" + path + "': folder '" + dir + "' " + std::strerror(errno));
+    if (std::filesystem::is_directory(path)) throw Error("cannot write '" + path + "': it is a folder");
     if (access(path.c_str(), F_OK) == 0 && access(path.c_str(), W_OK) != 0)
         throw Error("cannot write '" + path + "': " + std::strerror(errno));
 }
@@ -241,12 +251,31 @@ void check_names(const Args& g, const NamedRender<float>& o) {
     find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather);
 }
 
+/// Throws for a flag given to a scene it does not act on: --insert-mesh stands a mesh on the
+/// Cornell box's free floor; --env lights open scenes (envmap, a mesh, a scene file), while
+/// the other built-in scenes are closed or lit by their own lights.
+void check_scene_flags(const Args& g) {
+    if (!g.insert.empty() && g.scene_name != "cornell" && g.scene_name != "cornell-glossy")
+        throw Error("--insert-mesh applies to --scene cornell and cornell-glossy (it stands the mesh on their free floor), "
+                    "not to " + (g.scene_name.empty() ? std::string("--mesh or --scene-file") : "'" + g.scene_name + "'"));
+    if (!g.env.empty() && !g.scene_name.empty() && g.scene_name != "envmap")
+        throw Error("--env applies to --scene envmap, --mesh and --scene-file, not to the built-in scene '" + g.scene_name +
+                    "' (lit by its own lights)");
+}
+
 /// Parses and validates every flag (nothing long runs before this returns). Returns false
 /// after --help.
 bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
     for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
+        std::string a = argv[i], given;  // given: the value of --name=value
+        bool has_given = false;
+        if (const auto eq = a.find('='); a.rfind("--", 0) == 0 && eq != std::string::npos) {
+            given = a.substr(eq + 1);
+            a.resize(eq);
+            has_given = true;
+        }
         auto value = [&]() -> const char* {
+            if (has_given) return has_given = false, given.c_str();
             if (i + 1 >= argc) throw Error(a + " expects a value");
             return argv[++i];
         };
@@ -296,6 +325,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--final-gather") g.photons.gather_rays = int(to_int(a, value(), 0, 1 << 16));
         else if (a == "--camera-samples") g.photons.camera_samples = int(to_int(a, value(), 1, 1 << 16));
         else throw Error("unknown option '" + a + "' (see --help)");
+        if (has_given) throw Error(a + " takes no value, got '" + a + "=" + given + "'");
     }
     check_names(g, o);
     if (g.time_budget > 0 && g.integrator == "vpl")
@@ -311,6 +341,10 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
     if (!ends_with(g.out, ".exr") && !ends_with(g.out, ".png"))
         throw Error("--out expects a file name ending in .exr or .png, got '" + g.out + "'");
     for (const char* ext : {".exr", ".png"}) check_writable(g.out.substr(0, g.out.size() - 4) + ext);
+    if (!g.export_json.empty() && !ends_with(g.export_json, ".json"))
+        throw Error("--export-scene expects a file name ending in .json, got '" + g.export_json + "'");
+    if (!g.export_json.empty()) check_writable(g.export_json);
+    check_scene_flags(g);
     for (const std::string& f : {g.mesh, g.scene_file, g.env})
         if (!f.empty() && access(f.c_str(), R_OK) != 0) throw Error("cannot read '" + f + "': " + std::strerror(errno));
     return true;
@@ -494,7 +528,7 @@ int main(int argc, char** argv) {
         print_camera(scene.camera);
         const std::size_t before_insert = g.mesh.empty() ? scene.triangles.size() : 0;  // occluders: the mesh
         if (!g.insert.empty())
-            insert_mesh<float>(scene, load_obj(g.insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
+            insert_mesh<float>(scene, load_obj_warning(g.insert).triangles, Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)),
                                cornell_mesh_placement<float>());
         if (!g.export_json.empty()) {
             write_scene_json(g.export_json, scene, SceneJsonView{o.image.width, o.image.height, o.tracer.max_depth});

@@ -958,6 +958,31 @@ TEST_CASE("io: OBJ validation: Kd/Ks negative or non-finite, Ke negative or non-
     CHECK(contains(m.warnings[0], "clamped"));
 }
 
+TEST_CASE("io: OBJ validation: Ns and Ni non-finite or negative, Ni zero, are errors naming file, line and value") {
+    const std::string obj = "mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n";
+    for (const char* line : {"Ni nan", "Ns -5", "Ns inf", "Ni -1.5", "Ni 0", "Ns"}) {
+        CAPTURE(line);
+        const std::string e = obj_error(obj, std::string("newmtl m\nKd 0.5 0.5 0.5\n") + line + "\n");
+        CHECK(contains(e, "scene.mtl:3"));
+        CHECK(contains(e, "material 'm' " + std::string(line).substr(0, 2)));
+    }
+    ObjMesh m;
+    CHECK(obj_error(obj, "newmtl m\nNs 0\nNi 1.5\n", &m).empty());
+    CHECK(m.materials[m.material[0]].ni == 1.5f);
+}
+
+TEST_CASE("io: OBJ validation: faces of zero area are kept with one warning naming the first line") {
+    ObjMesh m;
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 2 4 1\n";
+    CHECK(obj_error(obj, "", &m).empty());
+    CHECK(m.triangles.size() == 3);
+    REQUIRE(m.warnings.size() == 1);
+    CHECK(contains(m.warnings[0], "scene.obj:6: 2 triangle(s) of zero area"));
+    // An emissive face of zero area is an error (it would divide by its area when sampled).
+    const std::string e = obj_error("mtllib scene.mtl\nv 0 0 0\nv 1 0 0\nv 2 0 0\nusemtl l\nf 1 2 3\n", "newmtl l\nKe 1 1 1\n");
+    CHECK(contains(e, "scene.obj:6: emissive face"));
+}
+
 TEST_CASE("io: OBJ validation: a missing MTL is a warning, the faces get the default material") {
     ObjMesh m;
     CHECK(obj_error("mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n", "", &m).empty());

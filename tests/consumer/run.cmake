@@ -57,3 +57,21 @@ if(TARGET glint_build)
 endif()
 ")
 run(${CMAKE_COMMAND} -S ${WORK_DIR}/parent -B ${WORK_DIR}/parent/build)
+
+# A component glint does not have (the wrong case included) fails naming it.
+file(MAKE_DIRECTORY ${WORK_DIR}/wrong_component)
+file(WRITE ${WORK_DIR}/wrong_component/CMakeLists.txt "cmake_minimum_required(VERSION 3.20)
+project(wrong_component LANGUAGES CXX)
+find_package(glint CONFIG REQUIRED COMPONENTS IO)
+")
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${WORK_DIR}/wrong_component -B ${WORK_DIR}/wrong_component/build
+                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT "${out}${err}" MATCHES "unknown component 'IO'")
+  message(FATAL_ERROR "find_package(glint COMPONENTS IO) should fail naming 'IO', got ${rc}: ${out}${err}")
+endif()
+
+# glint-render is installed with the package (where the examples were built).
+if(EXISTS ${BUILD_DIR}/examples/glint-render)
+  run(${WORK_DIR}/prefix/bin/glint-render --version)
+endif()

@@ -11,9 +11,11 @@
 //    vertices, every face index must name an existing vertex (positive: 1..number of `v`
 //    lines; negative: relative to the vertices defined before the face's line);
 //  - polygons with more than 255 vertices are fan-triangulated in the text before parsing;
-//  - Kd, Ks and Ke must be finite numbers; Kd and Ks must not be negative, Ke must not be
-//    negative; Kd or Ks above 1 (not energy conserving) are clamped to 1 with a warning;
-//  - an emissive face (a triangle of its fan) of zero area is an error;
+//  - Kd, Ks, Ke, Ns and Ni must be finite numbers, none negative, Ni above 0; Kd or Ks above
+//    1 (not energy conserving) are clamped to 1 with a warning;
+//  - an emissive face (a triangle of its fan) of zero area is an error; other triangles of
+//    zero area are kept (no ray ever hits them) with one warning naming their count and the
+//    first one's line;
 //  - a missing MTL file, or a material name no MTL defines, is a warning (ObjMesh::warnings):
 //    its faces get the default material.
 // Every error is a glint::Error naming the file, the line and the value.
@@ -172,7 +174,7 @@ inline ObjScan obj_scan(const std::string& file, std::istream& in) {
     return scan;
 }
 
-/// Checks the Kd, Ks and Ke lines of an MTL text (see the header comment).
+/// Checks the Kd, Ks, Ke, Ns and Ni lines of an MTL text (see the header comment).
 inline void mtl_validate(const std::string& file, std::istream& in) {
     std::string raw, material = "(before any newmtl)";
     std::uint32_t line = 0;
@@ -181,12 +183,15 @@ inline void mtl_validate(const std::string& file, std::istream& in) {
         const std::vector<std::string_view> tok = obj_tokens(raw);
         if (tok.empty()) continue;
         if (tok[0] == "newmtl" && tok.size() > 1) material = std::string(tok[1]);
-        if (tok[0] != "Kd" && tok[0] != "Ks" && tok[0] != "Ke") continue;
+        const bool colour = tok[0] == "Kd" || tok[0] == "Ks" || tok[0] == "Ke";
+        if (!colour && tok[0] != "Ns" && tok[0] != "Ni") continue;
         const std::string where = file + ":" + std::to_string(line) + ": material '" + material + "' " + std::string(tok[0]);
         if (tok.size() < 2) throw Error(where + " has no value");
-        for (std::size_t k = 1; k < std::min<std::size_t>(tok.size(), 4); ++k)
-            if (obj_number(tok[k], where) < 0.0f)
-                throw Error(where + " = " + std::string(tok[k]) + " is negative");
+        for (std::size_t k = 1; k < std::min<std::size_t>(tok.size(), colour ? 4 : 2); ++k) {
+            const float v = obj_number(tok[k], where);
+            if (v < 0.0f || (tok[0] == "Ni" && v == 0.0f))
+                throw Error(where + " = " + std::string(tok[k]) + (v < 0.0f ? " is negative" : " is not positive"));
+        }
     }
 }
 
@@ -239,15 +244,24 @@ inline ObjMaterial obj_material(const tinyobj::material_t& m, const std::string&
     return om;
 }
 
-/// Appends the fan of one face; throws for an emissive fan triangle of zero area.
+/// Triangles of zero area met so far, and the OBJ line of the first.
+struct ObjDegenerates {
+    std::size_t count = 0;
+    std::uint32_t first_line = 0;
+};
+
+/// Appends the fan of one face; throws for an emissive fan triangle of zero area and counts
+/// the others.
 inline void obj_add_face(ObjMesh& mesh, const std::vector<Vec3f>& poly, std::uint32_t mat, std::uint32_t line,
-                         const std::string& path) {
+                         const std::string& path, ObjDegenerates& degenerate) {
     const bool emissive = mesh.materials[mat].ke.max() > 0.0f;
     for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
         const TriangleVertices<float> t{poly[0], poly[k], poly[k + 1]};
-        if (emissive && !(glm::length(glm::cross(t[1] - t[0], t[2] - t[0])) * 0.5f > 0.0f))
+        const bool zero_area = !(glm::length(glm::cross(t[1] - t[0], t[2] - t[0])) * 0.5f > 0.0f);
+        if (zero_area && emissive)
             throw Error(path + ":" + std::to_string(line) + ": emissive face (material '" + mesh.materials[mat].name +
                         "') has a triangle of zero area");
+        if (zero_area && degenerate.count++ == 0) degenerate.first_line = line;
         mesh.triangles.push_back(t);
         mesh.material.push_back(mat);
         mesh.line.push_back(line);
@@ -279,6 +293,7 @@ inline ObjMesh load_obj(const std::string& path) {
     const auto default_material = static_cast<std::uint32_t>(mesh.materials.size());
     mesh.materials.push_back(ObjMaterial{});
     std::size_t face = 0;
+    detail::ObjDegenerates degenerate;
     std::vector<Vec3f> poly;
     for (const auto& shape : shapes) {
         std::size_t offset = 0;
@@ -296,11 +311,15 @@ inline ObjMesh load_obj(const std::string& path) {
             const std::uint32_t mat =
                 mid >= 0 && std::size_t(mid) < default_material ? static_cast<std::uint32_t>(mid) : default_material;
             if (face >= scan.face_line.size()) throw Error("load_obj(" + path + "): more faces parsed than written");
-            detail::obj_add_face(mesh, poly, mat, scan.face_line[face], path);
+            detail::obj_add_face(mesh, poly, mat, scan.face_line[face], path, degenerate);
             offset += count;
         }
     }
     if (mesh.triangles.empty()) throw Error("load_obj(" + path + "): no faces");
+    if (degenerate.count > 0)
+        mesh.warnings.push_back(path + ":" + std::to_string(degenerate.first_line) + ": " +
+                                std::to_string(degenerate.count) + " triangle(s) of zero area, the first on this line; "
+                                "kept, but no ray hits them");
     return mesh;
 }
 
