@@ -3,7 +3,8 @@
 # Runs apt-get only when something is missing; needs root (or sudo) for that.
 set -euo pipefail
 packages=(g++ cmake make libglm-dev doctest-dev libbenchmark-dev libembree-dev libopenexr-dev
-          libtinyobjloader-dev libtinygltf-dev libstb-dev gnuplot-nox clang libclang-rt-14-dev pkg-config)
+          libtinyobjloader-dev libtinygltf-dev libstb-dev gnuplot-nox clang libclang-rt-14-dev pkg-config
+          doxygen)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

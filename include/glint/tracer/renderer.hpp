@@ -57,7 +57,7 @@ struct RenderSettings {
     /// transport's alone: comparisons of estimators (bench_convergence) are not diluted by
     /// the pixel-footprint noise at silhouettes and light edges that every method shares.
     bool pixel_jitter = true;
-    /// The sample index of each pixel's first sample: a render of samples first_sample ..
+    /// The sample index of each pixel's first sample: a render of samples first_sample to
     /// first_sample + spp - 1, so that progressive passes continue one sequence (a Halton
     /// sampler's pixel positions are not randomized by its seed: passes must not restart it).
     std::uint64_t first_sample = 0;
