@@ -67,9 +67,11 @@ enum class LambdaEstimate { regression, eq33 };
 /// (Welford updates, so f == g gives bitwise-equal co-moments and lambda == 1 exactly).
 template <Scalar T>
 struct CorrelatedStats {
-    T n = 0;
-    T mean_f = 0, mean_g = 0;
-    T comoment_fg = 0, comoment_gg = 0;  // sum (f - mean_f)(g - mean_g), sum (g - mean_g)^2
+    T n = 0;  ///< Number of samples added (a count held in T; 0 before the first add()).
+    /// Sample mean of f/p (0 before the first add()).
+    T mean_f = 0, mean_g = 0;  ///< Sample mean of g/p (0 before the first add()).
+    /// Centred co-moment sum (f - mean_f)(g - mean_g) over the samples.
+    T comoment_fg = 0, comoment_gg = 0;  ///< Centred second moment sum (g - mean_g)^2 over the samples.
 
     /// Add one sample: f_over_p = f(u)/p(u), g_over_p = g(u)/p(u).
     void add(T f_over_p, T g_over_p) {
@@ -100,7 +102,9 @@ struct CorrelatedStats {
     T estimate(T J, LambdaEstimate form = LambdaEstimate::regression) const {
         return estimate(J, lambda(J, form));
     }
+    /// Importance-sampling estimate (lambda = 0): the mean of f/p.
     T importance_estimate() const { return mean_f; }
+    /// Correlated-sampling estimate (lambda = 1) for the main part's known integral J.
     T correlated_estimate(T J) const { return estimate(J, T(1)); }
 };
 
@@ -274,6 +278,8 @@ enum class LightSides { front, both };
 template <Scalar T, std::size_t N>
 class PolygonLight {
 public:
+    /// A light over `vertices` (planar, convex, in order, world space) emitting `radiance` (Le per
+    /// band) from `sides`. Throws Error for more than max_polygon_vertices vertices.
     PolygonLight(std::span<const Vec3<T>> vertices, const Spectrum<T, N>& radiance,
                  LightSides sides = LightSides::front)
         : sampler_(vertices), radiance_(radiance), sides_(sides) {
@@ -281,8 +287,11 @@ public:
             throw Error("glint::PolygonLight: at most " + std::to_string(max_polygon_vertices) +
                         " vertices, got " + std::to_string(vertices.size()));
     }
+    /// The polygon and its uniform-area sampler (vertices, normal, area).
     const PolygonSampler<T>& sampler() const { return sampler_; }
+    /// The emitted radiance Le, constant over the polygon.
     const Spectrum<T, N>& radiance() const { return radiance_; }
+    /// Which sides emit.
     LightSides sides() const { return sides_; }
 
     /// Integral of G over the light for a receiver at x with normal n (zero when x is behind a
@@ -312,12 +321,12 @@ private:
 /// The three estimates of one integral and the per-band statistics they came from.
 template <Scalar T, std::size_t N>
 struct CorrelatedResult {
-    Spectrum<T, N> combined{};     // f/p + lambda (J - g/p), lambda from the samples
-    Spectrum<T, N> importance{};   // lambda = 0
-    Spectrum<T, N> correlated{};   // lambda = 1
-    Spectrum<T, N> main_part{};    // J
-    Spectrum<T, N> lambda{};       // per band (direct lighting); mean over cells (environment)
-    std::array<CorrelatedStats<T>, N> stats{};  // direct lighting only, for filter_lambda
+    Spectrum<T, N> combined{};     ///< f/p + lambda (J - g/p), lambda from the samples
+    Spectrum<T, N> importance{};   ///< Importance-sampling estimate (lambda = 0)
+    Spectrum<T, N> correlated{};   ///< Correlated-sampling estimate (lambda = 1)
+    Spectrum<T, N> main_part{};    ///< J, the main part's integral in closed form
+    Spectrum<T, N> lambda{};       ///< per band (direct lighting); mean over cells (environment)
+    std::array<CorrelatedStats<T>, N> stats{};  ///< direct lighting only, for filter_lambda; zero for environment lighting
 };
 
 /// Direct illumination of x (normal n, outgoing direction fixed inside `brdf`) by a polygon
@@ -386,17 +395,21 @@ CorrelatedResult<T, N> correlated_direct(const PolygonLight<T, N>& light, const 
 template <Scalar T>
 class SphereCells {
 public:
+    /// n_phi azimuth intervals times n_theta cos(theta) intervals over the hemisphere z >= 0, or
+    /// the whole sphere when `hemisphere` is false. Throws Error unless both counts are positive.
     SphereCells(int n_phi, int n_theta, bool hemisphere = true)
         : n_phi_(n_phi), n_theta_(n_theta), hemisphere_(hemisphere) {
         if (n_phi <= 0 || n_theta <= 0)
             throw Error("glint::SphereCells: need positive cell counts, got " +
                         std::to_string(n_phi) + " x " + std::to_string(n_theta));
     }
+    /// Number of cells, n_phi * n_theta; cells are indexed d = j * n_phi + i.
     std::size_t count() const { return std::size_t(n_phi_) * std::size_t(n_theta_); }
     /// cos(theta_j), j = 0 .. n_theta (from 1 down to 0, or -1 for the sphere).
     T cos_boundary(int j) const {
         return T(1) - (hemisphere_ ? T(1) : T(2)) * T(j) / T(n_theta_);
     }
+    /// phi_i = 2 pi i / n_phi in radians, i = 0 .. n_phi.
     T phi_boundary(int i) const { return T(2) * pi<T> * T(i) / T(n_phi_); }
     /// |Omega_d| = (phi_i+1 - phi_i)(cos theta_j - cos theta_j+1), the same for every cell.
     T solid_angle() const {
@@ -445,9 +458,15 @@ public:
     /// A cell's extent: unit vectors of its azimuth boundaries phi_i, phi_i+1 in the xy plane,
     /// phi_i+1 - phi_i, and its cos(theta) interval [z_lo, z_hi].
     struct Bounds {
-        Vec2<T> e0, e1;
-        T width, z_lo, z_hi;
+        /// Unit xy vector (cos phi_i, sin phi_i) of the lower azimuth boundary.
+        Vec2<T> e0, e1;  ///< Unit xy vector (cos phi_i+1, sin phi_i+1) of the upper azimuth boundary.
+        /// \var z_lo
+        /// Lower end cos(theta_j+1) of the cell's cos(theta) interval.
+
+        /// Azimuth width phi_i+1 - phi_i in radians.
+        T width, z_lo, z_hi;  ///< Upper end cos(theta_j) of the cell's cos(theta) interval.
     };
+    /// The extent of cell d (d < count()), for min_cosine().
     Bounds bounds(std::size_t d) const {
         const int i = int(d % std::size_t(n_phi_)), j = int(d / std::size_t(n_phi_));
         const T p0 = phi_boundary(i), p1 = phi_boundary(i + 1);
@@ -475,6 +494,8 @@ public:
         }
         return least;
     }
+    /// The least n . w over the directions w of cell d (n a unit vector); negative when part of
+    /// the cell lies below the tangent plane of n.
     T min_cosine(std::size_t d, const Vec3<T>& n) const { return min_cosine(bounds(d), n); }
 
 private:

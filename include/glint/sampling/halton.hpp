@@ -40,6 +40,8 @@
 
 namespace glint {
 
+/// How a Halton sequence is randomized (see the header comment): not at all, by a random shift
+/// per dimension, by random digit permutations, or by Owen's nested scrambling.
 enum class HaltonRandomization { none, cranley_patterson, digit_permutation, owen };
 
 /// Name used in benchmark output ("none", "cp", "perm", "owen").
@@ -59,6 +61,8 @@ constexpr const char* short_name(HaltonRandomization r) {
 template <Scalar T>
 class Halton {
 public:
+    /// The first `dims` prime bases (dims in [1, prime_count]), randomized as `randomization`
+    /// asks with tables drawn from Pcg32(seed). Throws Error for dims outside that range.
     explicit Halton(std::size_t dims, HaltonRandomization randomization = HaltonRandomization::none,
                     std::uint64_t seed = 0) {
         if (dims == 0 || dims > prime_count)
@@ -115,7 +119,9 @@ public:
         data_ = std::move(data);
     }
 
+    /// Number of dimensions (prime bases 2, 3, 5, ...).
     std::size_t dims() const { return data_->dims; }
+    /// The randomization chosen at construction.
     HaltonRandomization randomization() const { return data_->randomization; }
 
     /// Coordinate `dim` (< dims()) of point `index` as an exact 64-bit fraction.
@@ -159,6 +165,8 @@ private:
 template <Scalar T>
 class Hammersley {
 public:
+    /// `count` points in `dims` dimensions; coordinates 1 .. dims-1 use Halton<T>(dims - 1,
+    /// randomization, seed). Throws Error when count or dims is 0, or dims - 1 > prime_count.
     Hammersley(std::uint64_t count, std::size_t dims,
                HaltonRandomization randomization = HaltonRandomization::none,
                std::uint64_t seed = 0)
@@ -169,6 +177,7 @@ public:
             shift0_ = Pcg32(seed, 0x68616d6dULL).next_u64();
     }
 
+    /// Number of points N in the set (coordinate 0 of point i is i/N).
     std::uint64_t count() const { return count_; }
 
     /// Coordinate `dim` of point `index` (< count()), in [0, 1).
@@ -214,6 +223,9 @@ constexpr std::uint64_t multiplicative_inverse(std::int64_t x, std::int64_t n) {
 template <Scalar T>
 class HaltonSampler {
 public:
+    /// A sampler for a width x height image (tiled every max_resolution pixels, in [1, 4096])
+    /// drawing `dims` Halton dimensions (in [3, prime_count], the pixel's two included), randomized
+    /// as asked with tables from `seed`. Allocates its tables; throws Error on a bad argument.
     HaltonSampler(int width, int height, std::size_t dims,
                   HaltonRandomization randomization = HaltonRandomization::none,
                   std::uint64_t seed = 0, int max_resolution = 128)
@@ -252,6 +264,7 @@ public:
 
     /// Number of dimensions drawn from the Halton sequence (the pixel's two included).
     std::size_t dims() const { return dims_; }
+    /// The randomization of dimensions 2 .. dims()-1 (dimensions 0 and 1 are never randomized).
     HaltonRandomization randomization() const { return randomization_; }
     /// Number of consecutive global indices that visit every pixel (of a max_resolution tile)
     /// exactly once: 2^e0 * 3^e1.
@@ -279,6 +292,8 @@ public:
     }
 
     // Sampler interface.
+    /// Begin sample `sample_index` of pixel (x, y) (any integers; taken modulo max_resolution):
+    /// selects its global index and restarts at dimension 2. Cheap when the pixel repeats.
     void start_pixel_sample(int x, int y, std::uint64_t sample_index) {
         if (x != cached_x_ || y != cached_y_) {  // a pixel's samples come one after another
             cached_first_ = pixel_first_index(x, y);
@@ -290,8 +305,12 @@ public:
         dim_ = 2;
         tail_started_ = false;
     }
+    /// Position in [0, 1)^2 inside the pixel of the current sample (Halton dimensions 0 and 1);
+    /// does not advance the dimension.
     Vec2<T> get_pixel_2d() const { return pixel_offset(index_); }
+    /// Next dimension of the current sample in [0, 1): Halton while dimensions last, then PCG32.
     T get_1d() { return dim_ < dims_ ? halton_dimension(index_, dim_++) : tail(); }
+    /// Next two dimensions of the current sample, in order (two get_1d() calls).
     Vec2<T> get_2d() {
         const T a = get_1d();
         return Vec2<T>(a, get_1d());

@@ -43,8 +43,8 @@ namespace glint {
 /// Digit grouping of one base: `digits` = group_digits * groups base-b digits are kept, taken
 /// group_digits at a time (group base b^group_digits <= max(max_group_base, b)).
 struct DigitGrouping {
-    int group_digits = 1;
-    int groups = 1;
+    int group_digits = 1;  ///< Base-b digits looked up together in one table entry (>= 1).
+    int groups = 1;        ///< Number of such lookups per radical inverse (>= 1).
 };
 
 /// The grouping for base b at `precision` bits: `preferred_groups` groups of the fewest digits
@@ -81,6 +81,9 @@ constexpr DigitGrouping digit_grouping(std::uint32_t b, int precision, std::uint
 template <Scalar T>
 class PermutedRadicalInverse {
 public:
+    /// Tables for dimensions 0 .. dims-1 (dims in [1, prime_count]) drawn from `seed`; the first
+    /// identity_dims dimensions stay unpermuted; a lookup table holds at most
+    /// max(max_group_base, b) entries (max_group_base in [2, 65536]). Throws Error otherwise.
     PermutedRadicalInverse(std::size_t dims, std::uint64_t seed, std::size_t identity_dims = 0,
                            std::uint32_t max_group_base = 4096) {
         if (dims == 0 || dims > prime_count)
@@ -94,7 +97,9 @@ public:
         for (std::size_t d = 0; d < dims; ++d) build_dimension(d, d < identity_dims, max_group_base, rng);
     }
 
+    /// Number of dimensions with tables.
     std::size_t dims() const { return dims_.size(); }
+    /// The prime base of dimension `dim`, primes[dim] (2, 3, 5, ...).
     std::uint32_t base(std::size_t dim) const { return primes[dim]; }
     /// Number of base-b digits kept for dimension `dim` (b^digits >= 2^digits(T) unless
     /// b^digits would reach 2^64).

@@ -45,8 +45,8 @@ Spectrum<T, N> global_radiance_estimate(const Spectrum<T, N>& emitted_power, T t
 /// one-sample reflected-radiance estimate x = (w/p) L_in that a terminated walk would lose.
 template <Scalar T, std::size_t N>
 struct RoulettePilotSample {
-    Spectrum<T, N> albedo{};
-    Spectrum<T, N> reflected{};
+    Spectrum<T, N> albedo{};     ///< Albedo a of the scattering point per band, in [0, 1].
+    Spectrum<T, N> reflected{};  ///< Reflected-radiance estimate x = (w/p) L_in per band.
 };
 
 /// Szécsi 2009, §2.3 allows L~ to come "from the data gathered during a preprocessing phase".

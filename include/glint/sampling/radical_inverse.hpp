@@ -107,7 +107,9 @@ public:
         shift1_ = l < 1 ? l : 1;
         shift2_ = l > 0 ? l - 1 : 0;
     }
+    /// The divisor d given at construction (1 by default).
     constexpr std::uint32_t divisor() const { return divisor_; }
+    /// floor(n / d), exact for every 64-bit n.
     constexpr std::uint64_t quotient(std::uint64_t n) const {
         const auto t = static_cast<std::uint64_t>((detail::u128(multiplier_) * n) >> 64);
         return (t + ((n - t) >> shift1_)) >> shift2_;

@@ -78,13 +78,13 @@ enum class ThroughputNorm { max, weighted };
 /// throughput rule from depth 3.
 template <Scalar T, std::size_t N>
 struct Roulette {
-    RouletteRule rule = RouletteRule::throughput;
+    RouletteRule rule = RouletteRule::throughput;  ///< Which rule decides the continuation probability.
     /// Band weights H (luminance by default, or 1/N each for the plain mean).
     Spectrum<T, N> weights = Spectrum<T, N>::default_luminance_weights();
-    ThroughputNorm norm = ThroughputNorm::max;  // throughput: the norm of F a
-    int min_depth = 3;                          // throughput: vertices before the first decision
-    T cap = T(1);                               // throughput: the largest s
-    T cutoff = T(0);                            // none: walks stop once max(F a) <= cutoff
+    ThroughputNorm norm = ThroughputNorm::max;  ///< throughput: the norm of F a
+    int min_depth = 3;                          ///< throughput: vertices before the first decision
+    T cap = T(1);                               ///< throughput: the largest s, in (0, 1]
+    T cutoff = T(0);                            ///< none: walks stop once max(F a) <= cutoff
     /// Szécsi 2009, §2.3: the incoming-radiance estimate L~ (zero: no offsets).
     Spectrum<T, N> estimate = Spectrum<T, N>(T(0));
     /// Szécsi 2009, §2.3: the estimate's goodness d in (0, 1]; with d < 1 walks continue with
@@ -93,11 +93,13 @@ struct Roulette {
     /// extracted formula reads s / ((1 - s)/d + 1), which does not give s_new = s at d = 1.)
     T goodness = T(1);
 
+    /// Szécsi 2009, §2.1's classic rule: s_i = <a_i, H>, the lobe albedo's H-weighted mean.
     static Roulette classic(const Spectrum<T, N>& H = Spectrum<T, N>::default_luminance_weights()) {
         return with_rule(RouletteRule::classic, H);
     }
     /// The classic rule on the plain mean of the bands.
     static Roulette mean() { return classic(Spectrum<T, N>(T(1) / T(N))); }
+    /// Szécsi 2009, §2.2's spectral rule: s_i = sum F a_i H / sum F H, F the walk's throughput.
     static Roulette spectral(const Spectrum<T, N>& H = Spectrum<T, N>::default_luminance_weights()) {
         return with_rule(RouletteRule::spectral, H);
     }
@@ -119,6 +121,8 @@ struct Roulette {
         return r;
     }
 
+    /// Lobe share w_i >= 0 of a lobe of albedo a for a walk of throughput F (the rule's
+    /// measure of F a, or of a alone for classic); lobes are selected in proportion to it.
     [[gnu::always_inline]] T selection_weight(const Spectrum<T, N>& F, const Spectrum<T, N>& a) const {
         switch (rule) {
             case RouletteRule::classic: return std::clamp(a.luminance(weights), T(0), T(1));
@@ -132,13 +136,17 @@ struct Roulette {
         }
         return std::max((F * a).max(), T(0));
     }
+    /// Probability s of continuing at a vertex of total albedo a, `depth` vertices after the
+    /// camera, reduced by `goodness` when it is below 1 (Szécsi 2009, §2.3); callers clamp to [0, 1].
     [[gnu::always_inline]] T continuation(const Spectrum<T, N>& F, const Spectrum<T, N>& a, int depth) const {
         const T s = rule_continuation(F, a, depth);
         if (goodness == T(1)) return s;
         const T den = T(1) - (T(1) - goodness) * s;
         return den > T(0) ? s * goodness / den : s;
     }
+    /// Radiance a terminated walk returns at a vertex of albedo a: a L~ (zero without an estimate).
     [[gnu::always_inline]] Spectrum<T, N> terminated(const Spectrum<T, N>& a) const { return a * estimate; }
+    /// Offset a walk continued with probability s (> 0) adds: -(1 - s)/s a L~ (Szécsi 2009, §2.3).
     [[gnu::always_inline]] Spectrum<T, N> continued_offset(const Spectrum<T, N>& a, T s) const { return a * estimate * (-(T(1) - s) / s); }
 
 private:
@@ -174,11 +182,12 @@ static_assert(RoulettePolicy<Roulette<float, 3>, float, 3>);
 /// The result of choosing among n lobes and termination with uniform `u`.
 template <Scalar T, std::size_t N>
 struct LobeSelection {
-    std::array<T, max_brdf_lobes> probability{};  // s_i
-    std::size_t count = 0;
-    T total = 0;          // s = sum s_i (the continuation probability)
-    int lobe = -1;        // selected lobe, -1 when the walk terminates
-    Spectrum<T, N> offset{};  // the radiance estimate's term (zero without one)
+    std::array<T, max_brdf_lobes> probability{};  ///< s_i of the first `count` lobes; the rest zero
+    std::size_t count = 0;  ///< Number of lobes considered (at most max_brdf_lobes).
+    T total = 0;          ///< s = sum s_i (the continuation probability)
+    int lobe = -1;        ///< selected lobe, -1 when the walk terminates
+    Spectrum<T, N> offset{};  ///< the radiance estimate's term (zero without one)
+    /// True when the walk stops here (no lobe selected).
     bool terminated() const { return lobe < 0; }
 };
 
@@ -225,6 +234,7 @@ concept MultiLobeBrdf = Scalar<T> && requires(const M& m, std::size_t i, const V
 /// The three combined-BRDF estimators of Szécsi 2009, §2.1.
 enum class BrdfSelection { decomposition, weighted, mis };
 
+/// Name used in benchmark output ("DIS", "W", "MIS").
 constexpr const char* short_name(BrdfSelection c) {
     switch (c) {
         case BrdfSelection::decomposition: return "DIS";
@@ -237,10 +247,11 @@ constexpr const char* short_name(BrdfSelection c) {
 /// One scattering step: reflected radiance = weight * L_in(direction) + offset.
 template <Scalar T, std::size_t N>
 struct ScatterSample {
-    int lobe = -1;  // -1: terminated
-    Vec3<T> direction{0, 0, 1};
-    Spectrum<T, N> weight{};  // W_i / s_i, zero when terminated
-    Spectrum<T, N> offset{};
+    int lobe = -1;  ///< Index of the lobe sampled; -1: terminated
+    Vec3<T> direction{0, 0, 1};  ///< Sampled incoming direction, unit, in the BRDF's local frame (z = normal)
+    Spectrum<T, N> weight{};  ///< W_i / s_i, zero when terminated or the density is zero
+    Spectrum<T, N> offset{};  ///< The roulette's radiance-estimate term, added whether or not the walk goes on
+    /// True when the walk stops here.
     bool terminated() const { return lobe < 0; }
 };
 

@@ -30,18 +30,24 @@ concept Sampler = Scalar<T> && requires(S s, int x, int y, std::uint64_t i) {
 template <Scalar T>
 class RandomSampler {
 public:
+    /// A sampler whose streams are all keyed by `seed`; different seeds give independent images.
     explicit RandomSampler(std::uint64_t seed = 0) : seed_(seed) {}
 
+    /// Begin sample `index` of pixel (x, y): restarts the stream at the hash of (seed, x, y,
+    /// index). Call before drawing any dimension of the sample.
     void start_pixel_sample(int x, int y, std::uint64_t index) {
         const std::uint64_t pixel =
             (std::uint64_t(std::uint32_t(x)) << 32) | std::uint64_t(std::uint32_t(y));
         rng_ = Pcg32::hashed(index ^ detail::mix_bits(seed_), pixel);
     }
+    /// Next uniform number in [0, 1) of the current pixel sample.
     [[gnu::always_inline]] T get_1d() { return rng_.uniform<T>(); }
+    /// Next two uniform numbers in [0, 1), drawn in order (x first).
     [[gnu::always_inline]] Vec2<T> get_2d() {
         const T a = rng_.uniform<T>();
         return Vec2<T>(a, rng_.uniform<T>());
     }
+    /// Position inside the pixel in [0, 1)^2; for this sampler simply the next get_2d().
     Vec2<T> get_pixel_2d() { return get_2d(); }
 
 private:

@@ -25,14 +25,22 @@ namespace glint {
 /// Orthonormal frame with n as local z.
 template <Scalar T>
 struct Frame {
-    Vec3<T> s, t, n;
+    /// First tangent (local x), unit.
+    Vec3<T> s, t, n;  ///< Normal (local z), unit.
+    /// \var t
+    /// Second tangent (local y), unit, completing a right-handed basis (s, t, n).
+
+    /// The frame with local z = `normal` (unit; not normalized here) and tangents from
+    /// orthonormal_basis().
     static Frame from_normal(const Vec3<T>& normal) {
         Frame f;
         f.n = normal;
         orthonormal_basis(normal, f.s, f.t);
         return f;
     }
+    /// Local coordinates v to world space: v.x s + v.y t + v.z n.
     Vec3<T> to_world(const Vec3<T>& v) const { return v.x * s + v.y * t + v.z * n; }
+    /// World-space v to local coordinates (its dot products with s, t, n).
     Vec3<T> to_local(const Vec3<T>& v) const {
         return Vec3<T>(glm::dot(v, s), glm::dot(v, t), glm::dot(v, n));
     }
@@ -61,6 +69,7 @@ Vec3<T> square_to_cosine_hemisphere(const Vec2<T>& u) {
     const T z = std::sqrt(std::max(T(0), T(1) - d.x * d.x - d.y * d.y));
     return Vec3<T>(d.x, d.y, z);
 }
+/// Density cos(theta)/pi per steradian of square_to_cosine_hemisphere; 0 below the horizon.
 template <Scalar T>
 T cosine_hemisphere_pdf(T cos_theta) {
     return cos_theta > T(0) ? cos_theta / pi<T> : T(0);
@@ -82,6 +91,8 @@ Vec3<T> square_to_cosine_power_hemisphere(const Vec2<T>& u, T exponent) {
     // CDF of cos(theta): 1 - cos^(e+1); cos = (1 - u)^(1/(e+1)) keeps z > 0 for u < 1.
     return detail::direction_from_height(std::pow(T(1) - u.x, T(1) / (exponent + T(1))), u.y);
 }
+/// Density (e+1)/(2 pi) cos^e(theta) per steradian of square_to_cosine_power_hemisphere; 0
+/// below the horizon.
 template <Scalar T>
 T cosine_power_hemisphere_pdf(T cos_theta, T exponent) {
     return cos_theta > T(0)
@@ -94,6 +105,7 @@ template <Scalar T>
 Vec3<T> square_to_uniform_sphere(const Vec2<T>& u) {
     return detail::direction_from_height(T(1) - T(2) * u.x, u.y);
 }
+/// Density 1/(4 pi) per steradian of square_to_uniform_sphere.
 template <Scalar T>
 constexpr T uniform_sphere_pdf() {
     return T(1) / (T(4) * pi<T>);
@@ -104,6 +116,7 @@ template <Scalar T>
 Vec3<T> square_to_uniform_hemisphere(const Vec2<T>& u) {
     return detail::direction_from_height(T(1) - u.x, u.y);  // z in (0, 1]
 }
+/// Density 1/(2 pi) per steradian of square_to_uniform_hemisphere.
 template <Scalar T>
 constexpr T uniform_hemisphere_pdf() {
     return T(1) / (T(2) * pi<T>);
@@ -122,6 +135,7 @@ Vec3<T> sample_triangle(const Vec3<T>& a, const Vec3<T>& b, const Vec3<T>& c, co
     const Vec2<T> bc = square_to_uniform_triangle(u);
     return bc.x * a + bc.y * b + (T(1) - bc.x - bc.y) * c;
 }
+/// Area of triangle (a, b, c), half the length of the cross product of two edges.
 template <Scalar T>
 T triangle_area(const Vec3<T>& a, const Vec3<T>& b, const Vec3<T>& c) {
     return T(0.5) * glm::length(glm::cross(b - a, c - a));
@@ -133,6 +147,8 @@ template <Scalar T>
 class PolygonSampler {
 public:
     PolygonSampler() = default;
+    /// Copies `vertices` (>= 3, coplanar, convex, in order) and builds the fan's area CDF.
+    /// Throws Error for fewer than 3 vertices or a zero or non-finite area.
     explicit PolygonSampler(std::span<const Vec3<T>> vertices)
         : vertices_(vertices.begin(), vertices.end()) {
         if (vertices.size() < 3)
@@ -155,12 +171,17 @@ public:
         normal_ = safe_normalize(normal);
     }
 
+    /// Area of the polygon (sum of its fan triangles).
     T area() const { return area_; }
+    /// Density 1 / area() per unit area of sample().
     T pdf() const { return T(1) / area_; }
     /// Unit normal, oriented by the vertex order (counter-clockwise seen from its side).
     const Vec3<T>& normal() const { return normal_; }
+    /// The vertices as given (a view valid while the sampler lives).
     std::span<const Vec3<T>> vertices() const { return vertices_; }
 
+    /// Uniform point on the polygon from u in [0, 1)^2: u.x picks the fan triangle by area and is
+    /// rescaled to sample inside it. Cost linear in the vertex count.
     Vec3<T> sample(Vec2<T> u) const {
         std::size_t i = 0;
         while (i + 1 < cdf_.size() && u.x >= cdf_[i]) ++i;
