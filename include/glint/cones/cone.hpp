@@ -78,13 +78,13 @@ namespace glint {
 /// `all` marks the cone that admits every ray (the fallback).
 template <Scalar T>
 struct Cone {
-    Vec3<T> apex{0};
-    Vec3<T> axis{0, 0, 1};
-    T cos_half = T(1);   // cos(half_angle)
-    T sin_half = T(0);   // sin(half_angle)
-    T half_angle = T(0); // radians, in [0, pi/2]
-    T slack = T(0);
-    bool all = false;
+    Vec3<T> apex{0};        ///< Apex a, world space.
+    Vec3<T> axis{0, 0, 1};  ///< Unit axis x, the direction the cone opens towards.
+    T cos_half = T(1);   ///< cos(half_angle); -1 for Cone::everything()
+    T sin_half = T(0);   ///< sin(half_angle)
+    T half_angle = T(0); ///< radians, in [0, pi/2] (pi for Cone::everything())
+    T slack = T(0);      ///< World-space distance the cone is enlarged by (covers rounding; 0 exact)
+    bool all = false;    ///< True for Cone::everything(): every test against it passes.
 
     /// The cone that admits every ray (the numerically safe fallback).
     static Cone everything() {
@@ -100,13 +100,16 @@ struct Cone {
 /// Which order the two steps of Szécsi 2009, §6.2 are applied in (see the header comment).
 enum class ConeOrder : std::uint8_t { directions_first, interleaved };
 
+/// Settings of enclosing_cone (and of the ray tiles' cones).
 struct ConeOptions {
-    ConeOrder order = ConeOrder::directions_first;
+    ConeOrder order = ConeOrder::directions_first;  ///< Order of the widening and translation steps.
     /// Openings above this (radians, at most pi/2) give Cone::everything().
     double max_half_angle = 85.0 * pi<double> / 180.0;
     /// Smallest opening used to translate the apex (parallel rays with distinct origins).
     double min_translate_angle = 1.0 / 1024.0;
 
+    /// Throws Error unless max_half_angle is in (0, pi/2] and min_translate_angle in
+    /// (0, max_half_angle).
     void validate() const {
         if (!(max_half_angle > 0.0 && max_half_angle <= pi<double> / 2))
             throw Error("ConeOptions::max_half_angle must be in (0, pi/2], got " + std::to_string(max_half_angle));

@@ -47,6 +47,8 @@ bool refract_or_reflect(const Vec3<T>& d, const Vec3<T>& n, T ior_outside, T ior
 template <Scalar T>
 class GlassShader {
 public:
+    /// Unit geometric normals of `tris` (computed in double, in their winding; allocates one per
+    /// triangle), glass of index `ior` (> 0), and next segments starting at tmin = `offset`.
     GlassShader(std::span<const TriangleVertices<T>> tris, T ior, T offset) : ior_(ior), offset_(offset) {
         normals_.reserve(tris.size());
         for (const auto& t : tris)
@@ -66,6 +68,7 @@ public:
         return true;
     }
 
+    /// Unit geometric normal of triangle `id` (< the number of triangles given).
     const Vec3<T>& normal(std::uint32_t id) const { return normals_[id]; }
 
 private:

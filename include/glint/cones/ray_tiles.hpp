@@ -47,17 +47,26 @@ namespace glint {
 /// square tiles of `tile` x `tile` rays (the last row and column of tiles may be partial).
 /// Szécsi 2009, §6.4 uses 256 x 256 rays in 16 x 16 tiles.
 struct TileGrid {
-    int width = 0, height = 0, tile = 16;
+    /// \var height
+    /// Rays per column of the array (0 in a default-constructed grid).
+
+    /// Rays per row of the array (0 in a default-constructed grid).
+    int width = 0, height = 0, tile = 16;  ///< Side of a square tile, in rays (Szécsi 2009, §6.4: 16).
 
     TileGrid() = default;
+    /// A w x h ray array in tiles of t x t rays. Throws Error unless w, h, t > 0 and w h < 2^32.
     TileGrid(int w, int h, int t = 16) : width(w), height(h), tile(t) {
         if (w <= 0 || h <= 0 || t <= 0 || std::int64_t(w) * h > std::int64_t(std::numeric_limits<std::uint32_t>::max()))
             throw Error("TileGrid: need width, height, tile > 0 and at most 2^32 rays, got " + std::to_string(w) + " x " +
                         std::to_string(h) + " rays in tiles of " + std::to_string(t));
     }
+    /// Tiles per row, ceil(width / tile).
     int tiles_x() const { return (width + tile - 1) / tile; }
+    /// Tiles per column, ceil(height / tile).
     int tiles_y() const { return (height + tile - 1) / tile; }
+    /// Number of tiles, tiles_x() * tiles_y().
     std::size_t tile_count() const { return std::size_t(tiles_x()) * std::size_t(tiles_y()); }
+    /// Number of rays, width * height.
     std::size_t ray_count() const { return std::size_t(width) * std::size_t(height); }
 };
 
@@ -73,11 +82,11 @@ struct TileGrid {
 /// defaults were set on bench_cones (sphere and knot scenes). With `min_tile` at least the
 /// grid's tile size (TileOptions::fixed()) it is Szécsi's scheme.
 struct TileOptions {
-    ConeOptions cone;
-    int min_tile = 4;
-    double split_gain = 0.3;    // expected fraction of a tile's tests that a split saves
-    double sphere_cost = 0.5;   // one cone-sphere test
-    double cone_cost = 10.0;    // one ray's share of building a cone
+    ConeOptions cone;  ///< How each tile's enclosing cone is built.
+    int min_tile = 4;  ///< Smallest side, in rays, a tile is split down to (>= 1; int max: no split).
+    double split_gain = 0.3;    ///< expected fraction of a tile's tests that a split saves
+    double sphere_cost = 0.5;   ///< cost of one cone-sphere test, in ray-triangle tests
+    double cone_cost = 10.0;    ///< one ray's share of building a cone, in ray-triangle tests
 
     /// Szécsi's fixed tiles: no split.
     static TileOptions fixed() {
@@ -85,6 +94,7 @@ struct TileOptions {
         o.min_tile = std::numeric_limits<int>::max();
         return o;
     }
+    /// Throws Error for invalid cone options, min_tile < 1 or a negative (or NaN) cost or gain.
     void validate() const {
         cone.validate();
         if (min_tile < 1) throw Error("TileOptions::min_tile must be >= 1, got " + std::to_string(min_tile));
@@ -95,15 +105,17 @@ struct TileOptions {
 
 /// Counts of one or more passes.
 struct PassStats {
-    int passes = 0;                  // passes run
-    std::uint64_t rays = 0;          // ray segments traced (active rays summed over passes)
-    std::uint64_t hits = 0;          // of which hit a triangle
-    std::uint64_t tests = 0;         // ray-triangle tests (0 where the accelerator cannot count)
-    std::uint64_t sphere_tests = 0;  // cone-sphere tests
-    std::uint64_t tiles = 0;         // tiles with active rays (one cone each)
-    std::uint64_t tiles_all = 0;     // of which got the cone that admits every ray
+    int passes = 0;                  ///< passes run
+    std::uint64_t rays = 0;          ///< ray segments traced (active rays summed over passes)
+    std::uint64_t hits = 0;          ///< of which hit a triangle
+    std::uint64_t tests = 0;         ///< ray-triangle tests (0 where the accelerator cannot count)
+    std::uint64_t sphere_tests = 0;  ///< cone-sphere tests
+    std::uint64_t tiles = 0;         ///< tiles with active rays (one cone each)
+    std::uint64_t tiles_all = 0;     ///< of which got the cone that admits every ray
 
+    /// Ray-triangle tests per traced ray segment (0 when no ray was traced).
     double tests_per_ray() const { return rays ? double(tests) / double(rays) : 0.0; }
+    /// Adds every count of `o` (statistics of further passes or frames).
     PassStats& operator+=(const PassStats& o) {
         passes += o.passes;
         rays += o.rays;
@@ -119,11 +131,11 @@ struct PassStats {
 /// Per-frame buffers, kept by the caller and reused (they grow once, then never allocate).
 template <Scalar T>
 struct TileWorkspace {
-    std::vector<std::uint8_t> active;    // per ray: still on its path
-    std::vector<StoreHit<T>> hits;       // per ray: the closest hit of the last pass
-    std::vector<Cone<T>> cones;          // per tile: the cone of the last pass
-    std::vector<std::uint32_t> index;    // one tile's active rays
-    std::vector<std::uint8_t> pass;      // one chunk of cone-sphere results
+    std::vector<std::uint8_t> active;    ///< per ray: still on its path
+    std::vector<StoreHit<T>> hits;       ///< per ray: the closest hit of the last pass
+    std::vector<Cone<T>> cones;          ///< per tile: the cone of the last pass
+    std::vector<std::uint32_t> index;    ///< one tile's active rays
+    std::vector<std::uint8_t> pass;      ///< one chunk of cone-sphere results
 };
 
 /// A shader for trace_passes: `shade(i, ray, hit, found)` is called after every pass for
@@ -173,11 +185,13 @@ PassStats run_passes(std::span<Ray<T>> rays, int max_passes, TileWorkspace<T>& w
 template <TriangleIntersector P>
 class RayTileEngine {
 public:
-    using scalar_type = typename P::scalar_type;
-    using T = scalar_type;
+    using scalar_type = typename P::scalar_type;  ///< Scalar type of the intersector (float or double).
+    using T = scalar_type;                         ///< Short name for scalar_type.
     /// Triangles whose spheres are tested against a cone at once (branch-free, vectorized).
     static constexpr std::size_t chunk = 64;
 
+    /// Stores `tris` as P's records (one block per triangle, as BruteForce<P>) and their bounding
+    /// spheres. Throws Error for invalid `opt` or 2^32 - 1 triangles or more. Allocates.
     explicit RayTileEngine(std::span<const TriangleVertices<T>> tris, const TileOptions& opt = {}) : opt_(opt) {
         opt_.validate();
         if (tris.size() >= std::numeric_limits<std::uint32_t>::max())
@@ -203,8 +217,11 @@ public:
         }
     }
 
+    /// Number of triangles; hit ids are their indices in the span given.
     std::size_t triangle_count() const { return refs_.size(); }
+    /// The intersector's triangle records.
     const TriangleStore<P>& store() const { return store_; }
+    /// The options given at construction.
     const TileOptions& options() const { return opt_; }
 
     /// One pass: for every ray i with active[i] != 0, hits[i] becomes its closest hit (id =

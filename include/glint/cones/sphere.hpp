@@ -33,10 +33,11 @@
 
 namespace glint {
 
+/// A sphere enclosing one triangle (Szécsi 2009, §6.3.1), tested against ray cones.
 template <Scalar T>
 struct BoundingSphere {
-    Vec3<T> center{0};
-    T radius = T(-1);  // negative: empty (nothing inside, meets no cone)
+    Vec3<T> center{0};  ///< Centre, world space.
+    T radius = T(-1);  ///< World units; negative: empty (nothing inside, meets no cone)
 };
 
 /// Minimal enclosing sphere of a triangle, rounded outwards to T. A triangle with a
