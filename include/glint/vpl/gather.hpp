@@ -49,17 +49,19 @@ enum class VplGather : std::uint8_t { all, cuts };
 /// The VPL method's own settings; the image's (size, samples, threads) are the renderer's
 /// RenderSettings.
 struct VplSettings {
-    std::size_t vpl_walks = 256; // shooting walks (each leaves a VPL per non-specular hit)
-    double min_distance = 0;     // geometry-term clamp (0: unclamped, unbiased)
-    int light_samples = 1;       // real-light samples per pixel for direct illumination
-    bool direct = true;          // emission seen directly plus direct illumination
-    bool indirect = true;        // the VPLs' illumination
-    std::uint64_t seed = 1;      // shooting and the pixels' sampler streams
-    ShootingOptions shooting{};
-    int max_specular = 16;       // mirror/dielectric vertices followed from the camera
-    VplGather gather = VplGather::all;
-    CutSettings cut{};           // gather = cuts: the cut's threshold and largest size
+    std::size_t vpl_walks = 256; ///< shooting walks (each leaves a VPL per non-specular hit)
+    double min_distance = 0;     ///< geometry-term clamp d_min, world units (0: unclamped, unbiased)
+    int light_samples = 1;       ///< real-light samples per pixel for direct illumination (>= 1)
+    bool direct = true;          ///< emission seen directly plus direct illumination
+    bool indirect = true;        ///< the VPLs' illumination
+    std::uint64_t seed = 1;      ///< shooting and the pixels' sampler streams
+    ShootingOptions shooting{};  ///< Walk depth cap of the shooting phase.
+    int max_specular = 16;       ///< mirror/dielectric vertices followed from the camera (>= 0)
+    VplGather gather = VplGather::all;  ///< Sum over every VPL or through a light cut.
+    CutSettings cut{};           ///< gather = cuts: the cut's threshold and largest size
 
+    /// Throws Error for invalid cut settings, a negative or non-finite min_distance,
+    /// light_samples < 1 or max_specular < 0.
     void validate() const {
         cut.validate();
         if (!(min_distance >= 0) || !std::isfinite(min_distance))
@@ -72,13 +74,18 @@ struct VplSettings {
 /// The first non-specular point seen along a camera ray, with the camera path's weight.
 template <Scalar T>
 struct PixelPoint {
-    Vec3<T> x{0}, n{0}, wo{0};  // position, normal facing the viewer, direction to the viewer
-    Rgb<T> weight{};            // product of the specular reflectances before x
-    Rgb<T> emitted{};           // emission seen along the camera path (weighted)
-    std::uint32_t material = 0;
-    std::uint32_t triangle = 0;  // the scene triangle at x, and x's barycentrics (u, v) on it
-    T u = 0, v = 0;
-    bool hit = false;
+    /// \var n
+    /// Unit geometric normal at x, facing the viewer.
+
+    /// Position, world space.
+    Vec3<T> x{0}, n{0}, wo{0};  ///< Unit direction from x to the viewer (the previous path vertex).
+    Rgb<T> weight{};            ///< product of the specular reflectances before x
+    Rgb<T> emitted{};           ///< emission seen along the camera path (weighted)
+    std::uint32_t material = 0;  ///< Index into Scene::materials of the material at x.
+    std::uint32_t triangle = 0;  ///< the scene triangle at x, and x's barycentrics (u, v) on it
+    /// Barycentric u of x on `triangle` (the hit's u).
+    T u = 0, v = 0;  ///< Barycentric v of x on `triangle` (the hit's v).
+    bool hit = false;  ///< False when the path left the scene or passed max_specular (x, n, wo, material, triangle, u, v unset).
 };
 
 /// A source of independent uniforms in [0, 1): a callable returning T (a sampler's get_1d, a
@@ -180,11 +187,14 @@ Rgb<T> gather_point(const Scene<T>& s, const PixelPoint<T>& p, std::span<const V
 template <Scalar T>
 class VplLights {
 public:
+    /// Views `vpls` (not copied) and, for VplGather::cuts, builds their cluster tree (allocates,
+    /// O(n log n)). Throws Error for invalid cut settings.
     VplLights(std::span<const Vpl<T>> vpls, VplGather mode = VplGather::all, const CutSettings& cut = {})
         : vpls_(vpls), cut_(cut), cuts_(mode == VplGather::cuts) {
         cut.validate();
         if (cuts_) tree_ = std::make_shared<const LightClusterTree<T>>(vpl_light_points<T>(vpls));
     }
+    /// The same with the mode and cut settings of `st`.
     VplLights(std::span<const Vpl<T>> vpls, const VplSettings& st) : VplLights(vpls, st.gather, st.cut) {}
 
     /// The VPLs' illumination reflected at p towards the viewer (without p.weight).
@@ -199,6 +209,7 @@ public:
         return evaluate_cut(*tree_, r, cut_, [&](const PointLight<T>& l) { return vis.visible(l.position); }).L;
     }
 
+    /// The VPLs given at construction.
     std::span<const Vpl<T>> vpls() const { return vpls_; }
     /// The cluster tree (null for VplGather::all).
     const LightClusterTree<T>* tree() const { return tree_.get(); }

@@ -45,11 +45,12 @@ template <RayAccelerator A, class V, Scalar T = typename A::scalar_type>
     requires VisibilityPolicy<V, T>
 class VplIntegrator {
 public:
-    using scalar_type = T;
-    using thread_state = V;
+    using scalar_type = T;  ///< Scalar type of the scene and accelerator.
+    using thread_state = V;  ///< Each rendering thread's own copy of the visibility policy.
+    /// What the integrator accumulates per pixel: the VPL part of its samples.
     struct pixel_state {
-        Rgb<T> indirect{T(0)};  // sum of the samples' VPL parts
-        std::uint32_t samples = 0;
+        Rgb<T> indirect{T(0)};  ///< sum of the samples' VPL parts (non-finite ones left out)
+        std::uint32_t samples = 0;  ///< Number of samples taken of the pixel.
     };
 
     /// `vpls` must outlive the integrator.
@@ -60,8 +61,11 @@ public:
         st.validate();
     }
 
+    /// A copy of the visibility policy for one rendering thread.
     V make_thread_state() const { return visibility_; }
 
+    /// Radiance along camera ray `ray`: emission seen, direct light (when st.direct) and the
+    /// VPLs' part (when st.indirect; also added to `state`), drawing uniforms from `sampler`.
     template <class S>
         requires Sampler<S, T>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state, V& vis) const {
@@ -83,6 +87,7 @@ public:
         return out;
     }
 
+    /// Appends the layer "indirect" to `film`: each pixel's mean VPL part (0 without samples).
     void finish(Film& film, std::span<const pixel_state> states) const {
         FilmLayer layer{"indirect", Image<Rgb<float>>(film.image.width, film.image.height)};
         for (std::size_t i = 0; i < states.size() && i < layer.pixels.pixels.size(); ++i)
@@ -104,9 +109,9 @@ private:
 /// What render_vpl returns: the renderer's result (image, variance, rays, seconds: shooting
 /// included), the image's VPL part, and the shooting's count and time.
 struct VplResult : RenderResult {
-    Image<Rgb<float>> indirect;
-    std::size_t vpls = 0;
-    double shooting_seconds = 0;
+    Image<Rgb<float>> indirect;  ///< The VPL part of the image (per-pixel mean), also inside `image`.
+    std::size_t vpls = 0;  ///< Number of VPLs gathered from.
+    double shooting_seconds = 0;  ///< Wall-clock seconds of the shooting phase (0 for render_vpls).
 };
 
 /// Gathering from VPLs shot beforehand (none for direct illumination alone), through the
@@ -148,8 +153,10 @@ VplResult render_vpl(const Scene<T>& s, const A& accel, const R& roulette, const
 /// A film of pixel points: what PixelPointIntegrator leaves per pixel, row by row.
 template <Scalar T>
 struct PointFilm {
-    std::vector<PixelPoint<T>> points;
+    std::vector<PixelPoint<T>> points;  ///< One point per pixel, row-major (y * width + x).
+    /// Makes room for width x height default (missed) points.
     void resize(int width, int height) { points.assign(std::size_t(width) * std::size_t(height), PixelPoint<T>{}); }
+    /// Ignores the Renderer's colours: a point film keeps only points (written by finish()).
     void set_pixel(int, int, const Rgb<T>&, const Rgb<T>&) {}
 };
 
@@ -158,12 +165,15 @@ struct PointFilm {
 template <RayAccelerator A, Scalar T = typename A::scalar_type>
 class PixelPointIntegrator {
 public:
-    using scalar_type = T;
-    using pixel_state = PixelPoint<T>;
+    using scalar_type = T;  ///< Scalar type of the scene and accelerator.
+    using pixel_state = PixelPoint<T>;  ///< The point a pixel's camera ray found.
 
+    /// Points of `s` found through `accel`, following at most max_specular mirror or dielectric
+    /// vertices; both must outlive the integrator.
     PixelPointIntegrator(const Scene<T>& s, const A& accel, int max_specular)
         : scene_(s), accel_(accel), max_specular_(max_specular) {}
 
+    /// Stores the point `ray` sees in `state` and returns the emission seen on the way.
     template <class S>
         requires Sampler<S, T>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state) const {
@@ -172,6 +182,7 @@ public:
         return {state.emitted, rays.rays(), false};
     }
 
+    /// Copies the pixels' points into `film`.
     void finish(PointFilm<T>& film, std::span<const pixel_state> states) const {
         film.points.assign(states.begin(), states.end());
     }

@@ -76,18 +76,20 @@ void balance_weights(std::span<const T> q, std::span<T> alpha) {
 /// (powers of its own frame's estimate).
 template <Scalar T>
 struct AnimationPath {
-    std::uint32_t frame = 0;
-    Vec3<T> z1{0}, n1{0};
-    bool reusable = false;  // z1 Lambertian: the path is valid in every frame that sees z1
-    std::vector<Vpl<T>> vpls;
+    std::uint32_t frame = 0;  ///< The frame whose light position shot the path.
+    /// First hit z_1, world space (zero when the light's ray hit nothing).
+    Vec3<T> z1{0}, n1{0};  ///< Unit normal at z_1 facing the light (zero when nothing was hit).
+    bool reusable = false;  ///< z1 Lambertian: the path is valid in every frame that sees z1
+    std::vector<Vpl<T>> vpls;  ///< The path's VPLs, z_1's first, powers of its own frame's estimate.
 };
 
+/// Settings of shoot_light_animation.
 struct AnimationOptions {
-    std::size_t paths_per_frame = 1;
-    int branches = 1;            // continuations from the first hit (Szécsi 2009, §7.2.1)
-    bool dependent = false;      // the same random numbers in every frame ("dependent sampling", Szécsi 2009, §7.2)
-    std::uint64_t seed = 1;
-    ShootingOptions shooting{};
+    std::size_t paths_per_frame = 1;  ///< Paths N shot from each frame's light position (> 0).
+    int branches = 1;            ///< continuations from the first hit (Szécsi 2009, §7.2.1; >= 1)
+    bool dependent = false;      ///< the same random numbers in every frame ("dependent sampling", Szécsi 2009, §7.2)
+    std::uint64_t seed = 1;      ///< Seed of the paths' random streams.
+    ShootingOptions shooting{};  ///< Walk depth cap (its max_depth only).
 };
 
 /// Shoots one path from the point light at `light` with first-hit power `power`.
@@ -117,12 +119,13 @@ AnimationPath<T> shoot_animation_path(const Scene<T>& s, const A& accel, const R
 /// render_path_images) one indirect-illumination image per path.
 template <Scalar T>
 struct LightAnimation {
-    std::vector<Vec3<T>> positions;           // the light, per frame
-    std::vector<AnimationPath<T>> paths;      // frame-major, paths_per_frame per frame
-    std::vector<T> density;                   // paths x frames: q_j with visibility
-    std::vector<std::vector<Rgb<T>>> images;  // per path
-    std::size_t paths_per_frame = 1;
+    std::vector<Vec3<T>> positions;           ///< the light, per frame
+    std::vector<AnimationPath<T>> paths;      ///< frame-major, paths_per_frame per frame
+    std::vector<T> density;                   ///< paths x frames: q_j with visibility (0 for paths not reusable)
+    std::vector<std::vector<Rgb<T>>> images;  ///< per path (empty before render_path_images)
+    std::size_t paths_per_frame = 1;          ///< Paths shot per frame, N.
 
+    /// Number of frames F (light positions).
     std::size_t frames() const { return positions.size(); }
 
     /// Weight alpha^(i) of path s in frame i when frames lo..hi (containing i and the path's

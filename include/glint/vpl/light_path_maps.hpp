@@ -60,17 +60,19 @@ namespace glint {
 /// linear extrapolation in the band between the lattice and the edges.
 template <Scalar T>
 struct ReferenceGrid {
-    int g = 4;
-    T inset = 0;
-    std::vector<Vec3<T>> x;          // positions
-    std::vector<std::uint32_t> tri;  // triangle of each point
+    int g = 4;  ///< Subdivisions per triangle edge, in [1, 256].
+    T inset = 0;  ///< Fraction s in [0, 0.5] the lattice is shrunk by toward each centroid (0: on the edges).
+    std::vector<Vec3<T>> x;          ///< positions, world space, per_triangle() per triangle in triangle order
+    std::vector<std::uint32_t> tri;  ///< triangle of each point
 
     /// The lattice's points and the interpolation weights of one surface point.
     struct Stencil {
-        std::size_t index[3];
-        T weight[3];
+        std::size_t index[3];  ///< Indices of the three lattice points (into x).
+        T weight[3];  ///< Their weights, summing to 1 (some negative when extrapolating).
     };
 
+    /// The lattice of every triangle of `s` at `grid` subdivisions, shrunk by `shrink`. Throws
+    /// Error for grid outside [1, 256] or shrink outside [0, 0.5]. Allocates.
     ReferenceGrid(const Scene<T>& s, int grid, T shrink = T(0)) : g(grid), inset(shrink) {
         if (grid < 1 || grid > 256) throw Error("glint::ReferenceGrid: grid " + std::to_string(grid) + " outside [1, 256]");
         if (!(shrink >= T(0) && shrink <= T(0.5)))
@@ -85,6 +87,7 @@ struct ReferenceGrid {
                     tri.push_back(std::uint32_t(t));
                 }
     }
+    /// Lattice points per triangle, (g + 1) (g + 2) / 2.
     std::size_t per_triangle() const { return std::size_t((g + 1) * (g + 2) / 2); }
     /// Index of lattice point (i, j) of triangle t: rows of constant j, g + 1 - j points each.
     std::size_t index(std::uint32_t t, int i, int j) const {
@@ -114,37 +117,42 @@ struct ReferenceGrid {
         for (int k = 0; k < 3; ++k) out += values[st.index[k]] * st.weight[k];
         return out;
     }
+    /// Number of reference points, per_triangle() times the triangle count.
     std::size_t size() const { return x.size(); }
 };
 
+/// Settings of build_light_path_map.
 struct LightPathMapOptions {
-    std::size_t entry_points = 256;
-    int branches = 4;          // walks per entry point (the splitting factor N_s of Szécsi 2009, §8.1.4)
-    int grid = 4;              // reference grid per triangle (g x g sub-triangles)
-    double inset = 0.1;        // the grid's lattice shrunk by 1 - inset toward each centroid (0: on the edges; docs/vpl.md)
-    std::size_t clusters = 0;  // 0: no clustering
-    double min_distance = 0;   // geometry-term clamp of the gathering (0: unclamped)
-    int threads = 0;
-    std::uint64_t seed = 1;
-    ShootingOptions shooting{};
+    std::size_t entry_points = 256;  ///< Entry points E sampled on the Lambertian surface (> 0).
+    int branches = 4;          ///< walks per entry point (the splitting factor N_s of Szécsi 2009, §8.1.4; >= 1)
+    int grid = 4;              ///< reference grid per triangle (g x g sub-triangles, g in [1, 256])
+    double inset = 0.1;        ///< the grid's lattice shrunk by 1 - inset toward each centroid (0: on the edges; docs/vpl.md)
+    std::size_t clusters = 0;  ///< k-means clusters of entry points; 0 (or >= entry_points): no clustering
+    double min_distance = 0;   ///< geometry-term clamp of the gathering, world units (0: unclamped)
+    int threads = 0;           ///< Threads gathering the panes (0: hardware concurrency).
+    std::uint64_t seed = 1;    ///< Seed of the entry points and their path trees.
+    ShootingOptions shooting{};  ///< Walk depth cap of the path trees (its max_depth only).
 };
 
+/// A point where a light path map's light paths start: a sampled side of a Lambertian triangle.
 template <Scalar T>
 struct EntryPoint {
-    Vec3<T> x{0}, n{0};  // position, normal of the sampled side
-    std::uint32_t triangle = 0;
+    /// Position z_1, world space.
+    Vec3<T> x{0}, n{0};  ///< Unit normal of the sampled side.
+    std::uint32_t triangle = 0;  ///< Index of the scene triangle holding x.
 };
 
 /// A light path map: reference points, entry points (and clusters), and one pane of items
 /// per entry point or cluster (RGB irradiance per reference point for unit irradiance).
 template <Scalar T>
 struct LightPathMap {
-    ReferenceGrid<T> grid;
-    std::vector<EntryPoint<T>> entries;
-    std::vector<std::uint32_t> cluster_of;  // per entry point: its pane
-    std::vector<std::vector<Rgb<T>>> panes;
-    std::vector<Vec3<T>> ref_normal;        // per reference point: the lit side's normal (from the VPLs)
+    ReferenceGrid<T> grid;  ///< The reference points the items are recorded at.
+    std::vector<EntryPoint<T>> entries;  ///< The entry points, in sampling order.
+    std::vector<std::uint32_t> cluster_of;  ///< per entry point: its pane
+    std::vector<std::vector<Rgb<T>>> panes;  ///< per pane: the items S(x) of every reference point (grid order)
+    std::vector<Vec3<T>> ref_normal;        ///< per reference point: the normal of the side facing the scene camera's eye
 
+    /// Memory of the panes and entry points in bytes (the grid and ref_normal not counted).
     std::size_t bytes() const {
         return panes.size() * grid.size() * sizeof(Rgb<T>) + entries.size() * sizeof(EntryPoint<T>);
     }

@@ -46,10 +46,10 @@ namespace glint {
 /// that arrived there.
 template <Scalar T>
 struct Vpl {
-    Vec3<T> position{0};
-    Vec3<T> normal{0, 0, 1};  // facing the side the light arrived from
-    Rgb<T> power{};           // incoming power dPhi
-    Rgb<T> albedo{};          // kd at the hit: the VPL reflects kd / pi
+    Vec3<T> position{0};      ///< The hit point, world space.
+    Vec3<T> normal{0, 0, 1};  ///< Unit surface normal facing the side the light arrived from
+    Rgb<T> power{};           ///< incoming power dPhi, the estimator's 1 / walks included
+    Rgb<T> albedo{};          ///< kd at the hit: the VPL reflects kd / pi
 };
 
 /// A roulette policy that a shooting walk can use (a radiance estimate's offset is reflected
@@ -60,11 +60,11 @@ concept ShootingRoulette = RoulettePolicy<R, T, 3>;
 /// Where a light sample leaves from: position, direction, and power / density.
 template <Scalar T>
 struct LightSample {
-    Vec3<T> position{0};
-    Vec3<T> normal{0};  // zero for a point light
-    Vec3<T> direction{0, 0, 1};
-    Rgb<T> power{};
-    const PointLight<T>* light = nullptr;  // the point light sampled (its profile), else null
+    Vec3<T> position{0};  ///< Point on the emitter, world space.
+    Vec3<T> normal{0};  ///< Unit normal of an area light; zero for a point light
+    Vec3<T> direction{0, 0, 1};  ///< Unit emission direction (EmitterSet::sample; unset by sample_point)
+    Rgb<T> power{};  ///< Power / density of the sample (sample), or Le or I of the emitter (sample_point)
+    const PointLight<T>* light = nullptr;  ///< the point light sampled (its profile), else null
 
     /// What leaves towards unit direction w: `power`, through a point light's profile.
     Rgb<T> towards(const Vec3<T>& w) const { return light ? light->intensity_towards(w) : power; }
@@ -74,6 +74,8 @@ struct LightSample {
 template <Scalar T>
 class EmitterSet {
 public:
+    /// Collects the emissive triangles of positive area and the point lights of `s` (validated
+    /// first). Throws Error when the scene has no light that emits. Allocates.
     explicit EmitterSet(const Scene<T>& s) {
         s.validate();
         for (std::size_t i = 0; i < s.triangles.size(); ++i) {
@@ -154,8 +156,10 @@ private:
 
 /// Options of the shooting phase.
 struct ShootingOptions {
-    int max_depth = 1024;  // cap on a walk's vertices, far beyond where roulette stops walks
-    int branches = 1;      // continuations from the first hit (path splitting, Szécsi 2009, §7.2.1)
+    int max_depth = 1024;  ///< cap on a walk's vertices (>= 1), far beyond where roulette stops walks
+    int branches = 1;      ///< continuations from the first hit (path splitting, Szécsi 2009, §7.2.1);
+                           ///< not read by shoot_scene_vpls: path trees take AnimationOptions::branches
+                           ///< or LightPathMapOptions::branches
 };
 
 /// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
