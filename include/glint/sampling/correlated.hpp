@@ -279,7 +279,8 @@ template <Scalar T, std::size_t N>
 class PolygonLight {
 public:
     /// A light over `vertices` (planar, convex, in order, world space) emitting `radiance` (Le per
-    /// band) from `sides`. Throws Error for more than max_polygon_vertices vertices.
+    /// band) from `sides`. Throws Error for more than max_polygon_vertices vertices, fewer than
+    /// 3 or a degenerate polygon (PolygonSampler).
     PolygonLight(std::span<const Vec3<T>> vertices, const Spectrum<T, N>& radiance,
                  LightSides sides = LightSides::front)
         : sampler_(vertices), radiance_(radiance), sides_(sides) {

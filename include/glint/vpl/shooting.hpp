@@ -48,7 +48,7 @@ template <Scalar T>
 struct Vpl {
     Vec3<T> position{0};      ///< The hit point, world space.
     Vec3<T> normal{0, 0, 1};  ///< Unit surface normal facing the side the light arrived from
-    Rgb<T> power{};           ///< incoming power dPhi, the estimator's 1 / walks included
+    Rgb<T> power{};           ///< incoming power dPhi (from shoot_scene_vpls: the estimator's 1 / walks included)
     Rgb<T> albedo{};          ///< kd at the hit: the VPL reflects kd / pi
 };
 
