@@ -75,7 +75,7 @@ private:
 template <Scalar T>
 struct SphereVisibilityOptions {
     bool self_shadow_heuristic = true;  ///< Skip spheres whose centre is nearer x than factor * radius.
-    T self_shadow_factor = T(2);  ///< Szécsi 2009, §5.3.2: "the double of their radius"
+    T self_shadow_factor = T(2);  ///< Multiple of the radius the heuristic uses; Szécsi 2009, §5.3.2: "the double of their radius".
 };
 
 namespace detail {
