@@ -101,6 +101,7 @@ inline std::uint32_t padded(std::uint32_t n) {
 /// World coordinates: the origin is 0 for every triangle, a ray is used as it is, and a tree
 /// leaf is a run of padded records, tested with the ray prepared once per query.
 struct IdentityFrame {
+    /// The world origin (0, 0, 0) for any triangles; `quality` is set to +inf (no constraint).
     template <class T>
     static Vec3d choose(std::span<const TriangleVertices<T>>, double& quality) {
         quality = infinity<double>;
@@ -112,6 +113,7 @@ struct IdentityFrame {
     static bool joins(const Vec3<T>&, const Vec3<T>&) {
         return true;
     }
+    /// `ray` itself, unchanged (no copy): world coordinates are the frame's.
     template <class T>
     static const Ray<T>& local(const Ray<T>& ray, const Vec3<T>&) {
         return ray;
@@ -129,6 +131,7 @@ struct IdentityFrame {
                           const RayDataOf<P>& world, Hit& hit) {
         return s.template test_batches<Any>(first, first + count, world, hit);
     }
+    /// Records leaf (first, count) tests: `count`, which already counts padded records.
     template <class Store>
     static std::uint64_t records(const Store&, std::uint32_t, std::uint32_t count) {
         return count;
@@ -140,6 +143,8 @@ struct IdentityFrame {
 /// detail::min_frame_quality); a tree leaf is a run of groups, and the ray is translated
 /// and prepared once per group.
 struct OffsetFrames {
+    /// Origin for a group of triangles (detail::choose_frame), rounded to T; `quality` gets
+    /// its quality (detail::frame_quality), which the store compares with min_frame_quality.
     template <class T>
     static Vec3d choose(std::span<const TriangleVertices<T>> tris, double& quality) {
         // Rounded to T: the origin exactly as rays will be translated by it.
@@ -152,12 +157,14 @@ struct OffsetFrames {
     static bool joins(const Vec3<T>&, const Vec3<T>&) {
         return false;
     }
+    /// A copy of `ray` translated into the frame at `origin` (direction and interval kept).
     template <class T>
     static Ray<T> local(const Ray<T>& ray, const Vec3<T>& origin) {
         Ray<T> r = ray;
         r.origin -= origin;
         return r;
     }
+    /// The leaf reference of a block: its groups (first group, group count).
     template <class Store>
     static std::pair<std::uint32_t, std::uint32_t> leaf(const Store&, typename Store::BlockRef ref) {
         return {ref.group_begin, ref.group_end - ref.group_begin};
@@ -181,6 +188,7 @@ struct OffsetFrames {
         }
         return found;
     }
+    /// Records leaf (first, count) tests: the padded records of its `count` groups (O(count)).
     template <class Store>
     static std::uint64_t records(const Store& s, std::uint32_t first, std::uint32_t count) {
         std::uint64_t n = 0;

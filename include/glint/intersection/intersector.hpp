@@ -26,9 +26,9 @@ namespace glint {
 /// so the hit point is (1 - u - v) v0 + u v1 + v v2.
 template <class T>
 struct TriangleHit {
-    T t = infinity<T>;
-    T u = 0;
-    T v = 0;
+    T t = infinity<T>;  ///< Ray parameter of the hit; +inf (the default) means no hit yet.
+    T u = 0;            ///< Barycentric weight of vertex 1.
+    T v = 0;            ///< Barycentric weight of vertex 2.
 };
 
 /// The vertices of one triangle.
@@ -48,8 +48,8 @@ inline constexpr std::size_t batch_width = 8;
 /// F lines from F separate arrays.
 template <class T, int F>
 struct SoaView {
-    const T* data = nullptr;
-    std::size_t count = 0;
+    const T* data = nullptr;  ///< First scalar of block 0; not owned.
+    std::size_t count = 0;    ///< Records in the view (the last block may be partly filled).
     /// Field k of record i; the records from i to the end of i's block follow at stride 1.
     const T* field(int k, std::size_t i) const {
         return data + (i / batch_width) * (batch_width * F) + std::size_t(k) * batch_width + i % batch_width;

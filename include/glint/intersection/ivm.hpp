@@ -39,13 +39,16 @@
 
 namespace glint {
 
+/// The inverse-vertex-matrix test (Szécsi 2009, §4.1) as a TriangleIntersector: a record of
+/// 9 scalars, in OffsetFrames so that no triangle plane passes near the frame origin.
 template <Scalar T>
 struct Ivm {
-    using scalar_type = T;
-    using RayData = detail::PlainRay<T>;
-    using frame = OffsetFrames;
+    using scalar_type = T;                ///< float or double: the record's and the test's precision.
+    using RayData = detail::PlainRay<T>;  ///< The ray as it is: origin, direction, interval.
+    using frame = OffsetFrames;           ///< Records live in per-group frames (frame.hpp).
 
-    // m[0], m[1]: rows 0 and 1 of M = [v0 v1 v2]^-1 (b_i = m[i] . x); m[2]: q' = [1,1,1] M.
+    /// m[0], m[1]: rows 0 and 1 of M = [v0 v1 v2]^-1 (b_i = m[i] . x); m[2]: q' = [1,1,1] M.
+    /// All zero for a degenerate triangle (never hits).
     Vec3<T> m[3]{};
 
     /// Inverts the vertex matrix in extended precision (double for float records, long
@@ -78,7 +81,7 @@ struct Ivm {
         return r;
     }
 
-    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
+    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }  ///< Copies the ray's fields; no work.
 
     /// t from the plane q' . x = 1, then the three barycentrics' signs (bitwise &, not &&:
     /// without short-circuit branches the batch loop vectorizes).

@@ -20,12 +20,17 @@
 
 namespace glint {
 
+/// The Moller-Trumbore test (Moller and Trumbore 1997) as a TriangleIntersector: a record
+/// of 9 scalars, no epsilon, world coordinates (IdentityFrame).
 template <Scalar T>
 struct MollerTrumbore {
-    using scalar_type = T;
-    using RayData = detail::PlainRay<T>;
+    using scalar_type = T;                ///< float or double: the record's and the test's precision.
+    using RayData = detail::PlainRay<T>;  ///< The ray as it is: origin, direction, interval.
 
-    Vec3<T> v0{0}, e1{0}, e2{0};
+    /// Vertex 0, in the frame's coordinates.
+    Vec3<T> v0{0}, e1{0}, e2{0};  ///< Edge v2 - v0 (zero for a degenerate triangle).
+    /// @var e1
+    /// Edge v1 - v0 (zero for a degenerate triangle).
 
     /// Degenerate triangles (|e1 x e2| <= 2^-60 * longest edge^2) get zero edges: det = 0,
     /// never a hit.
@@ -38,7 +43,7 @@ struct MollerTrumbore {
         return r;
     }
 
-    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
+    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }  ///< Copies the ray's fields; no work.
 
     /// Cramer's rule; bitwise &, not &&, so that the batch loop has no branches and
     /// vectorizes.

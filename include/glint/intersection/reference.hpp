@@ -16,10 +16,16 @@
 
 namespace glint {
 
+/// Result of reference_intersect: the exact-as-possible answer and how far it lies from the
+/// decision boundaries, in units of precision T's rounding.
 struct ReferenceHit {
-    bool hit = false;        // t in (tmin, tmax) and all barycentrics >= 0
-    bool defined = false;    // false for degenerate triangles and rays parallel to the plane
-    long double t = 0, u = 0, v = 0;
+    bool hit = false;        ///< t in (tmin, tmax) and all barycentrics >= 0.
+    bool defined = false;    ///< False for degenerate triangles and rays parallel to the plane.
+    /// Ray parameter of the plane hit (valid when `defined`).
+    long double t = 0, u = 0, v = 0;  ///< Barycentric weight of vertex 2.
+    /// @var u
+    /// Barycentric weight of vertex 1.
+
     /// Distance from the hit point on the plane to the nearest edge line, in units of
     /// eps_T * scale / cos(angle): how many "ulps" a test of precision T could be off by.
     /// Decisions closer than a few units to an edge may legitimately differ between tests.
@@ -30,6 +36,8 @@ struct ReferenceHit {
     double t_unit = 0;
 };
 
+/// Intersects `r` with triangle (a, b, c) in long double from the exact T inputs; never
+/// throws. Reference for tests and the stress report (long double, square roots), not for rendering.
 template <class T>
 ReferenceHit reference_intersect(const Ray<T>& r, const Vec3<T>& a, const Vec3<T>& b,
                                  const Vec3<T>& c) {

@@ -67,9 +67,11 @@ template <class T>
 template <TriangleIntersector P>
 class Triangle {
 public:
-    using T = typename P::scalar_type;
-    using Frame = FrameOf<P>;
+    using T = typename P::scalar_type;  ///< float or double, P's precision.
+    using Frame = FrameOf<P>;           ///< Where the record lives (frame.hpp).
 
+    /// Chooses the frame for (v0, v1, v2), world space, and builds the record relative to it
+    /// in double precision; a degenerate triangle gives a record that never hits.
     Triangle(const Vec3<T>& v0, const Vec3<T>& v1, const Vec3<T>& v2) {
         const TriangleVertices<T> tri{v0, v1, v2};
         double quality;
@@ -83,8 +85,8 @@ public:
         return intersect_record(record_, P::prepare(Frame::local(ray, frame_)), hit);
     }
 
-    const P& record() const { return record_; }
-    Vec3<T> frame_origin() const { return frame_; }
+    const P& record() const { return record_; }  ///< The intersector's record, in the frame's coordinates.
+    Vec3<T> frame_origin() const { return frame_; }  ///< World position of the frame origin (0 in the IdentityFrame).
 
 private:
     P record_{};
@@ -94,7 +96,7 @@ private:
 /// Closest hit found in a TriangleStore: hit data plus the caller's triangle id.
 template <class T>
 struct StoreHit : TriangleHit<T> {
-    std::uint32_t id = std::numeric_limits<std::uint32_t>::max();
+    std::uint32_t id = std::numeric_limits<std::uint32_t>::max();  ///< Caller's triangle id; UINT32_MAX: no hit yet.
 };
 
 /// Blocks of triangle records, stored as an array of structures of arrays (SoaView). A
@@ -113,19 +115,24 @@ struct StoreHit : TriangleHit<T> {
 template <TriangleIntersector P>
 class TriangleStore {
 public:
-    using T = typename P::scalar_type;
-    using Frame = FrameOf<P>;
-    using RayData = RayDataOf<P>;
-    static constexpr int F = field_count<P>;
-    static constexpr std::size_t W = batch_width;
+    using T = typename P::scalar_type;       ///< float or double, P's precision.
+    using Frame = FrameOf<P>;                ///< Where the records live (frame.hpp).
+    using RayData = RayDataOf<P>;            ///< Per-ray data of P::prepare.
+    static constexpr int F = field_count<P>; ///< Scalars per record.
+    static constexpr std::size_t W = batch_width;  ///< Records per block of the SoA array.
 
+    /// A run of records sharing one frame origin.
     struct Group {
-        Vec3<T> origin;
-        std::uint32_t begin, end;  // record range (without padding)
+        Vec3<T> origin;            ///< Frame origin, world space, rounded to T.
+        /// First record of the range (without padding).
+        std::uint32_t begin, end;  ///< One past the last record of the range (without padding).
     };
+    /// A block as add_block returns it: the half-open range of its groups.
     struct BlockRef {
-        std::uint32_t group_begin = 0, group_end = 0;
+        /// First group of the block.
+        std::uint32_t group_begin = 0, group_end = 0;  ///< One past the block's last group.
     };
+    /// Whether add_block pads every group to whole batches (tree leaves) or not (the default).
     enum class Padding { none, batches };
 
     /// Appends one block; `ids[i]` is reported for hits on `tris[i]` (the original
@@ -161,15 +168,18 @@ public:
 
     /// Number of record slots stored (triangles plus the padding of padded blocks).
     std::size_t size() const { return ids_.size(); }
-    std::size_t group_count() const { return groups_.size(); }
-    const Group& group(std::size_t g) const { return groups_[g]; }
+    std::size_t group_count() const { return groups_.size(); }  ///< Groups of all blocks.
+    const Group& group(std::size_t g) const { return groups_[g]; }  ///< Group g; g < group_count(), unchecked.
+    /// The id given for record `record` (a record index, as test_batches reports); padding
+    /// records carry UINT32_MAX; unchecked.
     std::uint32_t id(std::size_t record) const { return ids_[record]; }
+    /// Bytes of records, ids and groups (sizes, not capacities).
     std::size_t bytes() const {
         return data_.size() * sizeof(T) + ids_.size() * sizeof(std::uint32_t) + groups_.size() * sizeof(Group);
     }
-    P record(std::size_t i) const { return detail::load_record<P>(view(), i); }
+    P record(std::size_t i) const { return detail::load_record<P>(view(), i); }  ///< Record i, loaded back bit for bit.
 
-    RecordView<P> view() const { return {data_.data(), ids_.size()}; }
+    RecordView<P> view() const { return {data_.data(), ids_.size()}; }  ///< All records, valid until the next add.
 
     /// Closest hit among the block's records with t in (ray.tmin, hit.t or ray.tmax);
     /// `hit` is updated only when a closer hit is found. Uses the batch kernel.

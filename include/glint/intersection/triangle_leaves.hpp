@@ -46,7 +46,7 @@ concept LeafTest = requires(F f, std::uint32_t i) {
 template <TriangleIntersector P>
 class TriangleLeaves {
 public:
-    using T = typename P::scalar_type;
+    using T = typename P::scalar_type;  ///< float or double, P's precision.
 
     /// Appends one leaf of triangles `tris` (non-empty), reported as `ids` (the user's
     /// triangle indices); returns its reference (first, count).
@@ -76,8 +76,8 @@ public:
     std::uint64_t records(std::uint32_t first, std::uint32_t count) const {
         return store_.leaf_records(first, count);
     }
-    std::size_t bytes() const { return store_.bytes(); }
-    const TriangleStore<P>& store() const { return store_; }
+    std::size_t bytes() const { return store_.bytes(); }  ///< Bytes of records, ids and groups (TriangleStore::bytes).
+    const TriangleStore<P>& store() const { return store_; }  ///< The padded store behind the leaves.
 
 private:
     TriangleStore<P> store_;
@@ -101,8 +101,9 @@ template <class T>
 template <TriangleIntersector P, bool Any>
 class LeafQuery {
 public:
-    using T = typename P::scalar_type;
+    using T = typename P::scalar_type;  ///< float or double, P's precision.
 
+    /// Refers to (does not copy) the query's locals: all four must outlive the query.
     [[gnu::always_inline]] LeafQuery(const TriangleLeaves<P>& leaves, Ray<T>& ray, const RayDataOf<P>& world,
                                      StoreHit<T>& hit)
         : leaves_(leaves), ray_(ray), world_(world), hit_(hit) {}

@@ -21,16 +21,30 @@
 
 namespace glint {
 
+/// Wald's projection test (I. Wald, PhD thesis 2004, §7.1) as a TriangleIntersector: 10
+/// record scalars (the plane, two barycentric functions, the axis k), world coordinates.
 template <Scalar T>
 struct Wald {
-    using scalar_type = T;
-    using RayData = detail::PlainRay<T>;
+    using scalar_type = T;                ///< float or double: the record's and the test's precision.
+    using RayData = detail::PlainRay<T>;  ///< The ray as it is: origin, direction, interval.
 
-    T n_u = 0, n_v = 0, n_d = std::numeric_limits<T>::quiet_NaN();
-    T beta_u = 0, beta_v = 0, beta_d = 0;    // beta  = barycentric of v1
-    T gamma_u = 0, gamma_v = 0, gamma_d = 0; // gamma = barycentric of v2
-    T k = 0;  // the dominant axis 0, 1 or 2, as a scalar: a record holds scalars only
+    /// Plane x_k + n_u x_u + n_v x_v = n_d: the normal's u component over its k component.
+    T n_u = 0, n_v = 0, n_d = std::numeric_limits<T>::quiet_NaN();  ///< The plane's offset; NaN for a degenerate triangle (always a miss).
+    /// @var n_v
+    /// The normal's v component over its k component.
 
+    /// beta (barycentric of v1) = beta_u x_u + beta_v x_v + beta_d: coefficient of x_u.
+    T beta_u = 0, beta_v = 0, beta_d = 0;    ///< beta's constant term.
+    /// @var beta_v
+    /// beta's coefficient of x_v.
+
+    /// gamma (barycentric of v2) = gamma_u x_u + gamma_v x_v + gamma_d: coefficient of x_u.
+    T gamma_u = 0, gamma_v = 0, gamma_d = 0; ///< gamma's constant term.
+    /// @var gamma_v
+    /// gamma's coefficient of x_v.
+    T k = 0;  ///< The dominant axis 0, 1 or 2, as a scalar: a record holds scalars only.
+
+    /// The record of triangle (a, b, c), given in double precision; rounded once to T.
     static Wald build(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
         Wald r;
         const Vec3d ec = b - a, eb = c - a;
@@ -51,7 +65,7 @@ struct Wald {
         return r;
     }
 
-    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }
+    static RayData prepare(const Ray<T>& r) { return RayData::from(r); }  ///< Copies the ray's fields; no work.
 
     /// The record's axis k selects the ray's components by selects, not by indexing (blends
     /// in the batch loop, not gathers); bitwise &, not &&, so that the loop vectorizes.

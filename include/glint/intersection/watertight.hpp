@@ -52,19 +52,35 @@ inline double edge_function(double a, double b, double c, double d) {
 }
 }  // namespace detail
 
+/// The watertight test (Woop, Benthin and Wald 2013) as a TriangleIntersector: the record is
+/// the three vertices (9 scalars), world coordinates; edges and vertices are inclusive.
 template <Scalar T>
 struct Watertight {
-    using scalar_type = T;
+    using scalar_type = T;  ///< float or double: the record's precision (edge functions run in double).
 
+    /// The ray's shear, computed once per ray by prepare().
     struct RayData {
-        Vec3<T> o;
-        T okx, oky, okz;  // the origin's coordinates on the axes kx, ky, kz
-        int kx, ky, kz;
-        T sx, sy, sz;
-        T tmin, tmax;
+        Vec3<T> o;        ///< Ray origin, as given.
+        /// The origin's coordinate on axis kx.
+        T okx, oky, okz;  ///< The origin's coordinate on axis kz.
+        /// @var oky
+        /// The origin's coordinate on axis ky.
+
+        /// First axis of the sheared frame: kz + 1 mod 3 (kz + 2 when d[kz] < 0).
+        int kx, ky, kz;   ///< The direction's dominant axis (largest |d|).
+        /// @var ky
+        /// Second axis of the sheared frame: kz + 2 mod 3 (kz + 1 when d[kz] < 0: the swap keeps the winding).
+
+        /// Shear factor d[kx] / d[kz].
+        T sx, sy, sz;     ///< Scale 1 / d[kz], which maps the sheared z to t.
+        /// @var sy
+        /// Shear factor d[ky] / d[kz].
+        T tmin, tmax;     ///< Upper end of the open interval of t.
+        /// @var tmin
+        /// Lower end of the open interval of t.
     };
 
-    Vec3<T> vtx[3]{};  // the vertices
+    Vec3<T> vtx[3]{};  ///< The vertices, frame coordinates; NaN for a degenerate triangle.
 
     /// Stores the vertices as given. A degenerate triangle (|e1 x e2| <= 2^-60 * longest
     /// edge^2, as for the other policies) is stored as NaN vertices, which every comparison
@@ -83,6 +99,8 @@ struct Watertight {
         return r;
     }
 
+    /// The shear of `r`: dominant axis, axis order and factors (Woop et al. 2013); a zero
+    /// direction gives non-finite factors and every test misses.
     static RayData prepare(const Ray<T>& r) {
         RayData d;
         d.o = r.origin;

@@ -43,21 +43,26 @@
 
 namespace glint {
 
+/// One tetrahedron of the mesh, positively oriented (orient3d(v0, v1, v2, v3) > 0).
 struct Tetrahedron {
-    std::array<std::int32_t, 4> v{};          // vertex indices into Delaunay::points()
-    std::array<std::int32_t, 4> neighbour{};  // across the face opposite v[i]; -1 none
+    std::array<std::int32_t, 4> v{};          ///< Vertex indices into Delaunay::points().
+    std::array<std::int32_t, 4> neighbour{};  ///< Across the face opposite v[i]; -1 none.
 };
 
+/// 3D Delaunay tetrahedralization of points in precision T (Bowyer-Watson with exact
+/// predicates; see the file comment).
 template <Scalar T>
 class Delaunay {
 public:
-    static constexpr int super_vertices = 4;
+    static constexpr int super_vertices = 4;  ///< Enclosing vertices, indices 0 ... 3 of points().
 
     Delaunay() = default;
 
     /// Tetrahedralizes `pts` (finite coordinates; throws glint::Error otherwise).
     explicit Delaunay(std::span<const Vec3<T>> pts, std::uint64_t seed = 1) { build(pts, seed); }
 
+    /// Replaces the mesh with the tetrahedralization of `pts`; `seed` drives the randomized
+    /// insertion order. Throws glint::Error for non-finite coordinates or 2^28 points or more.
     void build(std::span<const Vec3<T>> pts, std::uint64_t seed = 1) {
         tets_.clear();
         alive_.clear();
@@ -135,7 +140,7 @@ public:
         }
         return out;
     }
-    std::size_t duplicate_count() const { return duplicates_; }
+    std::size_t duplicate_count() const { return duplicates_; }  ///< Input points skipped as exact duplicates.
 
 private:
     static std::uint32_t spread(std::uint32_t x) {

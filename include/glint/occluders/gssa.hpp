@@ -111,7 +111,10 @@ void gssa_cap_weights(T R, T r, T d, T& wR, T& wr) {
 /// noise 0.0029); Szécsi's printed formula measures 0.031 RMS / 0.085 max on the same data, its
 /// form refitted 0.028 / 0.100; the minimum of the three upper bounds 0.016 / 0.082.
 struct GssaFit {
-    double c0 = 0.0, c1 = 0.0, c2 = 0.0;
+    /// Scale c0 of the exponent.
+    double c0 = 0.0, c1 = 0.0, c2 = 0.0;  ///< Growth of the exponent with rho, c2.
+    /// @var c1
+    /// Power c1 of x.
 };
 inline constexpr GssaFit gssa_default_fit{0.12832, 1.40885, 4.35176};
 

@@ -44,12 +44,15 @@
 
 namespace glint {
 
+/// An occluder sphere, world space.
 template <Scalar T>
 struct Sphere {
-    Vec3<T> centre{0};
-    T radius = 0;
+    Vec3<T> centre{0};  ///< Centre, world coordinates.
+    T radius = 0;       ///< Radius, world units (>= 0).
 };
 
+/// Pair distance of the merge (Szécsi 2009, §5.2.2): d1 = d (centre distance), d2 = d + r - R
+/// (R >= r: how far the smaller sphere reaches out of the larger).
 enum class MergeDistance { d1, d2 };
 
 /// Options of occluder generation. samples = 0 picks max(10000, 4 * triangles) capped at
@@ -57,12 +60,12 @@ enum class MergeDistance { d1, d2 };
 /// probability for isotropic random lines through the mesh's bounding ball equals the
 /// mesh's, measured with calibration_lines lines (see calibrate_radii).
 struct OccluderOptions {
-    std::size_t samples = 0;
-    MergeDistance distance = MergeDistance::d2;
-    GssaModel gssa = GssaModel::fitted;
-    std::uint64_t seed = 1;
-    bool calibrate = true;
-    std::size_t calibration_lines = 20000;
+    std::size_t samples = 0;                     ///< Surface samples; 0: automatic (see above).
+    MergeDistance distance = MergeDistance::d2;  ///< Which pair the merger takes next.
+    GssaModel gssa = GssaModel::fitted;          ///< Area model that gives a merged sphere's radius.
+    std::uint64_t seed = 1;                      ///< Seed of sampling, insertion order and calibration lines.
+    bool calibrate = true;                       ///< Scale radii to match the mesh's hit probability.
+    std::size_t calibration_lines = 20000;       ///< Random lines per hit probability measurement.
 };
 
 /// Circumcentre and radius of a tetrahedron (double; false when degenerate).
@@ -153,6 +156,8 @@ Sphere<T> merge_pair(const Sphere<T>& a, const Sphere<T>& b, GssaModel model = G
 template <Scalar T>
 class SphereMerger {
 public:
+    /// Takes the initial spheres and finds every sphere's closest partner. Throws Error for a
+    /// non-finite centre or radius, or a negative radius.
     SphereMerger(std::vector<Sphere<T>> initial, MergeDistance distance = MergeDistance::d2,
                  GssaModel model = GssaModel::fitted)
         : s_(std::move(initial)), distance_(distance), model_(model) {
@@ -169,8 +174,8 @@ public:
         for (std::size_t i = 0; i < s_.size(); ++i) update_partner(std::int32_t(i));
     }
 
-    std::size_t size() const { return live_; }
-    std::size_t merges() const { return merges_; }
+    std::size_t size() const { return live_; }     ///< Spheres alive now.
+    std::size_t merges() const { return merges_; } ///< Merges done so far.
 
     /// Merges closest pairs until at most `target` spheres remain (target >= 1).
     void reduce_to(std::size_t target) {
@@ -183,6 +188,7 @@ public:
         }
     }
 
+    /// The spheres alive now (a copy, in creation order).
     std::vector<Sphere<T>> spheres() const {
         std::vector<Sphere<T>> out;
         out.reserve(live_);
@@ -191,6 +197,7 @@ public:
         return out;
     }
 
+    /// The merge distance of (a, b) under this merger's MergeDistance (d2: d - |R - r|).
     double pair_distance(const Sphere<T>& a, const Sphere<T>& b) const {
         const double d = glm::length(Vec3d(a.centre) - Vec3d(b.centre));
         return distance_ == MergeDistance::d1 ? d : d - std::abs(double(a.radius) - double(b.radius));

@@ -54,9 +54,12 @@ concept VisibilityPolicy = requires(V v, const Vec3<T>& p) {
 template <RayAccelerator Accel>
 class ShadowRayVisibility {
 public:
-    using T = typename Accel::scalar_type;
+    using T = typename Accel::scalar_type;  ///< Accel's scalar type.
+    /// Keeps a pointer to `accel` (it must outlive this); `epsilon`: offset along n, world
+    /// units, and the fraction of the segment left out before y.
     ShadowRayVisibility(const Accel& accel, T epsilon) : accel_(&accel), eps_(epsilon) {}
-    void set_point(const Vec3<T>& x, const Vec3<T>& n) { x_ = x + eps_ * n; }
+    void set_point(const Vec3<T>& x, const Vec3<T>& n) { x_ = x + eps_ * n; }  ///< Shading point x, its unit normal n.
+    /// Whether no triangle lies between x and y (one any-hit query).
     bool visible(const Vec3<T>& y) const {
         // Ray parameter in units of |y - x|: y itself is on a surface.
         return !accel_->any_hit(Ray<T>{x_, y - x_, T(0), T(1) - eps_});
@@ -68,10 +71,11 @@ private:
     Vec3<T> x_{0};
 };
 
+/// Culling options shared by the sphere visibility policies.
 template <Scalar T>
 struct SphereVisibilityOptions {
-    bool self_shadow_heuristic = true;
-    T self_shadow_factor = T(2);  // Szécsi 2009, §5.3.2: "the double of their radius"
+    bool self_shadow_heuristic = true;  ///< Skip spheres whose centre is nearer x than factor * radius.
+    T self_shadow_factor = T(2);  ///< Multiple of the radius the heuristic uses; Szécsi 2009, §5.3.2: "the double of their radius".
 };
 
 namespace detail {
@@ -107,6 +111,7 @@ inline bool occludes(const Vec3<T>& u, T cos_gamma, T t, const Vec3<T>& l, T q) 
 template <Scalar T>
 class SphereVisibilityLinear {
 public:
+    /// Copies `spheres`. Throws Error for a non-finite centre or radius, or a negative radius.
     explicit SphereVisibilityLinear(std::span<const Sphere<T>> spheres, SphereVisibilityOptions<T> opt = {})
         : s_(spheres.begin(), spheres.end()), opt_(opt) {
         for (const auto& s : s_)
@@ -131,6 +136,7 @@ public:
             ux_[i] = uy_[i] = uz_[i] = cg_[i] = T(0), t_[i] = infinity<T>;
     }
 
+    /// Whether a surviving sphere occludes light y from x; false for y == x. O(active()).
     bool occluded(const Vec3<T>& y) const {
         const Vec3<T> d = y - x_;
         const T q = std::sqrt(glm::dot(d, d));
@@ -147,9 +153,9 @@ public:
         }
         return false;
     }
-    bool visible(const Vec3<T>& y) const { return !occluded(y); }
-    std::size_t active() const { return count_; }
-    std::size_t size() const { return s_.size(); }
+    bool visible(const Vec3<T>& y) const { return !occluded(y); }  ///< Not occluded(y).
+    std::size_t active() const { return count_; }  ///< Spheres left after culling at the current point.
+    std::size_t size() const { return s_.size(); }  ///< Spheres given.
 
 private:
     static constexpr std::size_t block = 16;
@@ -165,6 +171,8 @@ private:
 template <Scalar T>
 class SphereVisibilityKdTree {
 public:
+    /// Copies `spheres` and builds the tree, leaves of at most `leaf_size` spheres (0 means 1).
+    /// Throws Error for a non-finite centre or radius, or a negative radius.
     explicit SphereVisibilityKdTree(std::span<const Sphere<T>> spheres, SphereVisibilityOptions<T> opt = {},
                                     std::size_t leaf_size = 4)
         : s_(spheres.begin(), spheres.end()), opt_(opt) {
@@ -182,6 +190,7 @@ public:
         if (n) build(0, ids, 0, std::max<std::size_t>(leaf_size, 1));
     }
 
+    /// Shading point x, unit normal n; spheres are pre-processed lazily by occluded(). O(1).
     void set_point(const Vec3<T>& x, const Vec3<T>& n) {
         x_ = x;
         n_ = n;
@@ -191,6 +200,8 @@ public:
         }
     }
 
+    /// Whether a sphere occludes light y from x, walking the segment front to back; false for
+    /// y == x. Non-const: caches the views of the spheres it meets for the current point.
     bool occluded(const Vec3<T>& y) {
         if (s_.empty()) return false;
         const Vec3<T> d = y - x_;
@@ -250,9 +261,9 @@ public:
             t1 = e.t1;
         }
     }
-    bool visible(const Vec3<T>& y) { return !occluded(y); }
-    std::size_t size() const { return s_.size(); }
-    std::size_t node_count() const { return nodes_.size(); }
+    bool visible(const Vec3<T>& y) { return !occluded(y); }  ///< Not occluded(y).
+    std::size_t size() const { return s_.size(); }  ///< Spheres given.
+    std::size_t node_count() const { return nodes_.size(); }  ///< Tree nodes, leaves included.
 
 private:
     struct Node {

@@ -30,11 +30,12 @@
 
 namespace glint {
 
+/// Limits of the BIH build (BihBuilder::options); the split rule itself has no parameters.
 struct BihBuildOptions {
-    // At most this many triangles make a leaf. Leaves are tested 8 triangles at a time (SIMD
-    // batches), so leaves larger than Waechter and Keller's 4 pay (docs/history/trees.md).
+    /// At most this many triangles make a leaf. Leaves are tested 8 triangles at a time (SIMD
+    /// batches), so leaves larger than Waechter and Keller's 4 pay (docs/history/trees.md).
     std::uint32_t leaf_size = 16;
-    int max_depth = 56;           // at most 56 (the traversal stack holds 64 entries)
+    int max_depth = 56;           ///< Deepest split level; capped at 56 (the traversal stack holds 64 entries).
 };
 
 namespace detail {
@@ -127,11 +128,13 @@ private:
 /// BIH builder policy (TreeBuilder).
 template <Scalar T>
 struct BihBuilder {
-    using scalar_type = T;
-    using node_type = BihNode<T>;  // traversed in these nodes (tree.hpp)
-    static constexpr TreeKind kind = TreeKind::bih;
-    BihBuildOptions options{};
+    using scalar_type = T;         ///< Precision of the input vertices and planes.
+    using node_type = BihNode<T>;  ///< Traversed in these nodes (tree.hpp).
+    static constexpr TreeKind kind = TreeKind::bih;  ///< Makes BIH trees (two planes per node).
+    BihBuildOptions options{};     ///< Leaf size and depth limit.
 
+    /// Builds the BIH over `tris` (unhittable triangles left out); O(N log N); throws
+    /// nothing but std::bad_alloc.
     BuiltTree<T> build(std::span<const TriangleVertices<T>> tris) const {
         return detail::BihBuild<T>(tris, options).run();
     }

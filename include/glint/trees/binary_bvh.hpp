@@ -35,21 +35,22 @@ enum class WideNodeOrder { depth_first, sibling_blocks };
 
 /// Cost constants and limits of the binned SAH build (docs/trees.md: how they were chosen).
 struct BvhBuildOptions {
-    float traversal_cost = 1.0f;     // C_T, per binary node
-    float intersection_cost = 1.0f;  // C_I, per started leaf block
-    std::uint32_t leaf_block = 8;    // primitives tested together (the batch kernel's width)
-    std::uint32_t max_leaf = 16;     // at most this many primitives per leaf (1 ... 16)
-    std::uint32_t bins = 16;         // centre bins per axis (2 ... 64)
-    unsigned threads = 1;            // build threads; 0: std::thread::hardware_concurrency()
-    WideNodeOrder node_order = WideNodeOrder::depth_first;  // the wide nodes' order in memory
-    float wide_node_cost = 1.0f;     // C_N, per wide node, in the wide collapse (wide_collapse.hpp)
-    // Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
-    // where the best object split's two boxes overlap by more than spatial_alpha times the
-    // root's surface area; references stay at most spatial_budget times the primitives.
+    float traversal_cost = 1.0f;     ///< C_T, per binary node; finite, >= 0.
+    float intersection_cost = 1.0f;  ///< C_I, per started leaf block; finite, > 0.
+    std::uint32_t leaf_block = 8;    ///< Primitives tested together (the batch kernel's width); >= 1.
+    std::uint32_t max_leaf = 16;     ///< At most this many primitives per leaf (1 ... 16).
+    std::uint32_t bins = 16;         ///< Centre bins per axis (2 ... 64).
+    unsigned threads = 1;            ///< Build threads; 0: std::thread::hardware_concurrency().
+    WideNodeOrder node_order = WideNodeOrder::depth_first;  ///< The wide nodes' order in memory.
+    float wide_node_cost = 1.0f;     ///< C_N, per wide node, in the wide collapse (wide_collapse.hpp); finite, >= 0.
+    /// Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
+    /// where the best object split's two boxes overlap by more than spatial_alpha times the
+    /// root's surface area; references stay at most spatial_budget times the primitives.
     bool spatial_splits = false;
-    float spatial_alpha = 1e-5f;
-    float spatial_budget = 1.5f;
+    float spatial_alpha = 1e-5f;     ///< Overlap, as a fraction of the root's area, that tries a spatial split (0 ... 1).
+    float spatial_budget = 1.5f;     ///< Cap on references per primitive over the tree (1 ... 4).
 
+    /// Throws Error naming the first option outside its range (build_binary_bvh calls it).
     void check() const {
         auto bad = [](const std::string& what) { throw Error("BvhBuildOptions: " + what); };
         if (!(traversal_cost >= 0) || !(intersection_cost > 0) || !(wide_node_cost >= 0) ||
@@ -67,6 +68,7 @@ struct BvhBuildOptions {
     }
     /// Leaf blocks started by n primitives: the unit in which the SAH counts C_I.
     std::uint32_t blocks(std::uint32_t n) const { return (n + leaf_block - 1) / leaf_block; }
+    /// Threads the build uses: `threads`, or the hardware's count (at least 1) when it is 0.
     unsigned thread_count() const {
         return threads ? threads : std::max(1u, std::thread::hardware_concurrency());
     }
@@ -74,18 +76,19 @@ struct BvhBuildOptions {
 
 /// One slot of the binary tree. A leaf has right == 0 (slot 0 is the root, never a child).
 struct BinaryBvhNode {
-    AABB<float> box;
-    std::uint32_t begin = 0, count = 0;  // primitive range (a leaf's contents, an inner node's span)
-    std::uint32_t right = 0;             // inner: the right child's slot; the left one is this slot + 1
-    bool leaf() const { return right == 0; }
+    AABB<float> box;                     ///< Bounds of the node's references, world space.
+    /// First index into BinaryBvh::prims of the node's range.
+    std::uint32_t begin = 0, count = 0;  ///< Primitives in the range (a leaf's contents, an inner node's span).
+    std::uint32_t right = 0;             ///< Inner: the right child's slot; the left one is this slot + 1.
+    bool leaf() const { return right == 0; }  ///< Leaf (right == 0), also true for unused slots.
 };
 
 /// The binned SAH tree: `nodes` has 2n - 1 slots for n primitives (unused slots stay
 /// default); `prims` is the primitive order, leaf ranges index it.
 struct BinaryBvh {
-    std::vector<BinaryBvhNode> nodes;
-    std::vector<std::uint32_t> prims;
-    bool empty() const { return prims.empty(); }
+    std::vector<BinaryBvhNode> nodes;  ///< Slots; nodes[0] is the root, empty when no primitive was kept.
+    std::vector<std::uint32_t> prims;  ///< Primitive indices in leaf order (repeated with spatial splits).
+    bool empty() const { return prims.empty(); }  ///< No primitive could be hit (no tree).
 };
 
 /// What spatial splits need from a primitive: clip(p, axis, region) is a box holding every
@@ -99,6 +102,7 @@ concept PrimitiveClipper = requires(const C& clip, std::uint32_t p, int axis, co
 /// No clipping: a primitive known only by its box. Its part in `region` is bounded by
 /// `region` itself, so spatial splits chop boxes (each piece the box's part in the slab).
 struct NoClipper {
+    /// Returns `region`: the piece of any box inside the slab is bounded by it.
     AABB<float> operator()(std::uint32_t, int, const AABB<float>& region) const { return region; }
 };
 

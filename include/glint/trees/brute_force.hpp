@@ -15,11 +15,13 @@
 
 namespace glint {
 
+/// Reference RayAccelerator: tests every ray against every triangle with P's batch kernel,
+/// O(triangles) per ray; the trees are checked against its hits.
 template <TriangleIntersector P>
 class BruteForce {
 public:
-    using scalar_type = typename P::scalar_type;
-    using T = scalar_type;
+    using scalar_type = typename P::scalar_type;  ///< float or double, P's precision.
+    using T = scalar_type;                        ///< Shorthand for scalar_type.
 
     /// All triangles in one block, each in the frame it would have alone
     /// (TriangleStore::add_each): one group in the identity frame; with offset frames (IVM)
@@ -36,7 +38,7 @@ public:
     /// Whether any triangle is hit with t in (ray.tmin, ray.tmax).
     bool any_hit(const Ray<T>& ray) const { return store_.any_hit(all_, ray); }
 
-    const TriangleStore<P>& store() const { return store_; }
+    const TriangleStore<P>& store() const { return store_; }  ///< The triangle records (one block).
 
 private:
     TriangleStore<P> store_;

@@ -46,11 +46,12 @@
 
 namespace glint {
 
+/// SAH constants and depth limit of the kd-tree build (see above); checked by build().
 struct KdBuildOptions {
-    double traversal_cost = 1.0;      // K_T
-    double intersection_cost = 0.07;  // K_I
-    double empty_bonus = 0.1;         // lambda = 1 - empty_bonus for a split with an empty side
-    int max_depth = 0;                // 0: 8 + 1.3 log2 N, at most 56
+    double traversal_cost = 1.0;      ///< K_T, one traversal step; positive and finite.
+    double intersection_cost = 0.07;  ///< K_I, one triangle test in units of K_T; positive and finite.
+    double empty_bonus = 0.1;         ///< lambda = 1 - empty_bonus for a split with an empty side; in [0, 1).
+    int max_depth = 0;                ///< 0: 8 + 1.3 log2 N; always capped at 56; negative throws.
 };
 
 namespace detail {
@@ -327,11 +328,13 @@ private:
 /// SAH kd-tree builder policy (TreeBuilder).
 template <Scalar T>
 struct KdTreeBuilder {
-    using scalar_type = T;
-    using node_type = KdNode<T>;  // traversed in these nodes (tree.hpp)
-    static constexpr TreeKind kind = TreeKind::kd;
-    KdBuildOptions options{};
+    using scalar_type = T;        ///< Precision of the input vertices and planes.
+    using node_type = KdNode<T>;  ///< Traversed in these nodes (tree.hpp).
+    static constexpr TreeKind kind = TreeKind::kd;  ///< Makes kd-trees (one plane per node).
+    KdBuildOptions options{};     ///< SAH constants and depth limit.
 
+    /// Builds the SAH kd-tree over `tris` (unhittable triangles left out), O(N log N).
+    /// Throws Error when `options` lie outside their documented ranges.
     BuiltTree<T> build(std::span<const TriangleVertices<T>> tris) const {
         return detail::KdBuild<T>(tris, options).run();
     }

@@ -53,6 +53,8 @@ inline void check_index(std::size_t i) {
 
 /// Every split node stores its first child's index; children are adjacent.
 struct PointerLayout {
+    /// Encodes `tree` into `out` (replaced), leaf i covering leaf_groups[i]; returns its
+    /// accounting. Throws Error past 2^29 nodes (detail::node_max_index).
     template <class T, class Node>
     static LayoutStats encode(const BuiltTree<T>& tree, std::span<const std::array<std::uint32_t, 2>> leaf_groups,
                               std::vector<Node>& out) {
@@ -65,10 +67,12 @@ struct PointerLayout {
         return s;
     }
 
+    /// Index of split node n's left child (the right one follows it); read from the node.
     template <class Node>
     static std::uint32_t first_child(const Node& n, std::uint32_t, std::uint32_t) {
         return n.child();
     }
+    /// Base of the block holding a node: always 0 (one block, no subtrees).
     static std::uint32_t block_base(std::uint32_t) { return 0; }
 
 private:

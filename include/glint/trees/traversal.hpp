@@ -53,14 +53,16 @@ template <TreeBuilder B, TriangleIntersector P, NodeLayout L>
     requires std::same_as<typename B::scalar_type, typename P::scalar_type>
 class TreeAccelerator {
 public:
-    using scalar_type = typename P::scalar_type;
-    using T = scalar_type;
-    using Node = typename B::node_type;
-    using builder_type = B;
-    using intersector_type = P;
-    using layout_type = L;
-    static constexpr int max_stack = 64;
+    using scalar_type = typename P::scalar_type;  ///< float or double, shared by B and P.
+    using T = scalar_type;                        ///< Shorthand for scalar_type.
+    using Node = typename B::node_type;           ///< Encoded node (KdNode or BihNode).
+    using builder_type = B;                       ///< The TreeBuilder policy.
+    using intersector_type = P;                   ///< The TriangleIntersector policy.
+    using layout_type = L;                        ///< The NodeLayout policy.
+    static constexpr int max_stack = 64;          ///< Traversal stack entries (builders cap depth at 56).
 
+    /// Builds with `builder` over `tris` and encodes the tree. Throws Error when the tree
+    /// needs more than 2^29 nodes or leaf groups, or when B's options are invalid.
     explicit TreeAccelerator(std::span<const TriangleVertices<T>> tris, const B& builder = B{})
         : TreeAccelerator(tris, builder.build(tris)) {}
 
@@ -105,10 +107,10 @@ public:
         return intersect<true>(r, leaf);
     }
 
-    const LayoutStats& stats() const { return stats_; }
-    const TriangleLeaves<P>& leaves() const { return leaves_; }
-    const std::vector<Node>& nodes() const { return nodes_; }
-    const AABB<T>& bounds() const { return bounds_; }
+    const LayoutStats& stats() const { return stats_; }  ///< Node accounting of the encoding.
+    const TriangleLeaves<P>& leaves() const { return leaves_; }  ///< Triangle records of all leaves.
+    const std::vector<Node>& nodes() const { return nodes_; }  ///< Encoded nodes; nodes()[0] is the root.
+    const AABB<T>& bounds() const { return bounds_; }  ///< Box of the hittable triangles (world space).
     /// Node bytes plus triangle-record bytes.
     std::size_t total_bytes() const { return stats_.node_bytes() + leaves_.bytes(); }
 

@@ -41,22 +41,25 @@ enum class TreeKind : std::uint8_t { kd, bih };
 /// - leaf: `prim_begin`, `prim_count` index BuiltTree::prims.
 template <class T>
 struct BuildNode {
-    bool leaf = true;
-    std::uint8_t axis = 0;
-    T plane[2] = {T(0), T(0)};
-    std::uint32_t left = 0, right = 0;  // indices into BuiltTree::nodes
-    std::uint32_t prim_begin = 0, prim_count = 0;
+    bool leaf = true;          ///< True for a leaf (the default), false for a split node.
+    std::uint8_t axis = 0;     ///< Split axis: 0 = x, 1 = y, 2 = z (split nodes only).
+    T plane[2] = {T(0), T(0)}; ///< Split plane(s) on `axis`, world units; kd uses plane[0] only.
+    /// Split nodes: index of the left child in BuiltTree::nodes.
+    std::uint32_t left = 0, right = 0;  ///< Split nodes: index of the right child in BuiltTree::nodes.
+    /// Leaves: first index into BuiltTree::prims.
+    std::uint32_t prim_begin = 0, prim_count = 0;  ///< Leaves: triangles in the leaf (0: empty).
 };
 
 /// The tree as a builder leaves it, independent of the node layout.
 template <class T>
 struct BuiltTree {
-    TreeKind kind = TreeKind::kd;
-    std::vector<BuildNode<T>> nodes;    // nodes[0] is the root
-    std::vector<std::uint32_t> prims;   // leaf contents, original triangle indices
-    AABB<T> bounds;                     // of all (finite) triangles
-    std::size_t triangle_count = 0;     // input triangles, including dropped ones
+    TreeKind kind = TreeKind::kd;       ///< Partitioning scheme; decides the node format.
+    std::vector<BuildNode<T>> nodes;    ///< Depth-first; nodes[0] is the root.
+    std::vector<std::uint32_t> prims;   ///< Leaf contents, original triangle indices.
+    AABB<T> bounds;                     ///< Of all (finite) triangles; empty if none.
+    std::size_t triangle_count = 0;     ///< Input triangles, including dropped ones.
 
+    /// Number of leaves, empty ones included (O(nodes)).
     std::size_t leaf_count() const {
         std::size_t n = 0;
         for (const auto& nd : nodes) n += nd.leaf;
@@ -130,18 +133,18 @@ inline constexpr std::uint32_t node_max_index = (1u << 29) - 1u;
 /// Equal-size node with P planes (1 for kd-trees, 2 for BIHs).
 template <class T, int Planes>
 struct EncodedNode {
-    T plane[Planes];
-    std::uint32_t word;
+    T plane[Planes];     ///< Split: plane position(s); leaf: plane[0]'s bits hold group_begin().
+    std::uint32_t word;  ///< Low bits: axis 0-2 (split), 3 (leaf), 7 (pointer); index or count above.
 
-    bool is_split() const { return (word & 3u) != 3u; }
-    bool is_leaf() const { return (word & 7u) == detail::node_leaf_tag; }
-    bool is_pointer() const { return (word & 7u) == detail::node_pointer_tag; }
-    bool is_empty_leaf() const { return word == detail::node_leaf_tag; }  // leaf of 0 groups
-    int axis() const { return static_cast<int>(word & 3u); }
-    std::uint32_t child() const { return word >> 2; }     // PointerLayout split nodes
-    std::uint32_t target() const { return word >> 3; }    // pointer nodes
-    std::uint32_t group_count() const { return word >> 3; }  // leaves: groups or records
-    std::uint32_t group_begin() const { return detail::unpack_index<T>(plane[0]); }
+    bool is_split() const { return (word & 3u) != 3u; }  ///< Split node (axis() is valid).
+    bool is_leaf() const { return (word & 7u) == detail::node_leaf_tag; }  ///< Leaf, empty or not.
+    bool is_pointer() const { return (word & 7u) == detail::node_pointer_tag; }  ///< Pointer node.
+    bool is_empty_leaf() const { return word == detail::node_leaf_tag; }  ///< Leaf of 0 groups.
+    int axis() const { return static_cast<int>(word & 3u); }  ///< Split nodes: axis 0, 1 or 2.
+    std::uint32_t child() const { return word >> 2; }     ///< PointerLayout split nodes: first child's index.
+    std::uint32_t target() const { return word >> 3; }    ///< Pointer nodes: the node it stands for.
+    std::uint32_t group_count() const { return word >> 3; }  ///< Leaves: groups or records in the range.
+    std::uint32_t group_begin() const { return detail::unpack_index<T>(plane[0]); }  ///< Leaves: first one.
     /// Split nodes: where a ray (origin o and inverse direction inv on the node's axis, neg:
     /// the direction's sign bit there) crosses into the near child's side (tn) and out of the
     /// far child's (tf): one plane gives both for a kd node, two planes for a BIH node.
@@ -151,18 +154,21 @@ struct EncodedNode {
         tf = neg ? tl : tr;
     }
 
+    /// Split node with b's axis and planes; `child` is stored for PointerLayout (< 2^30).
     static EncodedNode split(const BuildNode<T>& b, std::uint32_t child) {
         EncodedNode n{};
         for (int i = 0; i < Planes; ++i) n.plane[i] = b.plane[i];
         n.word = (child << 2) | b.axis;
         return n;
     }
+    /// Leaf over groups [group_begin, group_begin + group_count); count <= detail::node_max_index.
     static EncodedNode leaf(std::uint32_t group_begin, std::uint32_t group_count) {
         EncodedNode n{};
         n.plane[0] = detail::pack_index<T>(group_begin);
         n.word = (group_count << 3) | detail::node_leaf_tag;
         return n;
     }
+    /// Pointer node to node index `target` (<= detail::node_max_index).
     static EncodedNode pointer(std::uint32_t target) {
         EncodedNode n{};
         n.word = (target << 3) | detail::node_pointer_tag;
@@ -179,14 +185,14 @@ static_assert(sizeof(BihNode<float>) == 12, "BIH nodes are 12 bytes for float");
 /// Accounting of an encoded tree (node count, node bytes, wasted slots, bytes per
 /// triangle). `slots` is the allocated array length; every slot is one node in size.
 struct LayoutStats {
-    std::size_t slots = 0;          // allocated nodes (node count)
-    std::size_t split_nodes = 0;
-    std::size_t leaf_nodes = 0;
-    std::size_t pointer_nodes = 0;
-    std::size_t wasted_slots = 0;   // allocated but unused (fragmentation)
-    std::size_t node_size = 0;      // bytes per node
-    std::size_t triangles = 0;      // input triangles
-    std::size_t node_bytes() const { return slots * node_size; }
+    std::size_t slots = 0;          ///< Allocated nodes (node count).
+    std::size_t split_nodes = 0;    ///< Slots holding split nodes.
+    std::size_t leaf_nodes = 0;     ///< Slots holding leaves, empty ones included.
+    std::size_t pointer_nodes = 0;  ///< Slots holding pointer nodes (subtree layouts only).
+    std::size_t wasted_slots = 0;   ///< Allocated but unused (fragmentation).
+    std::size_t node_size = 0;      ///< Bytes per node.
+    std::size_t triangles = 0;      ///< Input triangles.
+    std::size_t node_bytes() const { return slots * node_size; }  ///< Node array size in bytes.
     /// Node memory per input triangle (triangle records are not included: they are the
     /// same for every layout).
     double bytes_per_triangle() const {

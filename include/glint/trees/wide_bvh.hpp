@@ -45,13 +45,16 @@ concept NodeHook = std::invocable<H&>;
 
 /// The default node hook: nothing.
 struct NoNodeHook {
-    void operator()() const noexcept {}
+    void operator()() const noexcept {}  ///< Does nothing; traversal compiles as without a hook.
 };
 
 /// What one or more queries did (for measurements): nodes whose children were tested, and
 /// leaves and records (lanes of padded batches) tested.
 struct WideBvhCounters {
-    std::uint64_t nodes = 0, leaves = 0, records = 0;
+    /// Inner nodes whose children were tested.
+    std::uint64_t nodes = 0, leaves = 0, records = 0;  ///< Records tested, padding lanes included.
+    /// @var leaves
+    /// Leaves whose records were tested.
 };
 
 /// N-wide BVH (N = 4 or 8) over primitive boxes, child boxes stored as B says, nodes
@@ -62,9 +65,9 @@ class WideBvh {
     static_assert(N == 4 || N == 8, "WideBvh: 4- or 8-wide nodes");
 
 public:
-    using Node = std::conditional_t<B == WideBoxes::floats, WideBvhNode<N>, WideBvhQNode<N>>;
-    static constexpr int width = N;
-    static constexpr WideBoxes box_format = B;
+    using Node = std::conditional_t<B == WideBoxes::floats, WideBvhNode<N>, WideBvhQNode<N>>;  ///< Node type B selects.
+    static constexpr int width = N;             ///< Children per node (4 or 8).
+    static constexpr WideBoxes box_format = B;  ///< How child boxes are stored.
     /// Stack entries: a step pushes at most N - 1 more than it pops, so a tree of depth D
     /// needs (N - 1) D + 1; build() refuses deeper trees.
     static constexpr int max_stack = 512;
@@ -89,8 +92,9 @@ public:
 
     /// Primitive order: leaf (first, count) covers prims()[first ... first + count - 1].
     const std::vector<std::uint32_t>& prims() const { return prims_; }
+    /// Nodes in the layout's order, root at 0, cache-line aligned; empty for an empty tree.
     const std::vector<Node, detail::CacheLineAllocator<Node>>& nodes() const { return nodes_; }
-    const WideBvhStats& stats() const { return stats_; }
+    const WideBvhStats& stats() const { return stats_; }  ///< Node count and bytes, depth, leaves, SAH cost.
 
     /// Replaces every leaf's (first, count) by f(first, count) (a pair), e.g. to point
     /// leaves at records laid out in leaf order. Leaves are visited in node order.

@@ -30,6 +30,7 @@ concept WideNodeLayout = requires(std::span<const WideBvhNode<8>> n8, std::span<
 /// The collapse's own order (BvhBuildOptions::node_order: depth first or sibling blocks):
 /// every node stays where it is.
 struct WideBuildOrder {
+    /// The identity permutation over `nodes` (O(n)).
     template <int N>
     static std::vector<std::uint32_t> arrange(std::span<const WideBvhNode<N>> nodes) {
         std::vector<std::uint32_t> at(nodes.size());
@@ -54,6 +55,7 @@ struct WideBuildOrder {
 /// format; node bytes equal the collapse's order (nothing is padded).
 template <std::uint32_t K>
 struct WideCompactSubtrees {
+    /// New index of every node (root stays at 0), units of at most K nodes as above; O(n).
     template <int N>
     static std::vector<std::uint32_t> arrange(std::span<const WideBvhNode<N>> nodes) {
         static_assert(K >= std::uint32_t(N), "WideCompactSubtrees: a unit holds at least one sibling block");

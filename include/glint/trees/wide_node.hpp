@@ -25,8 +25,8 @@ namespace glint {
 /// inner node's index or a leaf reference (wide_leaf_*).
 template <int N>
 struct alignas(N * 4) WideBvhNode {
-    float bounds[6][N];
-    std::uint32_t child[N];
+    float bounds[6][N];      ///< Child box planes, world space: row 2a low, 2a + 1 high on axis a.
+    std::uint32_t child[N];  ///< Inner node index, leaf reference, or all ones for an unused child.
 };
 
 /// How a wide node stores its child boxes: as floats, or quantized to 8 bits per plane
@@ -42,11 +42,11 @@ enum class WideBoxes { floats, quantized };
 /// are in use. 96 bytes for N = 8 (two cache lines), 64 for N = 4.
 template <int N>
 struct alignas(32) WideBvhQNode {
-    float origin[3];
-    std::uint8_t exp[3];
-    std::uint8_t count;
-    std::uint8_t q[6][N];
-    std::uint32_t child[N];
+    float origin[3];         ///< Low corner of the used children's union (q = 0), world space.
+    std::uint8_t exp[3];     ///< Per axis, the exponent bits of the power-of-two step s_a.
+    std::uint8_t count;      ///< Children in use, 0 ... N; the rest are unused.
+    std::uint8_t q[6][N];    ///< Child planes in steps from origin: row 2a low, 2a + 1 high.
+    std::uint32_t child[N];  ///< Inner node index, leaf reference, or all ones for an unused child.
 };
 
 namespace detail {
@@ -142,10 +142,13 @@ void wide_store(WideNodes<N>&& wide, std::vector<WideBvhQNode<N>, CacheLineAlloc
 
 /// Accounting of a wide BVH (node count and bytes, depth, leaves).
 struct WideBvhStats {
-    std::size_t nodes = 0, leaves = 0, node_bytes = 0;
-    std::uint32_t depth = 0;  // wide levels on the longest path, leaves included
-    // The collapse's SAH cost per ray entering the root's box (WideCollapse) with the float
-    // boxes (quantized ones round them outward); 0 for a one-leaf tree or a root box of no area.
+    /// Wide nodes in the tree.
+    std::size_t nodes = 0, leaves = 0, node_bytes = 0;  ///< Bytes of the node array.
+    /// @var leaves
+    /// Leaf references in the child words (each 1 ... 16 primitives).
+    std::uint32_t depth = 0;  ///< Wide levels on the longest path, leaves included (0: empty tree).
+    /// The collapse's SAH cost per ray entering the root's box (WideCollapse) with the float
+    /// boxes (quantized ones round them outward); 0 for a one-leaf tree or a root box of no area.
     float sah_cost = 0;
 };
 
