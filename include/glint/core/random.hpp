@@ -22,8 +22,11 @@ constexpr std::uint64_t mix_bits(std::uint64_t v) {
 
 }  // namespace detail
 
+/// PCG32 generator (O'Neill 2014): 64-bit state, 32-bit outputs, period 2^64 per stream.
+/// Cheap to copy; one per thread or per path. Satisfies std::uniform_random_bit_generator.
 class Pcg32 {
 public:
+    /// Type of one raw output.
     using result_type = std::uint32_t;
 
     /// `seed` picks the starting point, `stream` one of 2^63 independent sequences.
@@ -32,6 +35,8 @@ public:
         seed_with(seed, stream);
     }
 
+    /// Restarts the generator as Pcg32(seed, stream) would. Related seeds give dependent
+    /// sequences; use hashed() for seeds derived from indices.
     constexpr void seed_with(std::uint64_t seed, std::uint64_t stream) {
         state_ = 0u;
         inc_ = (stream << 1u) | 1u;
@@ -49,6 +54,7 @@ public:
         return Pcg32(detail::mix_bits(seed ^ s), detail::mix_bits(s + 0x9e3779b97f4a7c15ULL));
     }
 
+    /// Next raw output, uniform over all 2^32 values; advances the state by one step.
     constexpr std::uint32_t next_u32() {
         const std::uint64_t old = state_;
         state_ = old * 6364136223846793005ULL + inc_;
@@ -57,6 +63,7 @@ public:
         return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
     }
 
+    /// 64 uniform bits from two next_u32() calls (first call in the high half).
     constexpr std::uint64_t next_u64() {
         const std::uint64_t hi = next_u32();
         return (hi << 32) | next_u32();
@@ -87,8 +94,11 @@ public:
     }
 
     // UniformRandomBitGenerator interface, so <random> distributions accept it.
+    /// Smallest output, 0.
     static constexpr result_type min() { return 0; }
+    /// Largest output, 2^32 - 1.
     static constexpr result_type max() { return 0xffffffffu; }
+    /// next_u32(), so that `<random>` distributions and std::shuffle accept a Pcg32.
     constexpr result_type operator()() { return next_u32(); }
 
 private:

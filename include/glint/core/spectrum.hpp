@@ -14,19 +14,30 @@
 
 namespace glint {
 
+/// N samples of a spectral quantity of scalar type T (radiance, albedo, throughput), with
+/// elementwise arithmetic against spectra and scalars (+, -, *, / and their compound forms;
+/// division by a zero band gives inf or NaN as for T). Rgb<T> is N = 3.
 template <class T, std::size_t N>
 struct Spectrum {
     static_assert(N > 0, "a spectrum needs at least one band");
+    /// Number of bands, N.
     static constexpr std::size_t size = N;
+    /// The band values, in band order (R, G, B for Rgb); zero-initialized by default.
     std::array<T, N> v{};
 
+    /// All bands zero.
     constexpr Spectrum() = default;
+    /// Every band set to `s` (a grey spectrum).
     constexpr explicit Spectrum(T s) { v.fill(s); }
+    /// One value per band, in order, each converted to T: Rgb<float>(r, g, b). Needs exactly N
+    /// arguments and N > 1 (one argument is the grey constructor).
     template <class... U>
         requires(sizeof...(U) == N && N > 1)
     constexpr Spectrum(U... x) : v{static_cast<T>(x)...} {}
 
+    /// Band i, unchecked: 0 <= i < N.
     constexpr T& operator[](std::size_t i) { return v[i]; }
+    /// Read-only band i, unchecked: 0 <= i < N.
     constexpr const T& operator[](std::size_t i) const { return v[i]; }
 
 #define GLINT_SPECTRUM_OP(op)                                                          \
@@ -51,20 +62,28 @@ struct Spectrum {
     GLINT_SPECTRUM_OP(/)
 #undef GLINT_SPECTRUM_OP
 
+    /// Every band negated.
     constexpr Spectrum operator-() const { return T(0) - *this; }
+    /// Exact band-by-band equality (no tolerance; a NaN band is unequal to everything).
     friend constexpr bool operator==(const Spectrum&, const Spectrum&) = default;
 
+    /// Largest band value.
     constexpr T max() const { return *std::max_element(v.begin(), v.end()); }
+    /// Smallest band value.
     constexpr T min() const { return *std::min_element(v.begin(), v.end()); }
+    /// Sum of the band values.
     constexpr T sum() const {
         T s = 0;
         for (T x : v) s += x;
         return s;
     }
+    /// Average band value, sum() / N (unweighted, unlike luminance()).
     constexpr T mean() const { return sum() / T(N); }
+    /// True when every band is exactly zero (e.g. a path whose throughput died).
     constexpr bool is_zero() const {
         return std::all_of(v.begin(), v.end(), [](T x) { return x == T(0); });
     }
+    /// True when no band is infinite or NaN; the check renderers run before accumulating.
     bool is_finite() const {
         return std::all_of(v.begin(), v.end(), [](T x) { return std::isfinite(x); });
     }
@@ -100,6 +119,7 @@ constexpr Spectrum<T, N> min(const Spectrum<T, N>& a, const Spectrum<T, N>& b) {
     return r;
 }
 
+/// Three-band red, green, blue spectrum, the one glint's renderers and image writers use.
 template <class T> using Rgb = Spectrum<T, 3>;
 
 }  // namespace glint

@@ -63,17 +63,20 @@ namespace glint {
 
 /// How glTF's quantities become glint's (see the file comment).
 struct GltfOptions {
-    double watts_per_lumen = 1.0 / 683.0;  // light intensity: candela to W/sr
-    double emission_scale = 1.0;           // emissive radiance factor
-    double mirror_roughness = 0.1;         // metals smoother than this are mirrors
-    double diffuse_roughness = 0.5;        // dielectrics at least this rough are Lambertian
+    double watts_per_lumen = 1.0 / 683.0;  ///< light intensity: candela to W/sr
+    double emission_scale = 1.0;           ///< emissive radiance factor
+    double mirror_roughness = 0.1;         ///< metals smoother than this are mirrors
+    double diffuse_roughness = 0.5;        ///< dielectrics at least this rough are Lambertian
 };
 
+/// What read_gltf() returns: the scene and what the file says beyond it.
 template <Scalar T>
 struct GltfScene {
-    Scene<T> scene;
-    bool has_camera = false;  // false: scene.camera is the default one
-    T aspect = T(0);          // the camera's aspectRatio (width / height), 0 if not given
+    Scene<T> scene;  ///< Geometry, materials, area and punctual lights, and the camera if any.
+    bool has_camera = false;  ///< false: scene.camera is the default one
+    T aspect = T(0);          ///< the camera's aspectRatio (width / height), 0 if not given
+    /// Everything read but skipped or approximated (textures, directional lights, ...), one
+    /// message per item naming the file; empty when the scene is exact.
     std::vector<std::string> warnings;
 };
 

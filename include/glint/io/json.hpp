@@ -17,16 +17,21 @@
 
 namespace glint {
 
+/// One JSON value and, for arrays and objects, its children. Only the field matching `kind`
+/// is meaningful; the others keep their defaults.
 struct JsonValue {
+    /// The JSON type of a value.
     enum class Kind : std::uint8_t { null, boolean, number, string, array, object };
-    Kind kind = Kind::null;
-    bool boolean = false;
-    double number = 0;
-    std::string string;
-    std::vector<JsonValue> items;                            // array
-    std::vector<std::string> keys;                           // object, in file order,
-    std::vector<JsonValue> members;                          // with its members' values
-    int line = 0;
+    Kind kind = Kind::null;  ///< Which of the fields below holds the value.
+    bool boolean = false;    ///< The value of `true` or `false` (Kind::boolean).
+    double number = 0;       ///< The value of a number, as a double (Kind::number).
+    std::string string;      ///< A string's text, escapes decoded to UTF-8 (Kind::string).
+    std::vector<JsonValue> items;                            ///< array elements, in file order
+    /// Object member names, in file order (duplicates kept; find() returns the first).
+    std::vector<std::string> keys;
+    /// Object member values, members[i] being the value of keys[i].
+    std::vector<JsonValue> members;
+    int line = 0;  ///< 1-based line of the value's first character, for error messages.
 
     /// The member `key` of an object, or nullptr.
     const JsonValue* find(std::string_view key) const {

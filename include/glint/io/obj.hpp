@@ -42,20 +42,33 @@
 
 namespace glint {
 
+/// One MTL material as read, validated (see the header comment) but not yet interpreted:
+/// the caller maps it to a glint Material (examples/render.cpp: illum 5 mirror, 7 glass,
+/// Ks > 0 and Ns > 0 glossy, else Lambertian). The defaults are the fallback material's.
 struct ObjMaterial {
-    std::string name = "default";
+    std::string name = "default";  ///< The `newmtl` name; "default" for the fallback material.
+    /// Diffuse reflectance (Kd), each band in [0, 1] after clamping; mid grey by default.
     Rgb<float> kd{0.5f}, ks{0.0f}, ke{0.0f};
-    float ns = 0.0f;   // Phong exponent
-    float ni = 1.0f;   // index of refraction
-    int illum = 2;
+    /// \var ks
+    /// Specular reflectance (Ks), each band in [0, 1] after clamping; none by default.
+    /// \var ke
+    /// Emitted radiance (Ke), each band >= 0; non-zero makes the material's faces area lights.
+    float ns = 0.0f;   ///< Phong exponent (Ns), >= 0.
+    float ni = 1.0f;   ///< index of refraction (Ni), > 0.
+    int illum = 2;     ///< MTL illumination model (illum), passed on unchecked; 2 in the default.
 };
 
+/// A triangle soup loaded by load_obj(): fan-triangulated faces with, per triangle, its
+/// material and source line.
 struct ObjMesh {
+    /// Vertex positions of each triangle, in file units and face winding order.
     std::vector<TriangleVertices<float>> triangles;
-    std::vector<std::uint32_t> material;  // per triangle, index into materials
-    std::vector<std::uint32_t> line;      // per triangle, the OBJ line of its face (1-based)
+    std::vector<std::uint32_t> material;  ///< per triangle, index into materials
+    std::vector<std::uint32_t> line;      ///< per triangle, the OBJ line of its face (1-based)
+    /// The MTL materials in file order, then the default grey material (always last, used by
+    /// faces without a known material).
     std::vector<ObjMaterial> materials;
-    std::vector<std::string> warnings;    // missing MTL files, clamped reflectances, ...
+    std::vector<std::string> warnings;    ///< missing MTL files, clamped reflectances, ...
 };
 
 namespace detail {

@@ -27,8 +27,12 @@ namespace glint {
 
 /// Image and tracer settings that the exported scene is rendered with.
 struct SceneJsonView {
+    /// Image width in pixels, > 0 (write_scene_json throws otherwise); the writer also stores
+    /// width / height as the camera's aspect.
     int width = 256, height = 256;
-    int max_depth = 64;
+    /// \var height
+    /// Image height in pixels, > 0 (write_scene_json throws otherwise).
+    int max_depth = 64;  ///< Cap on a walk's vertices (PathTracerSettings::max_depth), > 0.
 };
 
 namespace detail {

@@ -36,8 +36,8 @@ namespace glint {
 /// A scene file: the scene and the image and tracer settings it was exported with.
 template <Scalar T>
 struct SceneFile {
-    Scene<T> scene;
-    SceneJsonView view;
+    Scene<T> scene;      ///< Geometry, materials, lights and camera, as written.
+    SceneJsonView view;  ///< Image size and vertex cap the scene was exported with.
 };
 
 namespace detail {

@@ -26,12 +26,18 @@ using DefaultAccel = MeshBvh<MollerTrumbore<float>, 8>;
 /// Any accelerator behind a virtual call per ray (a RayAccelerator).
 class AnyAccel {
 public:
+    /// The accelerators behind AnyAccel all trace float rays.
     using scalar_type = float;
     virtual ~AnyAccel() = default;
+    /// The closest hit in (ray.tmin, ray.tmax), stored in `hit`; false on a miss.
+    /// Thread-safe: the tree is read-only.
     virtual bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit) const = 0;
+    /// Whether anything lies in (ray.tmin, ray.tmax): the shadow-ray query, which may stop at
+    /// the first hit found.
     virtual bool any_hit(const Ray<float>& ray) const = 0;
 };
 
+/// A built accelerator: the default BVH as its own type, or any other behind AnyAccel.
 using AcceleratorChoice = std::variant<std::unique_ptr<const DefaultAccel>, std::unique_ptr<const AnyAccel>>;
 
 namespace detail {

@@ -30,8 +30,14 @@
 namespace glint {
 
 template <Scalar T>
+/// The BRDF of a Lambertian or glossy Material seen from one direction, in the local shading
+/// frame (z = normal): a MultiLobeBrdf of one lobe (Lambertian) or two (plus Phong), as the
+/// header comment defines them. Cheap to build per shading point; specular materials use
+/// specular_scatter instead.
 class SurfaceBrdf {
 public:
+    /// The BRDF of `m` (its kind must be lambertian or glossy) for the unit direction `wo_local`
+    /// towards the viewer, in the shading frame (wo_local.z > 0 on the visible side).
     [[gnu::always_inline]] SurfaceBrdf(const Material<T>& m, const Vec3<T>& wo_local)
         : kd_(m.kd), ks_(m.ks), n_(m.exponent), wo_(wo_local),
           lobes_(m.kind == MaterialKind::glossy ? 2 : 1) {
@@ -39,14 +45,20 @@ public:
         if (lobes_ > 1) orthonormal_basis(r_, rb1_, rb2_);  // only the Phong lobe samples about r
     }
 
+    /// Number of lobes: 2 for a glossy material (Lambertian + Phong), else 1.
     std::size_t lobe_count() const { return lobes_; }
+    /// Selection weight of lobe i for the roulette: kd for lobe 0, ks for lobe 1.
     Rgb<T> albedo(std::size_t i) const { return i == 0 ? kd_ : ks_; }
 
+    /// A local direction drawn from lobe i's density pdf(i, ·) with the uniform pair u in
+    /// [0, 1)^2; a Phong sample may lie below the horizon (then eval gives 0).
     Vec3<T> sample(std::size_t i, const Vec2<T>& u) const {
         if (i == 0) return square_to_cosine_hemisphere(u);
         const Vec3<T> l = square_to_cosine_power_hemisphere(u, n_);
         return rb1_ * l.x + rb2_ * l.y + r_ * l.z;
     }
+    /// Solid-angle density (1/sr) with which sample(i, ·) draws the unit local direction wi;
+    /// 0 outside the lobe's hemisphere.
     T pdf(std::size_t i, const Vec3<T>& wi) const {
         if (i == 0) return wi.z > T(0) ? wi.z / pi<T> : T(0);
         const T c = glm::dot(wi, r_);
@@ -92,11 +104,15 @@ public:
         const T p0 = lobe0_probability();
         return p0 < T(1) ? p0 * pdf(0, wi) + (T(1) - p0) * pdf(1, wi) : pdf(0, wi);
     }
+    /// True for a Lambertian material (no Phong lobe).
     bool diffuse_only() const { return lobes_ == 1; }
+    /// Diffuse reflectance of the Lambertian lobe (f = kd / pi).
     const Rgb<T>& kd() const { return kd_; }
     /// The Phong lobe's ks, exponent and mirror direction (local): what a bound on f needs.
     const Rgb<T>& ks() const { return ks_; }
+    /// Phong exponent n of lobe 1 (meaningless when diffuse_only()).
     T exponent() const { return n_; }
+    /// Unit mirror direction of wo about the normal in the local frame, the Phong lobe's axis.
     const Vec3<T>& mirror() const { return r_; }
 
 private:

@@ -15,11 +15,13 @@
 
 namespace glint {
 
+/// One entry of a choice table: a name a user types, its one-line description, and what
+/// builds the chosen thing. Tables are static arrays, so the strings are literals.
 template <class Make>
 struct Choice {
-    std::string_view name;
-    std::string_view help;
-    Make make;
+    std::string_view name;  ///< What the user types (a command-line value), unique in its table.
+    std::string_view help;  ///< One line for the usage text: what the choice is and costs.
+    Make make;              ///< The chosen value, or a function that builds it.
 };
 
 /// The table's names, "a, b, c".

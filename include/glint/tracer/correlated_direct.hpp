@@ -45,34 +45,92 @@ enum class DirectEstimator { importance, correlated, combined };
 /// eq. 3.3's statistical estimate, or the fractional visibility of the light samples.
 enum class LambdaSource { statistical, visibility };
 
+/// The direct-lighting policy of Szécsi 2009, §3.2 (see the header comment): K correlated
+/// samples per area light and vertex, with per-pixel statistics that finish() turns into the
+/// film's pooled estimate and its "lambda" layer. Read-only during rendering; the per-pixel
+/// state lives in the renderer's pixel_state array.
 template <Scalar T = float>
 class CorrelatedDirect {
 public:
+    /// Per-band double-precision sums (pixel_state accumulates many samples).
     using D3 = Spectrum<double, 3>;
 
     /// The primary vertex's quantities of one pixel sample.
     struct vertex_record {
-        Rgb<T> a{T(0)}, b{T(0)};    // kept (pooled) parts: a = sum mean f/p, b = sum (J - mean g/p)
-        Rgb<T> fg{T(0)}, gg{T(0)};  // within-vertex co-moments
-        T lambda = std::numeric_limits<T>::quiet_NaN();  // mean per-vertex lambda over the lights
-        T visible = 0, traced = 0;  // shadow rays that reached a light, shadow rays traced
+        /// Kept (pooled) part a = sum over the area lights of mean f/p, per band.
+        Rgb<T> a{T(0)}, b{T(0)};
+        /// \var b
+        /// Kept (pooled) part b = sum over the area lights of (J - mean g/p), per band.
+
+        /// Within-vertex co-moment of f/p and g/p, summed over the area lights (lambda's
+        /// numerator).
+        Rgb<T> fg{T(0)}, gg{T(0)};
+        /// \var gg
+        /// Within-vertex second moment of g/p about its mean, summed over the area lights
+        /// (lambda's denominator).
+
+        T lambda = std::numeric_limits<T>::quiet_NaN();  ///< mean per-vertex lambda over the lights
+        /// Shadow rays that reached a light at this vertex.
+        T visible = 0, traced = 0;
+        /// \var traced
+        /// Shadow rays traced at this vertex (those towards samples with G > 0).
     };
     /// Per-pixel sums over its samples (X: the sample's radiance without the kept parts).
+    /// Samples with a non-finite X, a or b add to n but not to the per-band sums.
     struct pixel_state {
+        /// Sum of X, per band.
         D3 x{0.0}, a{0.0}, b{0.0}, xx{0.0}, aa{0.0}, bb{0.0}, xa{0.0}, xb{0.0}, ab{0.0}, fg{0.0}, gg{0.0};
+        /// \var a
+        /// Sum of the records' a, per band.
+        /// \var b
+        /// Sum of the records' b, per band.
+        /// \var xx
+        /// Sum of X^2, per band.
+        /// \var aa
+        /// Sum of a^2, per band.
+        /// \var bb
+        /// Sum of b^2, per band.
+        /// \var xa
+        /// Sum of X a, per band.
+        /// \var xb
+        /// Sum of X b, per band.
+        /// \var ab
+        /// Sum of a b, per band.
+        /// \var fg
+        /// Sum of the records' fg co-moments, per band.
+        /// \var gg
+        /// Sum of the records' gg moments, per band.
+
+        /// Sum of the samples' per-vertex lambdas (samples whose lambda is not NaN).
         double lambda_sum = 0, visible = 0, traced = 0;
+        /// \var visible
+        /// Shadow rays that reached a light, over the pixel's primary vertices.
+        /// \var traced
+        /// Shadow rays traced, over the pixel's primary vertices.
+
+        /// Samples counted in lambda_sum.
         int lambda_count = 0, n = 0;
+        /// \var n
+        /// Pixel samples recorded.
     };
 
+    /// The policy for `scene`'s area and point lights (copied), taking s.light_samples (clamped
+    /// to 1 .. 64) samples per area light and vertex; pools lambda over
+    /// s.lambda_filter_radius when the estimator is combined and the radius is >= 0.
     CorrelatedDirect(const Scene<T>& scene, const PathTracerSettings<T>& s, DirectEstimator estimator = DirectEstimator::combined,
                      LambdaSource source = LambdaSource::statistical)
         : lights_(scene), k_(std::size_t(std::clamp(s.light_samples, 1, 64))), estimator_(estimator), source_(source),
           radius_(s.lambda_filter_radius),
           pooled_(estimator == DirectEstimator::combined && s.lambda_filter_radius >= 0 && !lights_.empty()) {}
 
+    /// The estimator fixed at construction.
     DirectEstimator estimator() const { return estimator_; }
+    /// Where the combined estimator's lambda comes from.
     LambdaSource lambda_source() const { return source_; }
 
+    /// Direct light at sp: point lights by one shadow ray each, every area light by K samples
+    /// (K 2D numbers and up to K shadow rays per light). At a primary vertex with pooling,
+    /// the area lights' a and b go into `rec` instead of the result.
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record* rec) const {
@@ -117,6 +175,8 @@ public:
         return from.lights_sampled ? T(0) : T(1);
     }
 
+    /// Adds one pixel sample (primary record `rec`, radiance L without the kept parts) to the
+    /// pixel's sums `st`.
     void record(pixel_state& st, const vertex_record& rec, const Rgb<T>& L) const {
         ++st.n;
         if (!std::isnan(rec.lambda)) {

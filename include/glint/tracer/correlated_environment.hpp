@@ -53,28 +53,45 @@
 
 namespace glint {
 
+/// How CorrelatedEnvironment samples: its cells, samples per vertex and estimator. The
+/// constructor checks the ranges below and throws glint::Error outside them.
 struct CorrelatedEnvironmentSettings {
-    int n_phi = 8, n_theta = 4;  // world-fixed cells over the sphere (at most 128)
+    /// Cells in azimuth of the world-fixed SphereCells grid; n_phi * n_theta <= 128.
+    int n_phi = 8, n_theta = 4;
+    /// \var n_theta
+    /// Cells in polar angle (equal solid angle per cell); n_phi * n_theta <= 128.
+
     /// K directions per vertex from the map's importance (1 .. 64); lambda_-k is estimated
     /// from K - 1 of them (Szécsi 2009's figures take 10-20 samples per cell).
     int samples = 16;
+    /// importance, correlated or combined, as in the header comment (default: combined).
     DirectEstimator estimator = DirectEstimator::combined;
     /// One main part in every cell (eq. 3.6 falls back to eq. 3.5 where the tangent plane cuts
     /// the cell), or none: the choice per cell and vertex.
     std::optional<EnvironmentMainPart> main_part;
 };
 
+/// The environment-lighting policy of Szécsi 2009, §3.3 (see the header comment): an
+/// EnvironmentLighting that estimates the map's reflected radiance at each vertex with K
+/// correlated samples. Needs a scene with an environment map; read-only after construction.
 template <Scalar T = float>
 class CorrelatedEnvironment {
 public:
+    /// Most cells, n_phi * n_theta (per-vertex state lives in stack arrays of this size).
     static constexpr std::size_t max_cells = 128, max_samples = 64;
+    /// \var max_samples
+    /// Most directions per vertex (CorrelatedEnvironmentSettings::samples).
+
 
     /// A cell's main part at one vertex: g(w) = L(w) weight (eq. 3.5) or weight (n . w) (eq. 3.6).
     struct CellPart {
-        EnvironmentMainPart part = EnvironmentMainPart::radiance;
-        Rgb<T> weight{T(0)};
+        EnvironmentMainPart part = EnvironmentMainPart::radiance;  ///< Which of eqs. 3.5 and 3.6.
+        Rgb<T> weight{T(0)};  ///< c_d for eq. 3.5, L~_d fr~ for eq. 3.6.
     };
 
+    /// The policy for `scene`'s environment map; precomputes each cell's average radiance
+    /// and its variance from the map's pixels. Throws glint::Error when the scene has no map
+    /// or `s` is out of range.
     CorrelatedEnvironment(const Scene<T>& scene, const CorrelatedEnvironmentSettings& s = {})
         : env_(scene.environment ? &*scene.environment : nullptr), cells_(s.n_phi, s.n_theta, false), settings_(s) {
         if (!env_) throw Error("glint::CorrelatedEnvironment: the scene '" + scene.name + "' has no environment map");
@@ -85,9 +102,14 @@ public:
         precompute_cells();
     }
 
+    /// The settings it was built with.
     const CorrelatedEnvironmentSettings& settings() const { return settings_; }
+    /// The world-fixed cells Omega_d (pole on the map's up axis).
     const SphereCells<T>& cells() const { return cells_; }
 
+    /// Radiance the environment reflects at `sp` towards its viewer, by the configured
+    /// estimator over K map samples (K 2D numbers from `sampler`, K shadow rays through
+    /// `queries`).
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries) const {

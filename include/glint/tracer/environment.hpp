@@ -21,8 +21,14 @@
 namespace glint {
 
 template <Scalar T>
+/// Radiance arriving from infinitely far away, by direction: a latitude-longitude RGB map
+/// (layout in the header comment) with luminance-proportional importance sampling. Immutable
+/// after construction, so one map serves all threads.
 class EnvironmentMap {
 public:
+    /// A map over `image` (radiance per pixel, W/(m^2 sr) per band); builds the sampling tables
+    /// in O(width * height). Throws glint::Error for an empty or all-black image or a negative
+    /// or non-finite pixel.
     explicit EnvironmentMap(Image<Rgb<float>> image) : image_(std::move(image)) {
         const int w = image_.width, h = image_.height;
         if (w < 1 || h < 1) throw Error("EnvironmentMap: empty image");
@@ -41,8 +47,11 @@ public:
         if (!(marginal_[std::size_t(h)] > 0)) throw Error("EnvironmentMap: the map is black");
     }
 
+    /// The radiance image the map was built from.
     const Image<Rgb<float>>& image() const { return image_; }
 
+    /// Radiance arriving from direction d (any length; the value of the pixel d falls in,
+    /// piecewise constant, no filtering).
     Rgb<T> eval(const Vec3<T>& d) const {
         int x, y;
         pixel_of(d, x, y);
@@ -85,10 +94,11 @@ public:
     /// (0 <= phi0 <= phi1 <= 2 pi), exact for the piecewise-constant map: each pixel counts with
     /// the solid angle it shares with the region, (phi overlap) x (cos(theta) overlap).
     struct RegionIntegrals {
-        Rgb<double> radiance{0.0};     // integral of L dw
-        double luminance_squared = 0;  // integral of luminance(L)^2 dw
-        double solid_angle = 0;
+        Rgb<double> radiance{0.0};     ///< integral of L dw
+        double luminance_squared = 0;  ///< integral of luminance(L)^2 dw
+        double solid_angle = 0;        ///< The region's solid angle in sr (integral of dw).
     };
+    /// The RegionIntegrals of the region given above; cost linear in the pixels it overlaps.
     RegionIntegrals integrate(double phi0, double phi1, double cos_lo, double cos_hi) const {
         const int w = image_.width, h = image_.height;
         RegionIntegrals out;

@@ -31,15 +31,15 @@ namespace glint {
 /// What a light walk reports at a non-specular hit.
 template <Scalar T>
 struct LightWalkVertex {
-    Vec3<T> x;                    // hit point
-    Vec3<T> n;                    // geometric normal on the side the walk arrived from
-    Vec3<T> direction;            // unit direction the walk arrived in (towards the surface)
-    Rgb<T> power;                 // power arriving at x
-    const Material<T>* material;  // the hit's material (not specular)
-    std::uint32_t triangle;       // the scene triangle hit
-    int depth;                    // scattering vertices before this one (first_depth at the first hit)
-    bool first;                   // no non-specular vertex before this one on the walk
-    bool via_specular;            // a mirror or dielectric lies between the walk's start and x
+    Vec3<T> x;                    ///< hit point
+    Vec3<T> n;                    ///< geometric normal on the side the walk arrived from
+    Vec3<T> direction;            ///< unit direction the walk arrived in (towards the surface)
+    Rgb<T> power;                 ///< power arriving at x
+    const Material<T>* material;  ///< the hit's material (not specular)
+    std::uint32_t triangle;       ///< the scene triangle hit
+    int depth;                    ///< scattering vertices before this one (first_depth at the first hit)
+    bool first;                   ///< no non-specular vertex before this one on the walk
+    bool via_specular;            ///< a mirror or dielectric lies between the walk's start and x
 };
 
 namespace detail {

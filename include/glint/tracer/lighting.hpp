@@ -77,8 +77,10 @@ template <Scalar T>
 struct NoPixelStatistics {
     struct pixel_state {};
     struct vertex_record {};
+    /// Keeps nothing (DirectLighting's per-sample hook).
     void record(pixel_state&, const vertex_record&, const Rgb<T>&) const {}
     template <class F>
+    /// Adds nothing to the film (DirectLighting's end-of-render hook).
     void finish(F&, std::span<const pixel_state>) const {}
 };
 
@@ -94,8 +96,11 @@ T balance_weight(T a, T b) {
 template <Scalar T>
 class SceneLights {
 public:
+    /// An emitter index with the probability it was picked with.
     using Pick = LightPick<T>;
 
+    /// The emitters of `scene`, with the power CDF pick() draws from; O(lights). Keeps copies,
+    /// not references, of the lights.
     explicit SceneLights(const Scene<T>& scene) : points_(scene.point_lights) {
         for (const auto& l : scene.area_lights) {
             lights_.emplace_back(std::span<const Vec3<T>>(l.vertices), l.emission);
@@ -113,6 +118,7 @@ public:
     const std::vector<PointLight<T>>& point_lights() const { return points_; }
     /// No area lights (point lights are not sampled by every policy).
     bool empty() const { return lights_.empty(); }
+    /// Number of emitters, area and point lights together.
     std::size_t emitters() const { return cdf_.size(); }
 
     /// The emitter chosen by u (proportional to power) and its probability.
@@ -122,6 +128,7 @@ public:
         i = std::min(i, cdf_.size() - 1);
         return {i, probability(i)};
     }
+    /// Probability that pick() chooses emitter i (i < emitters(); the scene must have power > 0).
     T probability(std::size_t i) const { return (cdf_[i] - (i ? cdf_[i - 1] : T(0))) / power_; }
     /// Light-sampling density (solid angle, light chosen by power) of the direction towards a
     /// point of area light `l` at squared distance r2, seen under cosine cos_l there.
@@ -163,18 +170,24 @@ enum class LightSelection : std::uint8_t { power, tree };
 template <Scalar T>
 class LightSelector {
 public:
+    /// The selector for `scene`'s emitters; LightSelection::tree also builds the light tree
+    /// (O(n log n) in the emitters).
     LightSelector(const Scene<T>& scene, LightSelection how)
         : lights_(scene), how_(how),
           tree_(how == LightSelection::tree ? LightTree<T>(scene_light_bounds(scene)) : LightTree<T>()) {}
 
+    /// The scene's emitters, in the numbering pick() returns.
     const SceneLights<T>& lights() const { return lights_; }
+    /// By power or by the light tree, as constructed.
     LightSelection selection() const { return how_; }
+    /// The light tree; empty unless selection() is LightSelection::tree.
     const LightTree<T>& tree() const { return tree_; }
 
     /// An emitter for point x with normal n, by u; probability 0: none.
     LightPick<T> pick(const Vec3<T>& x, const Vec3<T>& n, T u) const {
         return how_ == LightSelection::tree ? tree_.pick(x, n, u) : lights_.pick(u);
     }
+    /// Probability that pick(x, n, ·) chooses emitter i: the density MIS weights need.
     T probability(const Vec3<T>& x, const Vec3<T>& n, std::size_t i) const {
         return how_ == LightSelection::tree ? tree_.probability(x, n, i) : lights_.probability(i);
     }
@@ -196,12 +209,15 @@ private:
 template <Scalar T = float>
 struct BrdfOnlyDirect : NoPixelStatistics<T> {
     BrdfOnlyDirect() = default;
+    /// The policy for `scene` (keeps a copy of its point lights; the settings are unused).
     BrdfOnlyDirect(const Scene<T>& scene, const PathTracerSettings<T>&) : points_(scene.point_lights) {}
+    /// The point lights' direct light at sp, one shadow ray each; area lights add nothing here.
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S&, Q& queries, typename NoPixelStatistics<T>::vertex_record*) const {
         return all_point_lights(std::span<const PointLight<T>>(points_), sp, queries);
     }
+    /// 1: the walk counts area-light emission wherever it meets it.
     T emission_weight(const Arrival<T>&, const Ray<T>&, const StoreHit<T>&) const { return T(1); }
 
 private:
@@ -216,13 +232,19 @@ private:
 template <Scalar T = float>
 class MisDirect : public NoPixelStatistics<T> {
 public:
+    /// Empty: MisDirect keeps nothing per vertex.
     using vertex_record = typename NoPixelStatistics<T>::vertex_record;
 
+    /// The policy for `scene` (kept by reference: it must outlive the policy), taking
+    /// s.light_samples (at least 1) light samples per vertex, emitters chosen by `how`.
     MisDirect(const Scene<T>& scene, const PathTracerSettings<T>& s, LightSelection how = LightSelection::power)
         : scene_(&scene), selector_(scene, how), k_(std::max(1, s.light_samples)) {}
 
+    /// How light samples choose their emitter.
     const LightSelector<T>& selector() const { return selector_; }
 
+    /// The light-sampled share of direct light at sp: k light samples, each an emitter, a point
+    /// on it (area light) and one shadow ray, MIS-weighted against the BRDF sample.
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record*) const {
@@ -286,8 +308,12 @@ template <Scalar T = float>
 class MisEnvironment {
 public:
     MisEnvironment() = default;
+    /// The policy for `scene`'s environment map, kept by pointer (the scene must outlive the
+    /// policy); a scene without a map makes it a no-op.
     explicit MisEnvironment(const Scene<T>& scene) : env_(scene.environment ? &*scene.environment : nullptr) {}
 
+    /// The map's light-sampled share at sp: one direction from the map's importance (a 2D number
+    /// from `sampler`) and its shadow ray, balance-weighted against the BRDF sample.
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries) const {
@@ -301,6 +327,8 @@ public:
         if (f.max() <= T(0) || !queries.unoccluded(spawn(sp, we))) return Rgb<T>(T(0));
         return env_->eval(we) * f * (wl.z * balance_weight(pdf_env, sp.brdf->sampling_pdf(wl)) / pdf_env);
     }
+    /// Map radiance in direction `dir` for a ray escaping the scene, balance-weighted against the
+    /// map sample when the vertex it left sampled lights (else whole).
     Rgb<T> escaped(const Vec3<T>& dir, const Arrival<T>& from) const {
         if (!env_) return Rgb<T>(T(0));
         const T w = from.lights_sampled ? balance_weight(from.pdf, env_->pdf(safe_normalize(dir))) : T(1);

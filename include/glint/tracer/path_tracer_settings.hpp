@@ -10,6 +10,8 @@
 
 namespace glint {
 
+/// The path tracer's per-walk settings, shared with its lighting policies (which read
+/// light_samples and lambda_filter_radius); the defaults give MIS with one light sample.
 template <Scalar T = float>
 struct PathTracerSettings {
     /// The roulette rule (sampling/roulette.hpp); the field's throughput rule by default.

@@ -29,9 +29,11 @@ namespace glint {
 /// When passes stop: after `seconds` (0: no budget) or after `passes` (0: no cap); at least
 /// one of the two must be set. At least one pass always runs.
 struct PassBudget {
-    double seconds = 0;
-    int passes = 0;
+    double seconds = 0;  ///< Wall-clock budget in seconds, >= 0 and finite; 0: none.
+    int passes = 0;      ///< Pass cap, >= 0; 0: none.
 
+    /// Throws glint::Error for a negative or non-finite budget, a negative pass count, or
+    /// neither limit set.
     void validate() const {
         if (!(seconds >= 0) || !std::isfinite(seconds))
             throw Error("time budget must be a finite number of seconds >= 0, got " + std::to_string(seconds));
@@ -47,7 +49,7 @@ struct PassBudget {
 
 /// The mean of a progressive render's passes, their summed statistics and how many ran.
 struct ProgressiveResult : RenderResult {
-    int passes = 0;
+    int passes = 0;  ///< Passes that ran and were averaged, >= 1 after a render.
 };
 
 namespace detail {

@@ -243,8 +243,8 @@ Scene<T> envmap(std::optional<EnvironmentMap<T>> map = std::nullopt) {
 /// `base` (the mesh stands on a floor through `base`; y is up, as in every built-in scene).
 template <Scalar T>
 struct MeshPlacement {
-    Vec3<T> base{0};
-    T size = T(1);
+    Vec3<T> base{0};  ///< Scene point where the mesh's bounding-box bottom centre lands.
+    T size = T(1);    ///< Larger horizontal (x or z) extent after scaling, in scene units, > 0.
 };
 
 /// Adds the triangles `mesh` (vertex order kept) to `s` with the material `m`, placed by `p`;
