@@ -115,7 +115,7 @@ struct CompactLightBounds {
     /// LightBounds::cos_theta_e.
 
     CompactLightBounds() = default;
-    /// The compact form of b (three square roots, once).
+    /// The compact form of b, its sphere and sine computed once.
     explicit CompactLightBounds(const LightBounds<T>& b)
         : c((b.box.lo + b.box.hi) * T(0.5)), phi(b.phi), w(b.w), cos_theta_o(b.cos_theta_o),
           sin_theta_o(detail::sin_from_cos(b.cos_theta_o)), cos_theta_e(b.cos_theta_e) {

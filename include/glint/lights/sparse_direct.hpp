@@ -77,7 +77,7 @@ public:
         /// \var interpolated
         /// Nodes of a reconstruction cut taken by interpolation, without a ray.
 
-        bool dense = false;  ///< The point fell back to the dense cut (secondary, glossy, or too few samples near).
+        bool dense = false;  ///< The point fell back to the dense cut (a glossy vertex, or fewer than k samples near).
     };
 
     /// Samples through `accel` (over scene.triangles); lights as LightPointOptions says.
