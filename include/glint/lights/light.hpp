@@ -34,8 +34,8 @@ struct PointLight {
     Rgb<T> intensity{T(0)};  ///< W/sr per band: everywhere (isotropic), along the axis (spot, cosine).
     PointLightKind kind = PointLightKind::isotropic;  ///< The intensity profile.
     Vec3<T> axis{0, 0, -1};  ///< Unit; spot and cosine lights.
-    T cos_outer = T(-1);     ///< Spot: no light beyond the outer cone,
-    T cos_inner = T(-1);     ///< full intensity inside the inner one.
+    T cos_outer = T(-1);     ///< Spot: cosine of the outer cone's half angle; no light beyond it.
+    T cos_inner = T(-1);     ///< Spot: cosine of the inner cone's half angle; full intensity inside it.
 
     /// An isotropic point light at p of intensity i (W/sr per band).
     static PointLight isotropic(const Vec3<T>& p, const Rgb<T>& i) { return {p, i}; }
@@ -45,7 +45,7 @@ struct PointLight {
         return {p, i, PointLightKind::spot, safe_normalize(axis), std::cos(outer), std::cos(std::min(inner, outer))};
     }
     /// An oriented (cosine-profile) point at p emitting i cos(theta) around `normal`
-    /// (normalized here; a zero normal stays zero and fails validate()).
+    /// (normalized here; a zero or non-finite normal becomes +z).
     static PointLight oriented(const Vec3<T>& p, const Vec3<T>& normal, const Rgb<T>& i) {
         return {p, i, PointLightKind::cosine, safe_normalize(normal), T(0), T(1)};
     }
