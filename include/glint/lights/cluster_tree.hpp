@@ -43,25 +43,34 @@ namespace glint {
 /// One node of the cluster tree; a leaf's representative is its light.
 template <Scalar T>
 struct LightNode {
-    static constexpr std::uint32_t none = 0xffffffffu;
-    AABB<T> box;                // of the lights' positions
-    Rgb<T> intensity{T(0)};     // sum of the lights' intensities (along their axes)
-    Vec3<T> axis{0, 0, 1};      // orientation cone
-    T theta_o = pi<T>;          // axes within theta_o of axis
-    T theta_e = pi<T>;          // no light emits beyond theta_e from its own axis
-    T cos_o = T(-1), sin_o = T(0), cos_e = T(-1);  // of theta_o and theta_e, for the cuts' bounds
-    std::uint32_t rep = 0;      // representative light
-    std::uint32_t left = none;  // children (none: a leaf)
-    std::uint32_t right = none;
-    bool cosine = false;        // every light has the cosine profile
+    static constexpr std::uint32_t none = 0xffffffffu;  ///< No node: a leaf's children, the root's parent.
+    AABB<T> box;                ///< Box of the lights' positions (world space).
+    Rgb<T> intensity{T(0)};     ///< Sum of the lights' intensities (along their axes), W/sr per band.
+    Vec3<T> axis{0, 0, 1};      ///< Unit axis of the orientation cone.
+    T theta_o = pi<T>;          ///< Every light's axis lies within theta_o (radians) of `axis`; pi: any.
+    T theta_e = pi<T>;          ///< No light emits beyond theta_e (radians) from its own axis.
+    /// cos(theta_o), precomputed for the cuts' bounds.
+    T cos_o = T(-1), sin_o = T(0), cos_e = T(-1);
+    /// \var sin_o
+    /// sin(theta_o), likewise.
+    /// \var cos_e
+    /// cos(theta_e), likewise.
+    std::uint32_t rep = 0;      ///< Representative light: index into LightClusterTree::lights().
+    std::uint32_t left = none;  ///< Left child's node index (none: a leaf).
+    std::uint32_t right = none; ///< Right child's node index (none: a leaf).
+    bool cosine = false;        ///< Every light has the cosine profile (PointLightKind::cosine).
 
+    /// True for a leaf (one light, no children).
     bool leaf() const { return left == none; }
 };
 
+/// The light cluster tree of Fernandez 2004, §5.1.2: a binary tree over point lights, built by
+/// greedy merging of the closest pair, laid out depth first (node 0 the root) and immutable once
+/// built; cuts (lights/cuts.hpp) read it from any number of threads.
 template <Scalar T>
 class LightClusterTree {
 public:
-    using Node = LightNode<T>;
+    using Node = LightNode<T>;  ///< A node of the tree.
 
     LightClusterTree() = default;
     /// Builds the tree over `lights` (validated first); an empty set gives an empty tree.
@@ -74,11 +83,17 @@ public:
         build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
 
+    /// The tree's copy of the lights, in the order of its leaves (a node's `rep` indexes it).
     std::span<const PointLight<T>> lights() const { return lights_; }
+    /// All nodes, depth first: 2n - 1 for n lights, none for an empty tree.
     std::span<const Node> nodes() const { return nodes_; }
+    /// Node i (unchecked: i < nodes().size()).
     const Node& node(std::uint32_t i) const { return nodes_[i]; }
+    /// True when the tree was built over no lights (it has no root then).
     bool empty() const { return nodes_.empty(); }
+    /// The root's index: always 0 (valid only when !empty()).
     std::uint32_t root() const { return 0; }
+    /// Wall-clock seconds the build took (0 for a default-constructed tree).
     double build_seconds() const { return build_seconds_; }
     /// The tree's memory: its nodes and its copy of the lights.
     std::size_t bytes() const { return nodes_.capacity() * sizeof(Node) + lights_.capacity() * sizeof(PointLight<T>); }

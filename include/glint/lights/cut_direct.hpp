@@ -42,15 +42,20 @@ concept PointShadowQueries = requires(Q& q, const ShadingPoint<T>& sp, const Vec
     { q.visible(sp, y, y, y) } -> std::convertible_to<bool>;
 };
 
+/// Dense light cuts (Fernandez 2004, §5.2) as a DirectLighting policy: deterministic, one shadow
+/// ray per node of the cut; copies share one cluster tree and may run on any number of threads.
 template <Scalar T = float>
 class CutDirect : public NoPixelStatistics<T> {
 public:
-    using vertex_record = typename NoPixelStatistics<T>::vertex_record;
+    using vertex_record = typename NoPixelStatistics<T>::vertex_record;  ///< Empty: no per-pixel statistics.
 
     /// The scene's point lights and area lights (split into LightPointOptions' default count
     /// of points), the default cut (2%, 300 nodes).
     CutDirect(const Scene<T>& scene, const PathTracerSettings<T>&) : CutDirect(scene, LightPointOptions<T>{}, CutSettings{}) {}
 
+    /// The lights `lights` selects from `scene`, split as it says, under cut settings `cut`.
+    /// Throws Error when `cut` or a light is invalid. Builds the cluster tree (O(n log n));
+    /// `scene` must outlive the policy.
     CutDirect(const Scene<T>& scene, const LightPointOptions<T>& lights, const CutSettings& cut)
         : scene_(&scene), covers_area_lights_(lights.area_lights), cut_(cut) {
         cut.validate();
@@ -58,6 +63,8 @@ public:
         tree_ = std::move(tree);
     }
 
+    /// Direct light reflected at sp toward its outgoing direction: the cut's sum over the tree's
+    /// lights, one shadow ray through `queries` per node of the cut; the sampler is not used.
     template <class Q, class S>
         requires PointShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S&, Q& queries, vertex_record*) const {
@@ -70,7 +77,9 @@ public:
         return from.lights_sampled && covers_area_lights_ && scene_->light_of[hit.id] >= 0 ? T(0) : T(1);
     }
 
+    /// The cluster tree over the policy's lights.
     const LightClusterTree<T>& tree() const { return *tree_; }
+    /// The cut settings the policy was built with.
     const CutSettings& settings() const { return cut_; }
 
     /// A shadow ray to light l; an oriented point lies on a surface, so its end is offset off it.

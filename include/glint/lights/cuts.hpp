@@ -50,9 +50,10 @@ namespace glint {
 
 /// The cut's knobs: relative error threshold and largest cut (0: unlimited).
 struct CutSettings {
-    double threshold = 0.02;
-    int max_nodes = 300;
+    double threshold = 0.02;  ///< Largest node error relative to the cut's running total (0.02: Weber's 2%); >= 0.
+    int max_nodes = 300;      ///< Most nodes in a cut (0: unlimited); >= 0.
 
+    /// Throws Error unless threshold is finite and >= 0 and max_nodes >= 0.
     void validate() const {
         if (!(threshold >= 0) || !std::isfinite(threshold))
             throw Error("glint::CutSettings: threshold " + std::to_string(threshold) + " must be finite and >= 0");
@@ -64,12 +65,15 @@ struct CutSettings {
 /// and the squared distance the geometry term is clamped at (0: none).
 template <Scalar T>
 struct CutReceiver {
-    Vec3<T> x, n;
-    Frame<T> frame;
-    const SurfaceBrdf<T>* brdf;
-    T d2min = T(0);
-    Frame<T> mirror;  // about the Phong lobe's mirror direction (glossy BRDFs)
+    /// Position of the shading point (world space).
+    Vec3<T> x, n;  ///< Unit normal at x, on the lit side.
+    Frame<T> frame;              ///< Local shading frame whose n axis is the normal.
+    const SurfaceBrdf<T>* brdf;  ///< BRDF at x (not owned; non-null).
+    T d2min = T(0);              ///< Squared distance the geometry term's 1/d^2 is clamped at (0: none).
+    Frame<T> mirror;             ///< Frame about the Phong lobe's mirror direction (glossy BRDFs).
 
+    /// The receiver at x_ with normal n_, frame f and BRDF b (non-null); the mirror frame is
+    /// derived from b's mirror direction.
     CutReceiver(const Vec3<T>& x_, const Vec3<T>& n_, const Frame<T>& f, const SurfaceBrdf<T>* b, T d2min_)
         : x(x_), n(n_), frame(f), brdf(b), d2min(d2min_), mirror(Frame<T>::from_normal(f.to_world(b->mirror()))) {}
 };
@@ -151,9 +155,9 @@ Rgb<T> light_factor(const PointLight<T>& l, const CutReceiver<T>& r) {
 /// What a cut did at one point.
 template <Scalar T>
 struct CutResult {
-    Rgb<T> L{T(0)};
-    int nodes = 0;
-    int shadow_rays = 0;
+    Rgb<T> L{T(0)};       ///< The cut's radiance sum_C L_C reflected at the point.
+    int nodes = 0;        ///< Nodes in the final cut.
+    int shadow_rays = 0;  ///< Shadow rays traced (one per representative evaluated).
 };
 
 /// One accepted node, for tests: its approximation, bound (f_max G_max I_C), its
@@ -161,10 +165,17 @@ struct CutResult {
 /// the cut was full) with the threshold's value then.
 template <Scalar T>
 struct CutRecord {
-    std::uint32_t node;
+    std::uint32_t node;  ///< The node's index in the tree.
+    /// The node's approximation f_rep G_rep V_rep I_C (per band).
     Rgb<T> estimate, bound, factor;
-    bool visible, by_threshold;
-    T allowed;
+    /// \var bound
+    /// The node's error bound f_max G_max I_C, per band.
+    /// \var factor
+    /// The representative's f G per unit intensity, without visibility.
+
+    /// Whether the representative's shadow ray was unoccluded.
+    bool visible, by_threshold;  ///< Whether the node met the threshold (false: accepted because the cut was full).
+    T allowed;  ///< Threshold times the running total (luminance) when the node was accepted.
 };
 
 namespace detail {

@@ -49,22 +49,26 @@
 
 namespace glint {
 
+/// How the octree is subdivided: cells of one depth (§4.3) or split where blocker lists grow (§4.4).
 enum class LieSubdivision : std::uint8_t { fixed, adaptive };
+/// What a cell keeps for a partial light: its blocker list, or only the state (§4.7).
 enum class LieVariant : std::uint8_t { blocker_lists, three_state };
 
+/// How the local illumination environments are built: sampling, subdivision, variant and masking.
 struct LieSettings {
-    int samples = 1 << 16;  // image samples (camera rays) of the construction
-    LieSubdivision subdivision = LieSubdivision::fixed;
-    int depth = 6;              // fixed subdivision: the cells' depth
-    int max_depth = 8;          // adaptive: no split below this depth
-    int blocker_threshold = 8;  // adaptive: split a cell when a light's list grows past this
-    LieVariant variant = LieVariant::blocker_lists;
-    bool early_blockers = true;   // keep blockers met before a light is seen (lights/lie_states.hpp)
-    double mask_fraction = 0.02;  // masking's budget: this fraction of a cell's minimum total
-    int area_samples = 16;        // points per polygon area light
-    double aspect = 1.0;          // width / height of the image whose view is sampled
-    int threads = 0;              // construction threads (0: all); the result does not depend on it
+    int samples = 1 << 16;  ///< Image samples (camera rays) of the construction; >= 1.
+    LieSubdivision subdivision = LieSubdivision::fixed;  ///< Fixed-depth (§4.3) or adaptive (§4.4) cells.
+    int depth = 6;              ///< Fixed subdivision: the cells' depth, in [0, 20].
+    int max_depth = 8;          ///< Adaptive: no split below this depth, in [0, 20].
+    int blocker_threshold = 8;  ///< Adaptive: split a cell when a light's list grows past this; >= 1.
+    LieVariant variant = LieVariant::blocker_lists;  ///< Blocker lists, or three states without lists (§4.7).
+    bool early_blockers = true;   ///< Keep blockers met before a light is seen (lights/lie_states.hpp).
+    double mask_fraction = 0.02;  ///< Masking's budget: this fraction of a cell's minimum total, in [0, 1).
+    int area_samples = 16;        ///< Points per polygon area light; >= 1.
+    double aspect = 1.0;          ///< Width / height of the image whose view is sampled; > 0.
+    int threads = 0;              ///< Construction threads (0: all); the result does not depend on it.
 
+    /// Throws Error naming the first setting out of its range.
     void validate() const {
         auto bad = [](const std::string& what) { throw Error("LieSettings: " + what); };
         if (samples < 1) bad("samples must be >= 1, got " + std::to_string(samples));
@@ -81,9 +85,9 @@ struct LieSettings {
 /// rounding error and surface normal (the shadow ray's far end is offset off that surface).
 template <Scalar T>
 struct LieLight {
-    PointLight<T> light;
-    Vec3<T> err{0};
-    Vec3<T> normal{0};
+    PointLight<T> light;  ///< The emitter (a cosine-profile point for an area light's sample).
+    Vec3<T> err{0};       ///< Rounding-error bound of the position, per axis (0 for a point light).
+    Vec3<T> normal{0};    ///< Unit normal of the area light's surface (0 for a point light).
 };
 
 /// The scene's point lights, then `area_samples` points on each polygon area light (Halton(2,3)
@@ -140,13 +144,26 @@ bool lie_camera_point(const Scene<T>& scene, const A& accel, const Ray<T>& ray, 
     return true;
 }
 
+/// The local illumination environments of a scene (Fernandez 2004, ch. 3-4): an octree whose
+/// reached leaf cells hold, per light, its state and blockers. Built once by the constructor
+/// (cost: samples x lights shadow rays), then read-only and safe to share between threads.
 template <Scalar T>
 class Lie {
 public:
+    /// A blocker triangle, stored ready for the ray-triangle test.
     using BlockerRecord = Triangle<MollerTrumbore<T>>;
+    /// One frozen cell: its entries are all_entries()[entry_begin, entry_begin + entry_count).
     struct Cell {
-        std::uint32_t entry_begin = 0, entry_count = 0, masked = 0, samples = 0;  // masked: lights masking drops
-        T min_total = 0;
+        /// First entry of the cell in all_entries().
+        std::uint32_t entry_begin = 0, entry_count = 0, masked = 0, samples = 0;
+        /// \var entry_count
+        /// Number of the cell's entries (its present lights).
+        /// \var masked
+        /// Number of the cell's lights that masking drops (entries flagged LieEntry::masked).
+        /// \var samples
+        /// Construction samples that landed in the cell.
+
+        T min_total = 0;  ///< Smallest total luminance of its samples (masking's reference).
     };
 
     /// Builds the LIEs of `scene` seen by its camera, tracing through `accel` (built over
@@ -166,22 +183,32 @@ public:
 
     /// The cell holding x, or LieOctree::none (outside the scene, or no sample reached it).
     std::uint32_t locate(const Vec3<T>& x) const { return octree_.locate(x); }
+    /// Cell c (unchecked: c < cells().size()).
     const Cell& cell(std::uint32_t c) const { return cells_[c]; }
     /// The lights present in cell c (not absent), in light order.
     std::span<const LieEntry> entries(std::uint32_t c) const {
         return std::span<const LieEntry>(entries_).subspan(cells_[c].entry_begin, cells_[c].entry_count);
     }
+    /// The blocker triangles of entry e, as records for the intersection test (empty unless e
+    /// is partial under LieVariant::blocker_lists).
     std::span<const BlockerRecord> blockers(const LieEntry& e) const {
         return std::span<const BlockerRecord>(records_).subspan(e.blocker_begin, e.blocker_count);
     }
+    /// The blocker triangles of entry e, as indices into the scene's triangles.
     std::span<const std::uint32_t> blocker_triangles(const LieEntry& e) const {
         return std::span<const std::uint32_t>(blocker_ids_).subspan(e.blocker_begin, e.blocker_count);
     }
+    /// The lights, in the order LieEntry::light indexes (lie_lights()).
     const std::vector<LieLight<T>>& lights() const { return lights_; }
+    /// Every reached cell, indexed by the octree leaves' cell numbers.
     const std::vector<Cell>& cells() const { return cells_; }
+    /// The entries of every cell, cell after cell.
     const std::vector<LieEntry>& all_entries() const { return entries_; }
+    /// The blocker lists of every entry, as scene triangle indices, entry after entry.
     const std::vector<std::uint32_t>& all_blocker_triangles() const { return blocker_ids_; }
+    /// The octree over the scene whose leaves name the cells.
     const LieOctree<T>& octree() const { return octree_; }
+    /// The settings the LIEs were built with.
     const LieSettings& settings() const { return settings_; }
     /// Bytes of the octree, the cells, their entries and blocker records.
     std::size_t bytes() const {

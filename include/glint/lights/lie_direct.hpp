@@ -38,19 +38,30 @@ namespace glint {
 /// ray-triangle tests those took.
 struct LieShadeCost {
     std::uint32_t lights = 0, accel_rays = 0, blocker_rays = 0, blocker_tests = 0;
+    /// \var lights
+    /// Lights evaluated (f I cos / r^2), those that could contribute.
+    /// \var accel_rays
+    /// Shadow rays through the accelerator (fallback cells, three-state partial lights).
+    /// \var blocker_rays
+    /// Shadow rays tested against blocker lists only.
+    /// \var blocker_tests
+    /// Ray-triangle tests against blocker list entries.
 };
 
+/// The DirectLighting policy that shades through local illumination environments (Fernandez
+/// 2004, §3.1.2, §3.2): deterministic; copies share one Lie and may run on any number of threads.
 template <Scalar T = float>
 class LieDirect : public NoPixelStatistics<T> {
 public:
-    using vertex_record = typename NoPixelStatistics<T>::vertex_record;
+    using vertex_record = typename NoPixelStatistics<T>::vertex_record;  ///< Empty: no per-pixel statistics.
     /// The accelerator the scene-only constructor builds for the construction's rays.
     using BuildAccel = std::conditional_t<std::is_same_v<T, float>, MeshBvh<MollerTrumbore<float>, 8>,
                                           BruteForce<MollerTrumbore<T>>>;
 
+    /// The direct light at a vertex and what computing it cost.
     struct Shaded {
-        Rgb<T> L{T(0)};
-        LieShadeCost cost;
+        Rgb<T> L{T(0)};     ///< Reflected direct radiance toward the vertex's outgoing direction.
+        LieShadeCost cost;  ///< Lights evaluated, rays and triangle tests spent.
     };
 
     /// LIEs built through `accel` (over scene.triangles).
@@ -61,6 +72,7 @@ public:
     LieDirect(const Scene<T>& scene, const LieSettings& s, bool masking)
         : LieDirect(scene, BuildAccel(std::span<const TriangleVertices<T>>(scene.triangles)), s, masking) {}
 
+    /// The direct light at sp (shade()'s L); the sampler is not used.
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S&, Q& queries, vertex_record*) const {
@@ -109,7 +121,9 @@ public:
         return out;
     }
 
+    /// The local illumination environments the policy shades through.
     const Lie<T>& lie() const { return *lie_; }
+    /// Whether lights the cells' masking dropped are skipped.
     bool masking() const { return masking_; }
     /// The same LIEs (shared, not rebuilt) with masking on or off.
     LieDirect with_masking(bool on) const {

@@ -23,15 +23,18 @@
 
 namespace glint {
 
+/// The octree of the local illumination environments: a cube around the scene, grown where
+/// samples land. Construction (descend, split) is single-threaded; locate() is read-only.
 template <Scalar T>
 class LieOctree {
 public:
-    static constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    static constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();  ///< No node, no cell.
 
+    /// A node: a leaf (with or without a cell) or an inner node with eight children.
     struct Node {
-        std::uint32_t first_child = none;  // eight consecutive nodes; none: a leaf
-        std::uint32_t cell = none;         // a leaf's LIE; none: no sample reached it
-        std::uint8_t depth = 0;
+        std::uint32_t first_child = none;  ///< First of eight consecutive children, in octant order; none: a leaf.
+        std::uint32_t cell = none;         ///< A leaf's LIE (index into Lie::cells()); none: no sample reached it.
+        std::uint8_t depth = 0;            ///< Depth below the root (0); a cell's edge is 2 half_size() / 2^depth.
     };
 
     LieOctree() = default;
@@ -92,10 +95,15 @@ public:
         return dropped;
     }
 
+    /// Node n, writable for the builder (unchecked: n < nodes().size()); node 0 is the root.
     Node& node(std::uint32_t n) { return nodes_[n]; }
+    /// Node n (unchecked: n < nodes().size()).
     const Node& node(std::uint32_t n) const { return nodes_[n]; }
+    /// Every node, the root first; children are appended as nodes are split.
     const std::vector<Node>& nodes() const { return nodes_; }
+    /// Centre of the root cube (world space).
     Vec3<T> center() const { return center_; }
+    /// Half the root cube's edge (world units).
     T half_size() const { return half_; }
 
 private:

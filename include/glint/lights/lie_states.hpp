@@ -36,32 +36,35 @@
 
 namespace glint {
 
+/// A light's state in a cell (§3.1): seen by no sampled point, by every one, or by some.
 enum class LieState : std::uint8_t { absent, unoccluded, partial };
 
 /// What one sample's shadow ray to one light found: a blocker triangle (>= 0), or one of these.
-inline constexpr std::int32_t lie_visible = -1;   // the ray reached the light
-inline constexpr std::int32_t lie_no_light = -2;  // the light cannot contribute there: no ray
+inline constexpr std::int32_t lie_visible = -1;   ///< The ray reached the light.
+inline constexpr std::int32_t lie_no_light = -2;  ///< The light cannot contribute there: no ray.
 
 /// How samples change a cell: `lists`: keep blocker lists (false: three states, §4.7);
 /// `early_blockers`: keep what blocked a light before a sample saw it (false: Fig. 3.2 as drawn).
 struct LieRules {
-    bool lists = true;
-    bool early_blockers = true;
+    bool lists = true;           ///< Keep blocker lists (false: three states, §4.7).
+    bool early_blockers = true;  ///< Keep blockers met while a light is absent (false: Fig. 3.2 as drawn).
 };
 
 /// A light of a frozen cell: its blockers are blocker ids [begin, begin+count); `masked`: the
 /// cell's masking drops it.
 struct LieEntry {
-    std::uint32_t light = 0;
-    LieState state = LieState::absent;
-    bool masked = false;
-    std::uint32_t blocker_begin = 0, blocker_count = 0;
+    std::uint32_t light = 0;            ///< Index of the light in Lie::lights().
+    LieState state = LieState::absent;  ///< Unoccluded or partial (absent lights get no entry).
+    bool masked = false;                ///< The cell's masking (§3.2) drops this light.
+    /// First of the entry's blocker ids in Lie::all_blocker_triangles().
+    std::uint32_t blocker_begin = 0, blocker_count = 0;  ///< Number of its blockers (0 unless partial with lists).
 };
 
 /// A cell under construction.
 template <Scalar T>
 class LieCellBuilder {
 public:
+    /// An empty cell over `lights` lights, each absent.
     explicit LieCellBuilder(std::size_t lights)
         : state_(lights, LieState::absent), blocked_(lights, false), blockers_(lights), max_(lights, T(0)) {}
 
@@ -81,10 +84,15 @@ public:
         return longest;
     }
 
+    /// Light j's state so far.
     LieState state(std::size_t j) const { return state_[j]; }
+    /// Light j's blocker list so far (triangle indices, in the order first met).
     const std::vector<std::uint32_t>& blockers(std::size_t j) const { return blockers_[j]; }
+    /// Light j's largest contribution over the samples (luminance, visibility included).
     T max_contribution(std::size_t j) const { return max_[j]; }
+    /// Smallest total luminance of the samples; 0 before any sample.
     T min_total() const { return samples_ ? min_total_ : T(0); }
+    /// Samples applied so far.
     std::uint32_t samples() const { return samples_; }
 
     /// The cell's lights in light order (so that a sum over them rounds as a sum over all

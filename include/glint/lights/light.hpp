@@ -23,23 +23,29 @@
 
 namespace glint {
 
+/// A point emitter's intensity profile (the header's table).
 enum class PointLightKind : std::uint8_t { isotropic, spot, cosine };
 
+/// A point emitter: position, intensity and profile. An aggregate; build one with isotropic(),
+/// spot() or oriented(), and check it with validate().
 template <Scalar T>
 struct PointLight {
-    Vec3<T> position{0};
-    Rgb<T> intensity{T(0)};  // W/sr per band: everywhere (isotropic), along the axis (spot, cosine)
-    PointLightKind kind = PointLightKind::isotropic;
-    Vec3<T> axis{0, 0, -1};  // unit; spot and cosine lights
-    T cos_outer = T(-1);     // spot: no light beyond the outer cone,
-    T cos_inner = T(-1);     // full intensity inside the inner one
+    Vec3<T> position{0};     ///< World-space position.
+    Rgb<T> intensity{T(0)};  ///< W/sr per band: everywhere (isotropic), along the axis (spot, cosine).
+    PointLightKind kind = PointLightKind::isotropic;  ///< The intensity profile.
+    Vec3<T> axis{0, 0, -1};  ///< Unit; spot and cosine lights.
+    T cos_outer = T(-1);     ///< Spot: cosine of the outer cone's half angle; no light beyond it.
+    T cos_inner = T(-1);     ///< Spot: cosine of the inner cone's half angle; full intensity inside it.
 
+    /// An isotropic point light at p of intensity i (W/sr per band).
     static PointLight isotropic(const Vec3<T>& p, const Rgb<T>& i) { return {p, i}; }
     /// A spot light; outer and inner are the cones' half angles in radians (inner <= outer),
     /// both at most pi / 2 (beyond, the cos theta factor would turn negative).
     static PointLight spot(const Vec3<T>& p, const Vec3<T>& axis, const Rgb<T>& i, T outer, T inner) {
         return {p, i, PointLightKind::spot, safe_normalize(axis), std::cos(outer), std::cos(std::min(inner, outer))};
     }
+    /// An oriented (cosine-profile) point at p emitting i cos(theta) around `normal`
+    /// (normalized here; a zero or non-finite normal becomes +z).
     static PointLight oriented(const Vec3<T>& p, const Vec3<T>& normal, const Rgb<T>& i) {
         return {p, i, PointLightKind::cosine, safe_normalize(normal), T(0), T(1)};
     }
@@ -54,6 +60,7 @@ struct PointLight {
         const T s = (c - cos_outer) / (cos_inner - cos_outer);
         return c * s * s * (T(3) - T(2) * s);
     }
+    /// The intensity I(w) in unit direction w leaving the light, W/sr per band.
     Rgb<T> intensity_towards(const Vec3<T>& w) const { return intensity * falloff(w); }
 
     /// The cosine of the half angle of the cone around `axis` outside which falloff is 0
@@ -74,6 +81,7 @@ struct PointLight {
         const T w = cos_inner - cos_outer;
         return T(2) * pi<T> * ((T(1) - cos_inner * cos_inner) * T(0.5) + w * (cos_outer * T(0.5) + T(0.35) * w));
     }
+    /// The emitted power, W per band: intensity times measure().
     Rgb<T> power() const { return intensity * measure(); }
 
     /// Throws glint::Error naming light `index` for a non-finite position, a negative or

@@ -30,8 +30,8 @@ namespace glint {
 /// A cone of directions: axis w, cos of its half angle (-1: the whole sphere).
 template <Scalar T>
 struct DirectionCone {
-    Vec3<T> w{0, 0, 1};
-    T cos_theta = T(1);
+    Vec3<T> w{0, 0, 1};  ///< Unit axis.
+    T cos_theta = T(1);  ///< Cosine of the half angle: 1 the axis alone, -1 the whole sphere.
 };
 
 namespace detail {
@@ -80,13 +80,15 @@ DirectionCone<T> cone_union(const DirectionCone<T>& a, const DirectionCone<T>& b
     return {w, std::cos(theta_o)};
 }
 
+/// Bounds of an emitter or a cluster of emitters (Conty Estevez and Kulla 2018, §4): box,
+/// intensity scale and the normals' and emission cones; phi = 0 marks empty bounds.
 template <Scalar T>
 struct LightBounds {
-    AABB<T> box;
-    T phi = T(0);             // summed intensity scale (W/sr, luminance)
-    Vec3<T> w{0, 0, 1};       // axis of the normals' cone
-    T cos_theta_o = T(1);     // the normals' cone
-    T cos_theta_e = T(0);     // emission about each normal
+    AABB<T> box;              ///< World-space box holding the emitters.
+    T phi = T(0);             ///< Summed intensity scale (W/sr, luminance).
+    Vec3<T> w{0, 0, 1};       ///< Unit axis of the normals' cone.
+    T cos_theta_o = T(1);     ///< Cosine of the normals' cone's half angle theta_o.
+    T cos_theta_e = T(0);     ///< Cosine of theta_e, the emission about each normal (0: a hemisphere).
 
     /// Bounds on the irradiance the emitters can send to x, whose surface's normal is n
     /// (reflecting side; n = 0: no receiver cosine). 0 only where none of them can reach x.
@@ -99,13 +101,21 @@ struct LightBounds {
 /// roots and one division (a light tree's descent evaluates two nodes per level).
 template <Scalar T>
 struct CompactLightBounds {
-    Vec3<T> c{0};
-    T r = T(0), r2 = T(0);  // bounding sphere's radius and its square
-    T phi = T(0);
-    Vec3<T> w{0, 0, 1};
+    Vec3<T> c{0};           ///< Centre of the box's bounding sphere.
+    /// Bounding sphere's radius.
+    T r = T(0), r2 = T(0);  ///< Its square.
+    T phi = T(0);           ///< LightBounds::phi.
+    Vec3<T> w{0, 0, 1};     ///< LightBounds::w.
     T cos_theta_o = T(1), sin_theta_o = T(0), cos_theta_e = T(0);
+    /// \var cos_theta_o
+    /// LightBounds::cos_theta_o.
+    /// \var sin_theta_o
+    /// Sine of theta_o, precomputed.
+    /// \var cos_theta_e
+    /// LightBounds::cos_theta_e.
 
     CompactLightBounds() = default;
+    /// The compact form of b, its sphere and sine computed once.
     explicit CompactLightBounds(const LightBounds<T>& b)
         : c((b.box.lo + b.box.hi) * T(0.5)), phi(b.phi), w(b.w), cos_theta_o(b.cos_theta_o),
           sin_theta_o(detail::sin_from_cos(b.cos_theta_o)), cos_theta_e(b.cos_theta_e) {

@@ -35,12 +35,14 @@ namespace glint {
 /// Which of a scene's emitters become points, and how finely area lights are split.
 template <Scalar T>
 struct LightPointOptions {
-    bool point_lights = true;   // the scene's point lights, as themselves
-    bool area_lights = true;    // its polygon area lights, split into oriented points
-    std::size_t total = 4096;   // area-light points in all (shared out by area), when spacing is 0
-    T spacing = T(0);           // > 0: one point per spacing^2 of area instead
-    std::size_t max_per_light = std::size_t(1) << 20;
+    bool point_lights = true;   ///< The scene's point lights, as themselves.
+    bool area_lights = true;    ///< Its polygon area lights, split into oriented points.
+    std::size_t total = 4096;   ///< Area-light points in all (shared out by area), when spacing is 0.
+    T spacing = T(0);           ///< > 0: one point per spacing^2 of area instead (world units).
+    std::size_t max_per_light = std::size_t(1) << 20;  ///< Most points one area light becomes; > 0.
 
+    /// Throws Error for a negative or non-finite spacing, total 0 when area lights are split by
+    /// count, or max_per_light 0.
     void validate() const {
         if (!(spacing >= T(0)) || !std::isfinite(double(spacing)))
             throw Error("glint::LightPointOptions: spacing " + std::to_string(double(spacing)) + " must be finite and >= 0");

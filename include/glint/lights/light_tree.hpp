@@ -36,18 +36,21 @@ namespace glint {
 /// A light chosen for a shading point and the probability it was chosen with.
 template <Scalar T>
 struct LightPick {
-    std::size_t index = 0;
-    T probability = T(0);
+    std::size_t index = 0;  ///< The emitter's index in the tree's input (undefined when probability is 0).
+    T probability = T(0);   ///< Probability it was picked with; 0: no light can reach the point.
 };
 
+/// The stochastic light tree of Conty Estevez and Kulla 2018 over emitters' bounds: immutable
+/// once built; pick() and probability() are const and safe to call from any number of threads.
 template <Scalar T = float>
 class LightTree {
 public:
+    /// A node, in depth-first order (node 0 the root).
     struct Node {
-        LightBounds<T> bounds;
-        std::int32_t second = -1;  // interior: the second child (the first follows the node); leaf: -1
-        std::int32_t light = -1;   // leaf: the emitter's index
-        std::int32_t parent = -1;
+        LightBounds<T> bounds;     ///< Bounds of the emitters below the node.
+        std::int32_t second = -1;  ///< Interior: the second child (the first follows the node); leaf: -1.
+        std::int32_t light = -1;   ///< Leaf: the emitter's index.
+        std::int32_t parent = -1;  ///< The parent's index; -1 at the root.
     };
 
     LightTree() = default;
@@ -65,9 +68,13 @@ public:
         for (const Node& nd : nodes_) descent_.push_back({CompactLightBounds<T>(nd.bounds), nd.second});
     }
 
+    /// True for a tree over no emitters (pick() then returns probability 0).
     bool empty() const { return nodes_.empty(); }
+    /// Number of emitters.
     std::size_t size() const { return leaf_of_.size(); }
+    /// All nodes, depth first: 2n - 1 for n emitters.
     const std::vector<Node>& nodes() const { return nodes_; }
+    /// The tree's memory: its nodes, their compact descent form and the emitters' leaf indices.
     std::size_t bytes() const {
         return nodes_.size() * (sizeof(Node) + sizeof(DescentNode)) + leaf_of_.size() * sizeof(std::int32_t);
     }

@@ -22,22 +22,30 @@
 
 namespace glint {
 
+/// A DirectLighting policy that forwards to one of Fernandez 2004's many-light systems, chosen
+/// at run time; it behaves exactly as the system it holds.
 template <Scalar T = float>
 class ManyLightDirect : public NoPixelStatistics<T> {
 public:
-    using vertex_record = typename NoPixelStatistics<T>::vertex_record;
+    using vertex_record = typename NoPixelStatistics<T>::vertex_record;  ///< Empty: no per-pixel statistics.
+    /// The systems it can hold: dense cuts, sparse sampling, local illumination environments.
     using System = std::variant<CutDirect<T>, SparseDirect<T>, LieDirect<T>>;
 
+    /// The policy running `system` (built beforehand, with its own settings).
     explicit ManyLightDirect(System system) : system_(std::move(system)) {}
 
+    /// The held system's estimate of the direct light at sp.
     template <class Q, class S>
         requires ShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record* rec) const {
         return std::visit([&](const auto& d) { return d.estimate(sp, sampler, queries, rec); }, system_);
     }
+    /// The held system's weight of area-light emission met at hit by `ray` (0 where its
+    /// estimate already holds that light, else 1).
     T emission_weight(const Arrival<T>& from, const Ray<T>& ray, const StoreHit<T>& hit) const {
         return std::visit([&](const auto& d) { return d.emission_weight(from, ray, hit); }, system_);
     }
+    /// The held system.
     const System& system() const { return system_; }
 
 private:

@@ -20,8 +20,8 @@ namespace glint {
 /// One neighbour: the sample's index and its distance (eq. 5.22).
 template <Scalar T>
 struct SampleNeighbour {
-    std::uint32_t sample;
-    T distance;
+    std::uint32_t sample;  ///< Index of the sample in the positions the tree was built over.
+    T distance;            ///< Its eq. 5.22 distance from the query point (world units).
 };
 
 /// Eq. 5.22: the distance from point x of unit normal nx to sample s of unit normal ns.
@@ -32,6 +32,8 @@ T sample_distance(const Vec3<T>& x, const Vec3<T>& nx, const Vec3<T>& s, const V
     return glm::length(x - s) / c;
 }
 
+/// A kd-tree over surface samples for k-nearest queries under the eq. 5.22 distance; it keeps
+/// the positions and normals by reference (they must outlive it) and is read-only once built.
 template <Scalar T>
 class SampleNeighbours {
 public:

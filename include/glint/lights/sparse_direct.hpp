@@ -57,18 +57,27 @@
 
 namespace glint {
 
+/// Sparse sampling (Fernandez 2004, §5.3-5.4) as a DirectLighting policy: deterministic,
+/// interpolating or reconstructing at primary vertices from samples made at construction, the
+/// dense cut elsewhere; copies share the samples and may run on any number of threads.
 template <Scalar T = float>
 class SparseDirect : public NoPixelStatistics<T> {
 public:
-    using vertex_record = typename NoPixelStatistics<T>::vertex_record;
-    using BuildAccel = typename LieDirect<T>::BuildAccel;  // the same accelerator the LIE's construction builds
+    using vertex_record = typename NoPixelStatistics<T>::vertex_record;  ///< Empty: no per-pixel statistics.
+    using BuildAccel = typename LieDirect<T>::BuildAccel;  ///< The same accelerator the LIE's construction builds.
 
     /// What shading one point did: its light, the cut's nodes (interpolation: 0), shadow rays,
     /// nodes interpolated, and whether it fell back to the dense cut.
     struct Shaded {
-        Rgb<T> L{T(0)};
+        Rgb<T> L{T(0)};  ///< Reflected direct radiance at the point.
+        /// Nodes of the cut (0 when interpolated).
         int nodes = 0, shadow_rays = 0, interpolated = 0;
-        bool dense = false;
+        /// \var shadow_rays
+        /// Shadow rays traced.
+        /// \var interpolated
+        /// Nodes of a reconstruction cut taken by interpolation, without a ray.
+
+        bool dense = false;  ///< The point fell back to the dense cut (a glossy vertex, or fewer than k samples near).
     };
 
     /// Samples through `accel` (over scene.triangles); lights as LightPointOptions says.
@@ -85,6 +94,8 @@ public:
     SparseDirect(const Scene<T>& scene, const LightPointOptions<T>& lights, const SparseSettings& s)
         : SparseDirect(scene, BuildAccel(std::span<const TriangleVertices<T>>(scene.triangles)), lights, s) {}
 
+    /// The direct light at sp: shade()'s L at a primary vertex (rec non-null), the dense cut's
+    /// estimate at a secondary one.
     template <class Q, class S>
         requires PointShadowQueries<Q, T> && Sampler<S, T>
     Rgb<T> estimate(const ShadingPoint<T>& sp, S& sampler, Q& queries, vertex_record* rec) const {
@@ -92,6 +103,7 @@ public:
         return shade(sp, queries).L;
     }
 
+    /// The dense cut's weight of area-light emission met by a ray (0 for the area lights it covers).
     T emission_weight(const Arrival<T>& from, const Ray<T>& ray, const StoreHit<T>& hit) const {
         return dense_.emission_weight(from, ray, hit);
     }
@@ -142,9 +154,13 @@ public:
         return weights > T(0) ? sum / weights : samples_->irradiance(near.front().sample);
     }
 
+    /// The sparse samples made at construction.
     const SparseSamples<T>& samples() const { return *samples_; }
+    /// The settings in force (mode and agreement as with() last set them).
     const SparseSettings& settings() const { return settings_; }
+    /// The dense-cut policy used where the samples are not.
     const CutDirect<T>& dense() const { return dense_; }
+    /// The light cluster tree shared with the dense cut.
     const LightClusterTree<T>& tree() const { return dense_.tree(); }
     /// The same samples and tree (shared, not rebuilt) in another mode or agreement.
     SparseDirect with(SparseMode mode, double agreement) const {

@@ -51,18 +51,23 @@ namespace glint {
 /// Interpolation (§5.3.1) or reconstruction cuts (§5.3.2).
 enum class SparseMode : std::uint8_t { interpolate, reconstruct };
 
+/// Sparse sampling's knobs: mode, sample count and placement, neighbourhood, agreement and cuts.
 struct SparseSettings {
-    SparseMode mode = SparseMode::reconstruct;
-    int samples = 5000;       // camera rays of the construction (about 5000 sample cuts per image)
-    int neighbours = 8;       // k: the nearest samples a point uses (eq. 5.12-5.13, 5.20)
-    double agreement = 0.05;  // t_interp of eq. 5.20
-    double max_radius = 0.1;  // the k-th sample farther (eq. 5.22) than this fraction of the scene's diagonal: dense cut
-    double aspect = 1.0;      // width / height of the image whose view is sampled
-    double priority = 0.0;    // the fraction of `samples` placed by priority (§5.4.3); 0: all uniform
-    int candidates = 4;       // candidate points per prioritized sample
-    int threads = 0;          // construction threads (0: all); the samples do not depend on it
-    CutSettings cut{};        // the sample cuts, the dense fallback, and reconstruction's evaluation threshold
+    SparseMode mode = SparseMode::reconstruct;  ///< Interpolation or reconstruction cuts.
+    int samples = 5000;       ///< Camera rays of the construction (about 5000 sample cuts per image); >= 1.
+    int neighbours = 8;       ///< k: the nearest samples a point uses (eq. 5.12-5.13, 5.20), in [2, 32].
+    double agreement = 0.05;  ///< t_interp of eq. 5.20; finite, >= 0 (0: never interpolate a node).
+    /// The k-th sample farther (eq. 5.22) than this fraction of the scene's diagonal: dense cut; > 0.
+    double max_radius = 0.1;
+    double aspect = 1.0;      ///< Width / height of the image whose view is sampled; > 0.
+    double priority = 0.0;    ///< The fraction of `samples` placed by priority (§5.4.3), in [0, 1); 0: all uniform.
+    int candidates = 4;       ///< Candidate points per prioritized sample, in [1, 64].
+    int threads = 0;          ///< Construction threads (0: all); the samples do not depend on it.
+    /// The sample cuts, the dense fallback, and reconstruction's evaluation threshold;
+    /// max_nodes must be in [1, 16000] (2-byte indices).
+    CutSettings cut{};
 
+    /// Throws Error naming the first setting out of its range (the ranges above).
     void validate() const {
         auto bad = [](const std::string& what) { throw Error("glint::SparseSettings: " + what); };
         if (samples < 1) bad("samples " + std::to_string(samples) + " must be >= 1");
@@ -78,14 +83,18 @@ struct SparseSettings {
     }
     /// The samples placed by priority; the others (the first Halton points) are uniform.
     int prioritized() const { return int(std::lround(priority * double(samples))); }
+    /// The samples placed uniformly: samples - prioritized().
     int uniform() const { return samples - prioritized(); }
 };
 
+/// The sample cuts of sparse sampling: per sample its position, normal, irradiance and packed
+/// relative irradiances, with a kd-tree for neighbour queries. Not copyable (the kd-tree refers
+/// to the positions); read-only and thread-safe once built.
 template <Scalar T>
 class SparseSamples {
 public:
-    static constexpr std::uint16_t unknown = 0xffff;
-    static constexpr T scale = T(4096);
+    static constexpr std::uint16_t unknown = 0xffff;  ///< Stored R meaning unknown (unreachable representative, or R >= 16).
+    static constexpr T scale = T(4096);               ///< Fixed-point scale of a stored R: 12 fraction bits.
 
     /// The uniform samples of `scene` seen by its camera (Halton points 1 to s.uniform()),
     /// through `accel`, with cuts of `tree`.
@@ -119,15 +128,19 @@ public:
     SparseSamples(const SparseSamples&) = delete;  // the kd-tree refers to x_ and n_
     SparseSamples& operator=(const SparseSamples&) = delete;
 
+    /// Number of samples (camera rays that found a diffuse or glossy surface).
     std::size_t size() const { return x_.size(); }
     /// The Halton index of sample i's camera ray (lie_sample_ray).
     std::uint64_t halton_index(std::size_t i) const { return index_[i]; }
+    /// Sample i's surface point (world space).
     const Vec3<T>& position(std::size_t i) const { return x_[i]; }
+    /// Sample i's unit normal, facing the camera.
     const Vec3<T>& normal(std::size_t i) const { return n_[i]; }
     /// The sample's irradiance (eq. 5.11 summed over its cut).
     const Rgb<T>& irradiance(std::size_t i) const { return E_[i]; }
-    /// Its packed relative irradiances and left-child indices.
+    /// Its packed relative irradiances (decode() each, unless `unknown`), one per kept node.
     std::span<const std::uint16_t> values(std::size_t i) const { return {values_.data() + first_[i], first_[i + 1] - first_[i]}; }
+    /// Its left-child indices into values(i), one per kept node (0: none).
     std::span<const std::uint16_t> left(std::size_t i) const { return {left_.data() + first_[i], first_[i + 1] - first_[i]}; }
     /// Adds work done to place the samples (shading the prioritized samples' candidates).
     void count(int shadow_rays, int nodes) {
@@ -136,6 +149,7 @@ public:
     }
     /// The shadow rays the samples' cuts (and their placement) cast, and their nodes, in all.
     std::uint64_t shadow_rays() const { return rays_; }
+    /// The nodes of those cuts, in all.
     std::uint64_t cut_nodes() const { return nodes_; }
     /// The kernel's largest radius (world units).
     T radius() const { return radius_; }
@@ -149,6 +163,7 @@ public:
         const double fixed = double(sizeof(Vec3<T>) * 2 + sizeof(Rgb<T>) + sizeof(std::uint32_t));
         return fixed + 4.0 * double(values_.size()) / double(x_.size());
     }
+    /// The relative irradiance R a stored value v stands for (meaningless for `unknown`).
     static T decode(std::uint16_t v) { return T(v) / scale; }
 
 private:

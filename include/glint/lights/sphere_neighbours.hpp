@@ -25,10 +25,11 @@
 
 namespace glint {
 
+/// A sphere bounding a cluster of lights (a point light: radius 0).
 template <Scalar T>
 struct BoundingSphere {
-    Vec3<T> centre{0};
-    T radius = T(0);
+    Vec3<T> centre{0};  ///< World-space centre.
+    T radius = T(0);    ///< Radius, world units; >= 0.
 };
 
 /// The largest distance between a point of a and a point of b.
@@ -47,13 +48,16 @@ BoundingSphere<T> enclosing_sphere(const BoundingSphere<T>& a, const BoundingSph
     return {a.centre + (b.centre - a.centre) * ((r - a.radius) / d), r};
 }
 
+/// Nearest-neighbour queries under the cluster distance among a set of spheres that changes by
+/// removal and insertion: a refitted kd-tree. Not thread-safe while it changes.
 template <Scalar T>
 class SphereNeighbours {
 public:
-    static constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    static constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();  ///< No sphere.
+    /// A query's answer.
     struct Nearest {
-        T distance = infinity<T>;
-        std::uint32_t id = none;
+        T distance = infinity<T>;  ///< Cluster distance to it (infinity: no other live sphere).
+        std::uint32_t id = none;   ///< The nearest sphere's id (none: no other live sphere).
     };
 
     /// A tree over spheres[0, n) (all live); `spheres` is the caller's array, indexed by id,
@@ -65,12 +69,14 @@ public:
         if (n > 0) build(ids, 0, n, none);
     }
 
+    /// Removes live sphere `id` from the set (precondition: it is live); O(depth).
     void remove(std::uint32_t id) {
         Node& leaf = nodes_[where_[id]];
         leaf.items.erase(std::find_if(leaf.items.begin(), leaf.items.end(), [&](const Item& it) { return it.id == id; }));
         refit(where_[id]);
     }
 
+    /// Adds sphere `id`, already in the caller's array, to the leaf its centre falls in; O(depth).
     void insert(std::uint32_t id) {
         const Vec3<T>& c = (*spheres_)[id].centre;
         std::uint32_t k = 0;
@@ -102,6 +108,7 @@ public:
         return best;
     }
 
+    /// The structure's memory: nodes, their items and the id-to-leaf map.
     std::size_t bytes() const {
         std::size_t b = nodes_.capacity() * sizeof(Node) + where_.capacity() * sizeof(std::uint32_t);
         for (const Node& n : nodes_) b += n.items.capacity() * sizeof(Item);

@@ -41,10 +41,12 @@
 
 namespace glint {
 
+/// The caustic filter's knobs (Larsen 2004, ch. 12): kernel size and the splat's depth test.
 struct CausticFilterSettings {
-    int k = 3;                     // kernel half-width: (2k + 1)^2 pixels
-    float depth_tolerance = 0.01f; // distance off the pixel's tangent plane, relative to its depth
+    int k = 3;                     ///< Kernel half-width: (2k + 1)^2 pixels; in [0, 64].
+    float depth_tolerance = 0.01f; ///< Distance off the pixel's tangent plane, relative to its depth; > 0.
 
+    /// Throws Error for k outside [0, 64] or a depth_tolerance that is not positive.
     void validate() const {
         if (k < 0 || k > 64) throw Error("glint::caustic_filter: k must be in [0, 64] (got " + std::to_string(k) + ")");
         if (!(depth_tolerance > 0.0f)) throw Error("glint::caustic_filter: depth_tolerance must be positive");
@@ -61,16 +63,17 @@ inline std::vector<float> caustic_kernel(int k) {
 
 /// What a pixel's centre sees: the screen buffers of the filter (Larsen's depth and n_s . n_e).
 struct ScreenSurface {
-    bool diffuse = false;    // a non-specular surface (caustics are splatted and shown there)
-    float depth = 0.0f;      // distance along the view axis
-    float area = 0.0f;       // A: world area of the pixel's footprint
-    Vec3<float> normal{0.0f};  // facing the eye
-    Vec3<float> position{0.0f};
+    bool diffuse = false;    ///< A non-specular surface (caustics are splatted and shown there); false where the ray missed.
+    float depth = 0.0f;      ///< Distance along the view axis (world units).
+    float area = 0.0f;       ///< A: world area of the pixel's footprint.
+    Vec3<float> normal{0.0f};  ///< Unit geometric normal, facing the eye.
+    Vec3<float> position{0.0f};  ///< World-space point the pixel's centre sees.
 };
 
 /// The camera's projection: pixel of a point and the view-axis distance (the inverse of Camera::ray).
 class ScreenProjection {
 public:
+    /// The projection of camera c onto a width x height image; throws Error for a size < 1.
     template <Scalar T>
     ScreenProjection(const Camera<T>& c, int width, int height)
         : eye_(c.eye), w_(safe_normalize(Vec3<float>(c.target - c.eye))), width_(width), height_(height) {
@@ -96,6 +99,7 @@ public:
         const float a = (float(x) + 0.5f) * du - h_ * aspect_, b = h_ - (float(y) + 0.5f) * dv;
         return du * dv / std::pow(1.0f + a * a + b * b, 1.5f);
     }
+    /// The unit view axis (from the eye toward the target).
     const Vec3<float>& axis() const { return w_; }
 
 private:

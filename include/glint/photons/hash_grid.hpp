@@ -20,6 +20,8 @@
 
 namespace glint {
 
+/// A hashed uniform grid over spheres for point-in-sphere queries (Hachisuka and Jensen 2009,
+/// §4.3); it copies the spheres, is immutable once built and safe to query from many threads.
 template <Scalar T>
 class SphereHashGrid {
 public:
@@ -65,7 +67,9 @@ public:
         }
     }
 
+    /// Number of (sphere, bucket) listings stored: the grid's size.
     std::size_t listings() const { return index_.size(); }
+    /// Edge of a grid cell: the largest radius (0 when no sphere has a positive radius).
     T cell_size() const { return cell_; }
 
 private:

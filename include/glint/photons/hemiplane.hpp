@@ -37,6 +37,8 @@ T hemiplane_fraction(T a) {
     return T(4) / pi<T> * s * std::atan(s);
 }
 
+/// The enlarged hemicube front plane of Larsen 2004, ch. 11: fixed gather directions and their
+/// shares F_h, built once; gather() is const.
 template <Scalar T>
 class HemiPlane {
 public:
@@ -59,7 +61,9 @@ public:
 
     /// Sum of the pixels' shares F_h: the covered fraction of the cosine-weighted hemisphere.
     T fraction() const { return fraction_; }
-    const std::vector<Vec3<T>>& directions() const { return directions_; }  // local, z the normal
+    /// Unit directions through the pixels' centres, row by row; local, z the normal.
+    const std::vector<Vec3<T>>& directions() const { return directions_; }
+    /// The pixels' shares F_h (eq. 11.2), aligned with directions().
     const std::vector<T>& weights() const { return weights_; }
 
     /// E = pi sum L F_h / fraction at x with normal n; radiance(const Ray<T>&, const StoreHit<T>&)

@@ -35,6 +35,7 @@ inline std::array<std::uint8_t, 4> encode_rgbe(float r, float g, float b) {
     return {q(r), q(g), q(b), std::uint8_t(std::clamp(e + 128, 0, 255))};
 }
 
+/// The colour an RGBE value stands for; (0, 0, 0) for exponent byte 0.
 inline Rgb<float> decode_rgbe(const std::array<std::uint8_t, 4>& c) {
     if (c[3] == 0) return Rgb<float>(0.0f);
     const float f = std::ldexp(1.0f, int(c[3]) - (128 + 8));
@@ -62,20 +63,25 @@ inline Vec3<float> decode_direction(const std::array<std::uint8_t, 2>& c) {
 
 /// One stored photon (Jensen 2001, ch. 5): 20 bytes.
 struct Photon {
-    Vec3<float> position{0.0f};
-    std::array<std::uint8_t, 4> rgbe{0, 0, 0, 0};  // power, Ward's RGBE
-    std::array<std::uint8_t, 2> incoming{0, 0};    // direction it travelled in, quantized
-    std::array<std::uint8_t, 2> surface{0, 0};     // normal on the side it arrived from, quantized
+    Vec3<float> position{0.0f};                    ///< World-space point where it was stored.
+    std::array<std::uint8_t, 4> rgbe{0, 0, 0, 0};  ///< Power, Ward's RGBE.
+    std::array<std::uint8_t, 2> incoming{0, 0};    ///< Direction it travelled in, quantized.
+    std::array<std::uint8_t, 2> surface{0, 0};     ///< Normal on the side it arrived from, quantized.
 
     Photon() = default;
+    /// A photon at p of power `power` (W per band) that travelled along `direction` onto a
+    /// surface of normal `normal`; both are quantized and need not be unit length.
     Photon(const Vec3<float>& p, const Rgb<float>& power, const Vec3<float>& direction, const Vec3<float>& normal)
         : position(p), rgbe(encode_rgbe(power[0], power[1], power[2])),
           incoming(detail::encode_direction(direction)), surface(detail::encode_direction(normal)) {}
 
+    /// The photon's power (W per band), as RGBE decodes it.
     Rgb<float> power() const { return decode_rgbe(rgbe); }
+    /// Stores power p (W per band), rounded to RGBE; negative bands become 0.
     void set_power(const Rgb<float>& p) { rgbe = encode_rgbe(p[0], p[1], p[2]); }
     /// The unit direction the photon travelled in when it arrived (towards the surface).
     Vec3<float> direction() const { return detail::decode_direction(incoming); }
+    /// Stores the arrival direction d, quantized to 256 x 256 spherical-angle bins.
     void set_direction(const Vec3<float>& d) { incoming = detail::encode_direction(d); }
     /// The unit surface normal on the side the photon arrived from.
     Vec3<float> normal() const { return detail::decode_direction(surface); }

@@ -48,31 +48,39 @@ Rgb<To> rgb_as(const Rgb<From>& c) {
 }
 }  // namespace detail
 
+/// Photon mapping's knobs: photon counts, the estimate's kNN and radius, the final gather.
 struct PhotonMapSettings {
-    std::size_t photons = 100000;          // emitted for the global map
-    std::size_t caustic_photons = 400000;  // emitted for the caustic map (its caustic photons kept)
-    std::size_t knn = 50;                  // photons per estimate
-    float radius = 0.05f;                  // largest search radius (scene units)
-    int gather_rays = 64;                  // final gather rays per pixel sample
-    int max_specular = 32;                 // camera and gather paths: specular vertices
-    std::uint64_t seed = 0;
-    int threads = 0;
+    std::size_t photons = 100000;          ///< Emitted for the global map; > 0.
+    std::size_t caustic_photons = 400000;  ///< Emitted for the caustic map (its caustic photons kept); > 0.
+    std::size_t knn = 50;                  ///< Photons per estimate; > 0.
+    float radius = 0.05f;                  ///< Largest search radius (scene units); > 0.
+    int gather_rays = 64;                  ///< Final gather rays per pixel sample; >= 0.
+    int max_specular = 32;                 ///< Camera and gather paths: most specular vertices followed; >= 0.
+    std::uint64_t seed = 0;                ///< Seeds the two tracings (2 seed + 1, 2 seed + 2) and the render.
+    int threads = 0;                       ///< Threads for tracing and precomputation (0: hardware concurrency).
 
+    /// Throws Error for a zero count or knn, a radius that is not positive, or negative
+    /// gather rays or specular depth.
     void validate() const {
         if (photons == 0 || caustic_photons == 0) throw Error("photon map: photon counts must be positive");
         if (knn == 0) throw Error("photon map: knn must be positive");
         if (!(radius > 0.0f)) throw Error("photon map: radius must be positive, got " + std::to_string(radius));
         if (gather_rays < 0 || max_specular < 0) throw Error("photon map: gather rays and specular depth must be >= 0");
     }
+    /// The radiance estimate these settings give: knn within radius, Jensen's cone filter (k = 1).
     RadianceEstimateSettings estimate() const { return {knn, radius, PhotonFilter::cone, 1.0f}; }
 };
 
 /// The global map with its precomputed irradiance, and the caustic map.
 struct PhotonMaps {
-    PhotonMap global, caustic;
-    PrecomputedIrradiance irradiance;
-    std::size_t emitted = 0;
+    /// The global map (every stored photon of its tracing, caustic ones included).
+    PhotonMap global, caustic;  ///< The caustic map (L S+ D photons of its own tracing).
+    PrecomputedIrradiance irradiance;  ///< Irradiance precomputed on the global map (Christensen 1999).
+    std::size_t emitted = 0;           ///< Photons emitted by both tracings together.
 
+    /// Traces, balances and precomputes the maps of scene s through `accel` (over its
+    /// triangles) with st's counts and seed; throws Error for invalid settings or a scene with
+    /// no light that emits.
     template <RayAccelerator A, Scalar T = typename A::scalar_type>
     PhotonMaps(const Scene<T>& s, const A& accel, const PhotonMapSettings& st) {
         st.validate();
@@ -92,12 +100,15 @@ struct PhotonMaps {
     }
 };
 
+/// Photon mapping's rendering pass as an integrator of tracer/renderer.hpp: direct light by
+/// policy D, caustics from the caustic map, indirect light by final gather on the global map's
+/// precomputed irradiance. const and thread-safe; each thread keeps its own thread_state.
 template <RayAccelerator A, class D, Scalar T = typename A::scalar_type>
 class PhotonMapIntegrator {
 public:
-    using scalar_type = T;
-    using thread_state = std::vector<PhotonNeighbour>;
-    struct pixel_state {};
+    using scalar_type = T;  ///< The scene's scalar type.
+    using thread_state = std::vector<PhotonNeighbour>;  ///< A rendering thread's kNN scratch.
+    struct pixel_state {};  ///< Empty: no per-pixel state.
 
     /// `maps` must outlive the integrator.
     PhotonMapIntegrator(const Scene<T>& s, const A& accel, const D& direct, const PhotonMaps& maps,
@@ -106,8 +117,11 @@ public:
         st.validate();
     }
 
+    /// A fresh, empty kNN scratch for one rendering thread.
     thread_state make_thread_state() const { return {}; }
 
+    /// Radiance along camera ray `ray`: emission seen through specular surfaces, then at the
+    /// visible point direct light, caustics and the final gather; with the rays traced.
     template <class S>
         requires Sampler<S, T> && DirectLighting<D, T, RayQueries<A>, S>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state&, thread_state& scratch) const {
@@ -130,6 +144,7 @@ public:
         return out;
     }
 
+    /// Does nothing: photon mapping adds no film layers.
     void finish(Film&, std::span<const pixel_state>) const {}
 
 private:

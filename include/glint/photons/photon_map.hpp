@@ -36,10 +36,12 @@ namespace glint {
 
 /// A found photon: its squared distance to the query and its index in PhotonMap::photons().
 struct PhotonNeighbour {
-    float d2;
-    std::uint32_t index;
+    float d2;              ///< Squared distance to the query point (scene units squared).
+    std::uint32_t index;   ///< Index of the photon in PhotonMap::photons() (heap order).
 };
 
+/// The photon map: a left-balanced kd-tree over photons (Jensen 2001, ch. 6), immutable once
+/// balanced; queries are const and safe from many threads, each with its own scratch vector.
 class PhotonMap {
 public:
     PhotonMap() = default;
@@ -54,10 +56,13 @@ public:
         if (!work.empty()) balance(work.data(), work.size(), 0, bounds(work), photons);
     }
 
+    /// Number of photons.
     std::size_t size() const { return photons_.size(); }
+    /// True for a map without photons (every query then finds none).
     bool empty() const { return photons_.empty(); }
     /// The photons in heap order: index i of a PhotonNeighbour.
     std::span<const Photon> photons() const { return photons_; }
+    /// Photon i in heap order (unchecked: i < size()).
     const Photon& photon(std::size_t i) const { return photons_[i]; }
 
     /// The k nearest photons to x within distance max_radius (<= max_radius), into `out`

@@ -56,21 +56,24 @@ namespace glint {
 /// Where a photon's emission numbers come from (see the header comment).
 enum class PhotonEmission : std::uint8_t { random, halton };
 
+/// How photons are traced: count, seed, depth cap, threads, direct hits, emission numbers.
 struct PhotonSettings {
-    std::size_t photons = 100000;  // emitted photons
-    std::uint64_t seed = 1;
-    int max_depth = 64;            // cap on a photon's vertices (roulette ends walks long before)
-    int threads = 0;               // 0: hardware concurrency
-    bool store_direct = true;      // the first hit of direct light goes to the global map
-    PhotonEmission emission = PhotonEmission::random;
+    std::size_t photons = 100000;  ///< Emitted photons; > 0.
+    std::uint64_t seed = 1;        ///< Seeds each photon's PCG stream (and the Halton shifts).
+    int max_depth = 64;            ///< Cap on a photon's vertices (roulette ends walks long before); >= 1.
+    int threads = 0;               ///< 0: hardware concurrency.
+    bool store_direct = true;      ///< The first hit of direct light goes to the global map.
+    PhotonEmission emission = PhotonEmission::random;  ///< Where the five emission numbers come from.
 };
 
+/// The photons one tracing stored, split into the global and caustic maps' photons.
 struct PhotonSet {
-    std::vector<Photon> global, caustic;
-    std::size_t emitted = 0;
+    /// Photons for the global map: every stored photon not on an L S+ D path.
+    std::vector<Photon> global, caustic;  ///< Photons for the caustic map: first non-specular hit after specular vertices.
+    std::size_t emitted = 0;  ///< Photons emitted (the powers already carry 1 / emitted).
     /// The scene triangle each photon of `global` and `caustic` lies on (parallel arrays):
     /// what one map per surface group (photons/surface_groups.hpp) sorts photons by.
-    std::vector<std::uint32_t> global_triangle, caustic_triangle;
+    std::vector<std::uint32_t> global_triangle, caustic_triangle;  ///< The triangle of each photon of `caustic`, parallel to it.
 };
 
 /// Appends p's photons (both maps, with their triangles) to out's; `emitted` is left alone.
@@ -85,6 +88,7 @@ inline void append_photons(PhotonSet& out, const PhotonSet& p) {
 template <Scalar T>
 class PhotonEmitters {
 public:
+    /// The emitters of s (validated first); throws Error when no light emits.
     explicit PhotonEmitters(const Scene<T>& s) {
         s.validate();
         for (std::size_t i = 0; i < s.triangles.size(); ++i) {

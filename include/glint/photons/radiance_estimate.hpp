@@ -33,14 +33,17 @@
 
 namespace glint {
 
+/// How found photons are weighted: equally, or by Jensen 2001's cone filter (ch. 7).
 enum class PhotonFilter : std::uint8_t { none, cone };
 
+/// The radiance estimate's knobs: photons per estimate, radius bound and filter.
 struct RadianceEstimateSettings {
-    std::size_t k = 100;       // photons per estimate
-    float max_radius = 0.1f;   // search radius bound
-    PhotonFilter filter = PhotonFilter::none;
-    float cone_k = 1.0f;       // k_c of the cone filter, >= 1
+    std::size_t k = 100;       ///< Photons per estimate; > 0.
+    float max_radius = 0.1f;   ///< Search radius bound (scene units); > 0.
+    PhotonFilter filter = PhotonFilter::none;  ///< Equal weights or the cone filter.
+    float cone_k = 1.0f;       ///< k_c of the cone filter, >= 1.
 
+    /// Throws Error for k = 0, a max_radius that is not positive, or cone_k < 1.
     void validate() const {
         if (k == 0) throw Error("glint::RadianceEstimateSettings: k must be positive (got 0)");
         if (!(max_radius > 0.0f)) throw Error("glint::RadianceEstimateSettings: max_radius must be positive (got " + std::to_string(max_radius) + ")");
@@ -82,6 +85,8 @@ inline Rgb<float> irradiance_estimate(const PhotonMap& map, const Vec3<float>& x
 class PrecomputedIrradiance {
 public:
     PrecomputedIrradiance() = default;
+    /// Estimates the irradiance at photons 0, stride, 2 stride, ... of `map` with settings s, on
+    /// `threads` threads (0: hardware concurrency); throws Error for invalid s or stride 0.
     PrecomputedIrradiance(const PhotonMap& map, const RadianceEstimateSettings& s, int threads = 0, std::size_t stride = 4)
         : stride_(stride) {
         s.validate();
@@ -102,7 +107,9 @@ public:
         });
     }
 
+    /// Number of precomputed values: ceil(map size / stride).
     std::size_t size() const { return values_.size(); }
+    /// Every stride-th photon carries a value.
     std::size_t stride() const { return stride_; }
 
     /// E of the nearest precomputed photon within max_radius of x whose normal has cosine

@@ -33,11 +33,13 @@
 
 namespace glint {
 
+/// Selective tracing's knobs: the photon set, the number of groups, the path-change tolerance.
 struct SelectiveTracingSettings {
-    PhotonSettings photons;      // photons, seed, emission (halton recommended), threads
-    std::size_t groups = 2310;   // G: 2 * 3 * 5 * 7 * 11, one elementary box per group
-    float tolerance = 1e-4f;     // hit points farther apart than tolerance * max(1, |x|) differ
+    PhotonSettings photons;      ///< Photons, seed, emission (halton recommended), threads.
+    std::size_t groups = 2310;   ///< G: 2 * 3 * 5 * 7 * 11, one elementary box per group; in [1, photons].
+    float tolerance = 1e-4f;     ///< Hit points farther apart than tolerance * max(1, |x|) differ; >= 0.
 
+    /// Throws Error for 0 photons, groups outside [1, photons] or a negative tolerance.
     void validate() const {
         if (photons.photons == 0) throw Error("glint::SelectivePhotons: photons must be positive (got 0)");
         if (groups == 0 || groups > photons.photons)
@@ -48,19 +50,22 @@ struct SelectiveTracingSettings {
 
 /// A photon added to or removed from the maintained set (for the texel caches' priorities).
 struct PhotonChange {
-    std::uint32_t triangle;
-    float luminance;  // luminance of its power
-    bool bounced;     // the photon was reflected diffusely at least once before it was stored
+    std::uint32_t triangle;  ///< Index of the scene triangle the photon lies on.
+    float luminance;  ///< Luminance of its power.
+    bool bounced;     ///< The photon was reflected diffusely at least once before it was stored.
 };
 
 /// What one update did.
 struct SelectiveFrame {
-    std::size_t pilots = 0;           // photons re-traced to test their paths
-    std::size_t groups_changed = 0;   // groups whose pilot's path changed
-    std::size_t reemitted = 0;        // photons traced again (whole groups)
-    std::vector<PhotonChange> removed, added;
+    std::size_t pilots = 0;           ///< Photons re-traced to test their paths.
+    std::size_t groups_changed = 0;   ///< Groups whose pilot's path changed.
+    std::size_t reemitted = 0;        ///< Photons traced again (whole groups).
+    /// Stored photons the update removed (old paths of re-traced photons).
+    std::vector<PhotonChange> removed, added;  ///< Stored photons the update added (their new paths).
 };
 
+/// A photon set maintained across frames of a changing scene by selective photon tracing
+/// (Larsen 2004, ch. 9): built by tracing every photon, then updated once per frame.
 template <Scalar T>
 class SelectivePhotons {
 public:
@@ -76,7 +81,9 @@ public:
         retrace_groups(s, accel, emitters, all);
     }
 
+    /// The settings the set was built with.
     const SelectiveTracingSettings& settings() const { return settings_; }
+    /// Number of photons in group g (those with index i mod G = g), for g < groups.
     std::size_t group_size(std::size_t g) const { return (paths_.size() - g + settings_.groups - 1) / settings_.groups; }
 
     /// One frame: pilots every group, re-traces the groups whose pilot changed (see the header).

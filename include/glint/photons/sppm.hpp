@@ -48,15 +48,17 @@
 
 namespace glint {
 
+/// Stochastic progressive photon mapping's knobs: photons per pass, initial radius, alpha, depths.
 struct SppmSettings {
-    std::size_t photons = 100000;  // photons emitted per pass
-    double radius = 0.05;          // initial gather radius (scene units)
-    double alpha = 2.0 / 3.0;      // the fraction of a pass's photons kept (radius reduction)
-    int max_specular = 32;         // camera paths: specular vertices before the visible point
-    int camera_samples = 1;        // camera rays per pixel and pass for emission and direct light
-    int photon_depth = 32;         // photon paths: bounces (PhotonSettings::max_depth)
-    std::uint64_t seed = 0;
+    std::size_t photons = 100000;  ///< Photons emitted per pass; > 0.
+    double radius = 0.05;          ///< Initial gather radius (scene units); > 0.
+    double alpha = 2.0 / 3.0;      ///< The fraction of a pass's photons kept (radius reduction), in (0, 1].
+    int max_specular = 32;         ///< Camera paths: specular vertices before the visible point; >= 0.
+    int camera_samples = 1;        ///< Camera rays per pixel and pass for emission and direct light; >= 1.
+    int photon_depth = 32;         ///< Photon paths: bounces (PhotonSettings::max_depth); >= 1.
+    std::uint64_t seed = 0;        ///< The render's seed; each pass derives its camera and photon seeds from it.
 
+    /// Throws Error for a setting outside the ranges above.
     void validate() const {
         if (photons == 0) throw Error("SPPM needs at least one photon per pass");
         if (!(radius > 0.0) || !std::isfinite(radius)) throw Error("SPPM radius must be positive, got " + std::to_string(radius));
@@ -69,9 +71,9 @@ struct SppmSettings {
 /// What render_sppm returns: the image (RenderResult: rays are the camera passes'), the
 /// passes done, the photons emitted in all and the mean final radius over the pixels.
 struct SppmResult : ProgressiveResult {
-    std::size_t photons_emitted = 0;
-    double mean_radius = 0;
-    double photon_seconds = 0;  // photon tracing and lookups
+    std::size_t photons_emitted = 0;  ///< Photons emitted over all passes.
+    double mean_radius = 0;           ///< Mean final gather radius over the pixels (scene units).
+    double photon_seconds = 0;  ///< Seconds of photon tracing and lookups.
 };
 
 namespace detail {

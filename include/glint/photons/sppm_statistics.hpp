@@ -18,10 +18,11 @@
 
 namespace glint {
 
+/// One visible point's progressive statistics (R^2, N, tau), updated once per photon pass.
 struct SppmStatistics {
-    double r2 = 0;    // R^2
-    double n = 0;     // N
-    Rgb<double> tau{0.0};
+    double r2 = 0;    ///< R^2: the squared gather radius (scene units squared); start it at the initial radius squared.
+    double n = 0;     ///< N: the accumulated (alpha-reduced) photon count.
+    Rgb<double> tau{0.0};  ///< tau: the accumulated BRDF-weighted flux within R, per band.
 
     /// A pass that found m photons of summed BRDF-weighted power phi within R.
     void update(double m, const Rgb<double>& phi, double alpha) {

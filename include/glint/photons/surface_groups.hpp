@@ -32,8 +32,8 @@ namespace glint {
 
 /// The group of every triangle (0 .. count - 1).
 struct SurfaceGroups {
-    std::vector<std::uint32_t> group_of;
-    std::size_t count = 0;
+    std::vector<std::uint32_t> group_of;  ///< Group of each scene triangle, indexed like Scene::triangles.
+    std::size_t count = 0;                ///< Number of groups.
 };
 
 namespace detail {
@@ -119,7 +119,9 @@ public:
         build(parts, threads);
     }
 
+    /// Number of surface groups, one map each.
     std::size_t groups() const { return maps_.size(); }
+    /// The map of group g (unchecked: g < groups()).
     const PhotonMap& group(std::size_t g) const { return maps_[g]; }
     /// The map of the surface group that triangle `triangle` belongs to.
     const PhotonMap& map_of_triangle(std::uint32_t triangle) const { return maps_[group_of_[triangle]]; }

@@ -39,16 +39,19 @@
 
 namespace glint {
 
+/// The texel caches' knobs: texel size, the AIM's estimate, the IIM's gather plane, frame budgets.
 struct TexelCacheSettings {
-    float texel_size = 0.25f;                 // target texel edge (world units)
-    RadianceEstimateSettings estimate{50, 0.5f};
-    int hemiplane_resolution = 16;            // R: R x R gather rays a texel
-    float hemiplane_extent = 2.0f;            // a: the front face enlarged to twice its side
-    std::size_t groups_per_frame = 4;         // AIM updates (whole groups) per frame
-    std::size_t texels_per_frame = 20;        // IIM updates per frame
-    float threshold = 0.0f;                   // on delta / group area
-    int threads = 0;
+    float texel_size = 0.25f;                 ///< Target texel edge (world units); > 0.
+    RadianceEstimateSettings estimate{50, 0.5f};  ///< The AIM's irradiance estimate (50 photons within 0.5).
+    int hemiplane_resolution = 16;            ///< R: R x R gather rays a texel, in [1, 4096].
+    float hemiplane_extent = 2.0f;            ///< a: the front face enlarged to twice its side; > 0.
+    std::size_t groups_per_frame = 4;         ///< AIM updates (whole groups) per frame.
+    std::size_t texels_per_frame = 20;        ///< IIM updates per frame.
+    float threshold = 0.0f;                   ///< On delta / group area: a group at or below it is not updated; >= 0.
+    int threads = 0;                          ///< Update threads (0: hardware concurrency).
 
+    /// Throws Error for invalid estimate settings, a texel_size that is not positive and
+    /// finite, or a negative threshold (the plane's own checks run when a cache is built).
     void validate() const {
         estimate.validate();
         if (!(texel_size > 0.0f) || !std::isfinite(texel_size))
@@ -60,11 +63,21 @@ struct TexelCacheSettings {
 /// What one budgeted update did.
 struct TexelUpdate {
     std::size_t aim_groups = 0, aim_texels = 0, iim_texels = 0;
+    /// \var aim_groups
+    /// Surface groups whose AIMs were recomputed.
+    /// \var aim_texels
+    /// Texels of those groups (AIMs recomputed).
+    /// \var iim_texels
+    /// Texels whose IIM was gathered.
 };
 
+/// Texel caches of approximated (AIM) and indirect (IIM) illumination over a scene's
+/// triangles (Larsen 2004, ch. 10-11), updated within a per-frame budget.
 template <Scalar T>
 class TexelCache {
 public:
+    /// Texels over the triangles of s, grouped by `groups` (one entry per triangle); throws
+    /// Error for invalid settings or a grouping of another triangle count. Values start at 0.
     TexelCache(const Scene<T>& s, SurfaceGroups groups, const TexelCacheSettings& settings)
         : settings_(settings), groups_(std::move(groups)),
           plane_(settings.hemiplane_resolution, T(settings.hemiplane_extent)) {
@@ -79,7 +92,9 @@ public:
         cursor_.assign(groups_.count, 0);
     }
 
+    /// Number of texels over all triangles.
     std::size_t texels() const { return texels_.size(); }
+    /// The gather plane the IIMs are collected through.
     const HemiPlane<T>& plane() const { return plane_; }
 
     /// Adds a selective-tracing frame's removed and added photons to the groups' deltas.

@@ -36,12 +36,13 @@ namespace glint {
 /// met only specular surfaces up to the cap, or carries no throughput).
 template <Scalar T>
 struct VisiblePoint {
-    Vec3<T> x{0}, err{0};
-    Vec3<T> n{0};   // normal on the side the path arrived from
-    Vec3<T> wo{0};  // unit direction back along the path
-    Rgb<T> beta{T(0)};  // the path's throughput through its specular vertices
-    std::uint32_t material = 0;
-    bool valid = false;
+    /// World-space position of the vertex.
+    Vec3<T> x{0}, err{0};  ///< Rounding-error bound of x, per axis (for offsetting rays off it).
+    Vec3<T> n{0};   ///< Unit geometric normal on the side the path arrived from.
+    Vec3<T> wo{0};  ///< Unit direction back along the path.
+    Rgb<T> beta{T(0)};  ///< The path's throughput through its specular vertices.
+    std::uint32_t material = 0;  ///< Index of the vertex's material in Scene::materials.
+    bool valid = false;          ///< A point was found (false: the other fields are meaningless).
 
     /// The point's BRDF in its own frame (frame must be this point's Frame::from_normal(n)).
     SurfaceBrdf<T> brdf(const Scene<T>& s, const Frame<T>& frame) const {
@@ -109,16 +110,20 @@ Rgb<T> direct_at(const Scene<T>& s, RayQueries<A>& rays, const D& direct, const 
 /// A film of visible points and the radiance each pixel's camera pass estimated, row by row.
 template <Scalar T>
 struct VisiblePointFilm {
-    int width = 0, height = 0;
-    std::vector<VisiblePoint<T>> points;
-    std::vector<Rgb<T>> radiance;  // emission met and direct light at the point
+    /// Image width in pixels.
+    int width = 0, height = 0;  ///< Image height in pixels.
+    std::vector<VisiblePoint<T>> points;  ///< Each pixel's visible point (its last sample's), row by row.
+    std::vector<Rgb<T>> radiance;  ///< Emission met and direct light at the point: the mean over the pixel's samples.
 
+    /// Sizes the film to w x h pixels, every point invalid and every radiance 0.
     void resize(int w, int h) {
         width = w;
         height = h;
         points.assign(std::size_t(w) * std::size_t(h), VisiblePoint<T>{});
         radiance.assign(points.size(), Rgb<T>(T(0)));
     }
+    /// Stores pixel (x, y)'s mean radiance; the Renderer calls it (the second value, the
+    /// variance of the mean, is not kept).
     void set_pixel(int x, int y, const Rgb<T>& mean, const Rgb<T>&) {
         radiance[std::size_t(y) * std::size_t(width) + std::size_t(x)] = mean;
     }
@@ -130,12 +135,16 @@ struct VisiblePointFilm {
 template <RayAccelerator A, class D, Scalar T = typename A::scalar_type>
 class VisiblePointIntegrator {
 public:
-    using scalar_type = T;
-    using pixel_state = VisiblePoint<T>;
+    using scalar_type = T;               ///< The scene's scalar type.
+    using pixel_state = VisiblePoint<T>;  ///< A pixel's visible point, its last sample's.
 
+    /// The camera pass over s through `accel` with direct-lighting policy `direct`, following
+    /// up to max_specular specular vertices; all three are kept by reference and must outlive it.
     VisiblePointIntegrator(const Scene<T>& s, const A& accel, const D& direct, int max_specular)
         : scene_(s), accel_(accel), direct_(direct), max_specular_(max_specular) {}
 
+    /// One pixel sample: emission met plus direct light at the visible point, which is left in
+    /// `state`; with the rays traced.
     template <class S>
         requires Sampler<S, T> && DirectLighting<D, T, RayQueries<A>, S>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state) const {
@@ -145,6 +154,7 @@ public:
         return {L, rays.rays(), false};
     }
 
+    /// Copies every pixel's visible point onto the film.
     void finish(VisiblePointFilm<T>& film, std::span<const pixel_state> states) const {
         film.points.assign(states.begin(), states.end());
     }
