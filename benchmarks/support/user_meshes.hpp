@@ -3,7 +3,10 @@
 // any_hit single rays) against Embree 3 (rtcIntersect1 / rtcOccluded1, FTZ and DAZ set as
 // Embree's documentation asks, build quality HIGH and MEDIUM) on every mesh of a folder.
 // Passes alternate glint, Embree HIGH, Embree MEDIUM; the ratio printed is the median over
-// passes of Embree's time / glint's (above 1: glint is faster). Hit counts are compared.
+// passes of Embree's time / glint's (above 1: glint is faster). Hit counts are compared, and
+// each ray's answer: where glint and Embree differ, whether the ray passes within 1e-5
+// (barycentric, in double precision) of a triangle's edge, where two tests that are not
+// watertight may both lose a hit through the crack between two triangles.
 #pragma once
 
 #ifdef GLINT_HAVE_EMBREE
@@ -67,6 +70,33 @@ public:
             hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
         }
         return hits;
+    }
+    /// Per ray: Embree's closest hit's triangle (-1 on a miss).
+    std::vector<long> closest_ids(const std::vector<Ray<float>>& rays) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        std::vector<long> out;
+        for (const auto& r : rays) {
+            RTCRayHit rh{};
+            rh.ray = to_rtc(r);
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(scene_, &ctx, &rh);
+            out.push_back(rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? long(rh.hit.primID) : -1);
+        }
+        return out;
+    }
+    /// Per ray: 1 where Embree finds it occluded, else 0.
+    std::vector<long> occluded_flags(const std::vector<Ray<float>>& rays) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        std::vector<long> out;
+        for (const auto& r : rays) {
+            RTCRay x = to_rtc(r);
+            rtcOccluded1(scene_, &ctx, &x);
+            out.push_back(x.tfar < 0);
+        }
+        return out;
     }
     std::size_t occluded(const std::vector<Ray<float>>& rays) const {
         RTCIntersectContext ctx;
@@ -140,6 +170,67 @@ void user_query(const std::string& name, const char* query, std::size_t nrays, i
     rows.push_back({name, query, "medium", gm, 1e-6 * double(nrays) / median(tm), median(rm), build_s, bytes, tris});
 }
 
+/// Where ray r meets triangle t, in double precision: the smallest barycentric coordinate
+/// (negative: outside) and the distance along the ray.
+inline std::pair<double, double> barycentric_margin(const Ray<float>& r, const TriangleVertices<float>& t) {
+    using D = glm::dvec3;
+    const D o(r.origin), d(r.direction), a(t[0]), e1 = D(t[1]) - a, e2 = D(t[2]) - a;
+    const D p = glm::cross(d, e2);
+    const double det = glm::dot(e1, p);
+    if (det == 0.0) return {-1.0, 0.0};
+    const D s = o - a, q = glm::cross(s, e1);
+    const double u = glm::dot(s, p) / det, v = glm::dot(d, q) / det;
+    return {std::min({u, v, 1.0 - u - v}), glm::dot(e2, q) / det};
+}
+
+/// Whether ray r, in double precision, crosses some triangle within its interval less than
+/// `tol` (barycentric) from that triangle's boundary: where two float tests that are not
+/// watertight (Möller-Trumbore's, Embree's) may each miss or hit the edge shared by two
+/// triangles. Brute force: for the few rays on which glint and Embree differ.
+inline bool near_edge(const Ray<float>& r, const std::vector<TriangleVertices<float>>& soup, double tol = 1e-5) {
+    for (const auto& t : soup) {
+        const auto [margin, d] = barycentric_margin(r, t);
+        if (std::abs(margin) < tol && d > double(r.tmin) && d < double(r.tmax)) return true;
+    }
+    return false;
+}
+
+/// Whether triangles a and b meet ray r at the same distance (1e-6 relative, in double
+/// precision): a tie of overlapping triangles, where either answer is right.
+inline bool tie(const Ray<float>& r, const TriangleVertices<float>& a, const TriangleVertices<float>& b) {
+    const double ta = barycentric_margin(r, a).second, tb = barycentric_margin(r, b).second;
+    return std::abs(ta - tb) <= 1e-6 * std::max(std::abs(ta), std::abs(tb));
+}
+
+/// The rays on which glint's and Embree's answers differ (closest hit, `ids`: another
+/// triangle or a hit against a miss; any hit: occluded or not), and how many of them pass
+/// near a triangle's edge (near_edge) or are ties. Prints one line, and the first rays that
+/// are neither.
+inline void compare_rays(const std::string& name, const char* query, const std::vector<Ray<float>>& rays,
+                         const std::vector<TriangleVertices<float>>& soup, const std::vector<long>& glint,
+                         const std::vector<long>& embree, bool ids) {
+    std::size_t differ = 0, edge = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        if (glint[i] == embree[i]) continue;
+        ++differ;
+        const bool both = ids && glint[i] >= 0 && embree[i] >= 0;
+        if ((both && tie(rays[i], soup[std::size_t(glint[i])], soup[std::size_t(embree[i])])) ||
+            near_edge(rays[i], soup)) {
+            ++edge;
+            continue;
+        }
+        const Ray<float>& r = rays[i];
+        if (differ - edge <= 3)
+            std::printf("#   %s %s ray %zu differs away from every edge: o=(%.9g %.9g %.9g) d=(%.9g %.9g %.9g) "
+                        "glint %ld Embree %ld\n",
+                        name.c_str(), query, i, r.origin.x, r.origin.y, r.origin.z, r.direction.x, r.direction.y,
+                        r.direction.z, glint[i], embree[i]);
+    }
+    std::printf("#   %s %s rays answered differently by glint and Embree HIGH: %zu of %zu, %zu of them ties or "
+                "within 1e-5 of a triangle's edge\n",
+                name.c_str(), query, differ, rays.size(), edge);
+}
+
 /// glint's nodes, leaves and triangle records per ray of one query.
 inline void print_counts(const char* query, const WideBvhCounters& c, std::size_t rays) {
     const double n = double(rays);
@@ -199,6 +290,12 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
             bvh.closest_hit(r, hit, cnt);
         }
         print_counts(q, cnt, rays->size());
+        std::vector<long> ids;
+        for (const auto& r : *rays) {
+            StoreHit<float> hit;
+            ids.push_back(bvh.closest_hit(r, hit) ? long(hit.id) : -1);
+        }
+        compare_rays(name, q, *rays, soup, ids, high.closest_ids(*rays), true);
     }
     const auto g = [&] {
         std::size_t h = 0;
@@ -210,6 +307,9 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
     WideBvhCounters cnt;
     for (const auto& r : shadow) bvh.any_hit(r, cnt);
     print_counts("shadow", cnt, shadow.size());
+    std::vector<long> occluded;
+    for (const auto& r : shadow) occluded.push_back(bvh.any_hit(r));
+    compare_rays(name, "shadow", shadow, soup, occluded, high.occluded_flags(shadow), false);
 }
 
 /// Geometric mean of `ratio` over rows of one query and quality among `names`.
