@@ -57,57 +57,49 @@ public:
         x.tnear = r.tmin, x.tfar = r.tmax, x.mask = 0xffffffffu;
         return x;
     }
+    /// Embree's closest hit's triangle on r (-1 on a miss); whether r is occluded.
+    long closest_id(const Ray<float>& r, RTCIntersectContext& ctx) const {
+        RTCRayHit rh{};
+        rh.ray = to_rtc(r);
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_, &ctx, &rh);
+        return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? long(rh.hit.primID) : -1;
+    }
+    bool is_occluded(const Ray<float>& r, RTCIntersectContext& ctx) const {
+        RTCRay x = to_rtc(r);
+        rtcOccluded1(scene_, &ctx, &x);
+        return x.tfar < 0;  // Embree sets tfar to -inf when occluded
+    }
+    /// Over every ray: the number of closest hits (timed), or each ray's triangle (-1: miss).
     std::size_t closest(const std::vector<Ray<float>>& rays) const {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         std::size_t hits = 0;
-        for (const auto& r : rays) {
-            RTCRayHit rh{};
-            rh.ray = to_rtc(r);
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(scene_, &ctx, &rh);
-            hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-        }
+        for (const auto& r : rays) hits += closest_id(r, ctx) >= 0;
         return hits;
     }
-    /// Per ray: Embree's closest hit's triangle (-1 on a miss).
     std::vector<long> closest_ids(const std::vector<Ray<float>>& rays) const {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         std::vector<long> out;
-        for (const auto& r : rays) {
-            RTCRayHit rh{};
-            rh.ray = to_rtc(r);
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(scene_, &ctx, &rh);
-            out.push_back(rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? long(rh.hit.primID) : -1);
-        }
+        for (const auto& r : rays) out.push_back(closest_id(r, ctx));
         return out;
     }
-    /// Per ray: 1 where Embree finds it occluded, else 0.
-    std::vector<long> occluded_flags(const std::vector<Ray<float>>& rays) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        std::vector<long> out;
-        for (const auto& r : rays) {
-            RTCRay x = to_rtc(r);
-            rtcOccluded1(scene_, &ctx, &x);
-            out.push_back(x.tfar < 0);
-        }
-        return out;
-    }
+    /// Over every ray: the number occluded (timed), or each ray's answer (1: occluded).
     std::size_t occluded(const std::vector<Ray<float>>& rays) const {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         std::size_t hits = 0;
-        for (const auto& r : rays) {
-            RTCRay x = to_rtc(r);
-            rtcOccluded1(scene_, &ctx, &x);
-            hits += x.tfar < 0;  // Embree sets tfar to -inf when occluded
-        }
+        for (const auto& r : rays) hits += is_occluded(r, ctx);
         return hits;
+    }
+    std::vector<long> occluded_flags(const std::vector<Ray<float>>& rays) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        std::vector<long> out;
+        for (const auto& r : rays) out.push_back(is_occluded(r, ctx));
+        return out;
     }
     double build_s = 0;
 
