@@ -73,10 +73,15 @@ public:
                     throw Error("MeshBvh: indices: triangle " + std::to_string(k / 3) + " has vertex index " +
                                 std::to_string(std::int32_t(idx[k])) + " (negative)");
         mesh_ = IndexedMesh<float>{vertices_.data(), nv, 3 * sizeof(float), idx, nt};
+        try {
+            mesh_.check();
+        } catch (const Error& e) {
+            throw Error(std::string("MeshBvh: indices: ") + e.what());
+        }
         BvhBuildOptions opt;
         opt.threads = build_threads;
         py::gil_scoped_release release;
-        bvh_ = std::make_unique<const DefaultAccel>(mesh_, opt);  // checks the indices (glint::Error)
+        bvh_ = std::make_unique<const DefaultAccel>(mesh_, opt);
     }
 
     py::dict closest_hit(const py::object& origins, const py::object& directions, float tmin, float tmax, int threads) const {
