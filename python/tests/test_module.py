@@ -75,3 +75,4 @@ def test_one_ray_by_hand():
     assert np.isinf(h["t"][1]) and h["id"][1] == -1
     assert bvh.any_hit(o, d).tolist() == [True, False]
     assert not bvh.any_hit(o, d, tmax=0.5)[0]  # t in the open interval (tmin, tmax)
+    assert bvh.closest_hit(o, d, normals=False)["normal"].tolist() == [[0, 0, 0], [0, 0, 0]]
