@@ -14,7 +14,7 @@ import glint
 out = sys.argv[1] if len(sys.argv) > 1 else "cornell_plot.png"
 
 # The mean radiance per pixel and the variance of that mean, float32 arrays (height, width, 3).
-image, variance = glint.render("cornell", width=256, height=256, spp=64, seed=1)
+image, variance = glint.render("cornell", width=200, height=200, spp=32, seed=1)
 
 # Display: clip to [0, 1] and apply a 2.2 gamma. Noise: each pixel's standard error, averaged over R, G, B.
 display = np.clip(image, 0, 1) ** (1 / 2.2)
@@ -22,7 +22,7 @@ standard_error = np.sqrt(variance).mean(axis=2)
 
 fig, (left, right) = plt.subplots(1, 2, figsize=(9, 4.2))
 left.imshow(display)
-left.set_title(f"Cornell box, 64 spp (glint {glint.__version__})")
+left.set_title(f"Cornell box, 32 spp (glint {glint.__version__})")
 noise = right.imshow(standard_error, cmap="magma", vmax=np.percentile(standard_error, 99))  # the light's edge is far above
 right.set_title("standard error per pixel")
 fig.colorbar(noise, ax=right, fraction=0.046)
