@@ -1,9 +1,10 @@
 """Rays per second of glint.MeshBvh's batch calls (threads=1) against MeshBvh's own C++ loop
 (glint_python_hits) on the same mesh and the same 10^6 rays, alternating, pinned to one core.
 
-    PYTHONPATH=build/python python3 python/bench_throughput.py [--rays N] [--rounds R] [--cpu C]
+    PYTHONPATH=build/python python3 python/bench_throughput.py [--rays N] [--rounds R] [--cpu C] [--mesh FILE.obj]
 
-Mesh: ../shared/scenes/bunny.obj beside the repository (or $GLINT_SCENES/bunny.obj), else a
+Both sides measure their thread's CPU time (threads=1 traces on the calling thread), so that
+other work on a shared core is left out. Mesh: ../shared/scenes/bunny.obj beside the repository (or $GLINT_SCENES/bunny.obj), else a
 generated bumpy sphere of 40000 triangles. Prints the median seconds of each side and the
 throughput ratio Python / C++ (1 = as fast as the C++ loop; the Python call also writes its
 arrays and computes each hit's normal; the closest-no-normals row calls it with normals=False)."""
@@ -24,9 +25,14 @@ def main():
     ap.add_argument("--rays", type=int, default=10**6)
     ap.add_argument("--rounds", type=int, default=9)
     ap.add_argument("--cpu", type=int, default=0, help="the core both sides run on (default 0)")
+    ap.add_argument("--mesh", help="an OBJ file instead of the bunny")
     a = ap.parse_args()
     os.sched_setaffinity(0, {a.cpu})  # the C++ side's process inherits it
-    vertices, indices, mesh_name = comparison_mesh()
+    if a.mesh:
+        m = glint.load_obj(a.mesh)
+        vertices, indices, mesh_name = m["vertices"], m["indices"], pathlib.Path(a.mesh).name
+    else:
+        vertices, indices, mesh_name = comparison_mesh()
     origins, directions = random_rays(vertices, a.rays)
     bvh = glint.MeshBvh(vertices, indices)
     times = {k: [] for k in ("cpp closest", "py closest", "py closest-no-normals", "cpp any", "py any")}
@@ -40,11 +46,12 @@ def main():
             for name, call in (("closest", lambda: bvh.closest_hit(origins, directions, threads=1)),
                                ("closest-no-normals", lambda: bvh.closest_hit(origins, directions, threads=1, normals=False)),
                                ("any", lambda: bvh.any_hit(origins, directions, threads=1))):
-                start = time.perf_counter()
+                start = time.thread_time()
                 call()
-                times["py " + name].append(time.perf_counter() - start)
+                times["py " + name].append(time.thread_time() - start)
     med = {k: statistics.median(v) for k, v in times.items()}
-    print(f"mesh {mesh_name}: {len(indices)} triangles, {a.rays} rays, {a.rounds} alternating rounds on core {a.cpu}, "
+    print(f"mesh {mesh_name}: {len(indices)} triangles, {a.rays} rays, {a.rounds} alternating rounds on core {a.cpu} "
+          f"(median thread CPU seconds), "
           f"glint {glint.__version__}, kernels {bvh.isa}")
     for q in ("closest", "closest-no-normals", "any"):
         c, p = med["cpp " + q.split("-")[0]], med["py " + q]
