@@ -76,3 +76,16 @@ def test_one_ray_by_hand():
     assert bvh.any_hit(o, d).tolist() == [True, False]
     assert not bvh.any_hit(o, d, tmax=0.5)[0]  # t in the open interval (tmin, tmax)
     assert bvh.closest_hit(o, d, normals=False)["normal"].tolist() == [[0, 0, 0], [0, 0, 0]]
+
+
+def test_empty_degenerate_and_nan_inputs_miss():
+    o, d = np.zeros((5, 3), np.float32), np.ones((5, 3), np.float32)
+    empty = glint.MeshBvh(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32))
+    assert empty.closest_hit(o, d)["id"].tolist() == [-1] * 5 and not empty.any_hit(o, d).any()
+    flat = glint.MeshBvh(TRIANGLE[0], np.array([[0, 0, 1]], np.uint32))  # zero area
+    assert flat.closest_hit(o, d)["id"].tolist() == [-1] * 5
+    nan = np.full((2, 3), np.nan, np.float32)
+    h = glint.MeshBvh(*TRIANGLE).closest_hit(nan, d[:2])
+    assert h["id"].tolist() == [-1, -1] and np.all(np.isinf(h["t"])) and np.all(h["normal"] == 0)
+    none = np.zeros((0, 3), np.float32)
+    assert glint.MeshBvh(*TRIANGLE).closest_hit(none, none)["t"].shape == (0,)
