@@ -1,0 +1,46 @@
+"""glint.render: shapes, finiteness, reproducibility and the checks before any work."""
+import numpy as np
+import pytest
+
+import glint
+
+
+def test_cornell_image():
+    img, var = glint.render("cornell", width=40, height=30, spp=8, seed=1)
+    assert img.shape == var.shape == (30, 40, 3) and img.dtype == var.dtype == np.float32
+    assert np.all(np.isfinite(img)) and np.all(np.isfinite(var)) and np.all(var >= 0)
+    assert 0.02 < img.mean() < 1.0  # a lit box, not black, not blown out
+    # The red wall is on the left (columns 5 to 10 at this size), the green wall on the right (29 to 34).
+    assert img[10:20, 6:10, 0].mean() > 2 * img[10:20, 6:10, 1].mean()
+    assert img[10:20, 30:34, 1].mean() > 2 * img[10:20, 30:34, 0].mean()
+    again, _ = glint.render("cornell", width=40, height=30, spp=8, seed=1, threads=1)
+    np.testing.assert_array_equal(img, again)
+
+
+def test_spp_lowers_the_variance():
+    _, var4 = glint.render("cornell", width=16, height=16, spp=4)
+    _, var64 = glint.render("cornell", width=16, height=16, spp=64)
+    # The variance of a mean falls as 1/spp: 16 times, well above 4 over the whole image.
+    assert var4.mean() > 4 * var64.mean()
+
+
+def test_camera_and_inserted_mesh(tmp_path):
+    f = tmp_path / "tetra.obj"
+    f.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    img, _ = glint.render("cornell", width=16, height=16, spp=2, insert_mesh=str(f),
+                          eye=(0, 1, 3.5), look_at=(0, 1, 0), fov=40)
+    assert np.all(np.isfinite(img))
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(scene="nowhere"), "unknown scene 'nowhere'"),
+    (dict(direct="best"), "unknown direct lighting 'best'"),
+    (dict(width=0), r"width = 0 is outside \[1, 16384\]"),
+    (dict(scene="room.obj"), "not supported yet"),
+    (dict(scene="/no/such/room.gltf"), "cannot read the file"),
+    (dict(scene="furnace", insert_mesh="x.obj"), "not one"),
+    (dict(eye=(0, 0, 0), look_at=(0, 0, 0)), "eye and look_at must differ"),
+])
+def test_bad_arguments(kwargs, message):
+    with pytest.raises(glint.Error, match=message):
+        glint.render(**{"width": 8, "height": 8, "spp": 1, **kwargs})
