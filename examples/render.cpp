@@ -38,6 +38,7 @@
 #include <glint/io/scene_json.hpp>
 #include <glint/io/scene_json_read.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
+#include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
@@ -87,6 +88,7 @@ void usage() {
         "  --spp N             samples per pixel (default 16)\n"
         "  --out FILE          FILE.exr or FILE.png: writes FILE.exr (RGB, variance and the integrator's\n"
         "                      layers) and the tone-mapped preview FILE.png (default out.exr)\n"
+        "  --aov               path: also the first-hit layers albedo, normal and depth in FILE.exr\n"
         "  --eye X,Y,Z --look-at X,Y,Z --up X,Y,Z --fov DEGREES\n"
         "                      camera (default: the scene's; a mesh is framed by its bounding box)\n"
         "  --max-depth N       path length cap (default 1024)\n" +
@@ -236,6 +238,7 @@ struct Args {
     std::optional<float> fov_degrees;
     std::string integrator = "path";
     double time_budget = 0;  // --time-budget: seconds of passes, 0: one render
+    bool aov = false;        // --aov: the first-hit layers (path integrator)
     VplCliOptions vpl;
     PhotonCliOptions photons;
 };
@@ -290,6 +293,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--height") { o.image.height = int(to_int(a, value(), 1, 16384)); g.height_given = true; }
         else if (a == "--spp") o.image.spp = int(to_int(a, value(), 1, 1 << 20));
         else if (a == "--out") g.out = value();
+        else if (a == "--aov") g.aov = true;
         else if (a == "--roulette") o.roulette = value();
         else if (a == "--rr-depth") o.rr_depth = int(to_int(a, value(), 0, 1 << 20));
         else if (a == "--direct") o.direct = value();
@@ -330,6 +334,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
     check_names(g, o);
     if (g.time_budget > 0 && g.integrator == "vpl")
         throw Error("--time-budget applies to integrators with passes (path, sppm, photons), not '" + g.integrator + "'");
+    if (g.aov && g.integrator != "path") throw Error("--aov applies to the path integrator, not '" + g.integrator + "'");
     if (int(!g.scene_name.empty()) + int(!g.mesh.empty()) + int(!g.scene_file.empty()) != 1)
         throw Error("give exactly one of --scene NAME, --mesh FILE and --scene-file FILE (see --help)");
     if (!g.scene_file.empty() && !ends_with(g.scene_file, ".gltf") && !ends_with(g.scene_file, ".glb") &&
@@ -434,6 +439,32 @@ std::vector<ExrLayer> exr_layers(const Film& film) {
     return out;
 }
 
+/// The EXR header's record of a render: glint's version, the samples per pixel, the seconds
+/// and the policies by name.
+std::vector<ExrAttribute> exr_attributes(const Args& g, const NamedRender<float>& o, int spp, double seconds) {
+    std::string policies = "integrator=" + g.integrator + " accel=" + g.accel;
+    if (g.integrator == "path")
+        policies += " roulette=" + o.roulette + " direct=" + o.direct + " selection=" + o.selection + " sampler=" +
+                    o.sampler + " weights=" + o.weights + " estimate=" + o.estimate;
+    return {{"glint:version", std::string(version_string)}, {"glint:spp", spp}, {"glint:render_seconds", seconds},
+            {"glint:policies", policies}};
+}
+
+/// --aov: the first-hit layers of the beauty pass's camera rays (all `spp` of each pixel's
+/// samples, from sample 0), as EXR layers albedo.RGB, normal.XYZ and depth.Z.
+std::vector<ExrLayer> first_hit_exr_layers(const Scene<float>& scene, const AcceleratorChoice& accel,
+                                           NamedRender<float> o, int spp) {
+    o.image.spp = spp;
+    o.image.first_sample = 0;
+    const auto start = std::chrono::steady_clock::now();
+    const FirstHitImages f =
+        std::visit([&](const auto& a) { return render_first_hit_named(scene, *a, o); }, accel);
+    std::fprintf(stderr, "first-hit layers in %.3f s\n",
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    return {ExrLayer{"albedo", {"R", "G", "B"}, flatten(f.albedo)}, ExrLayer{"normal", {"X", "Y", "Z"}, flatten(f.normal)},
+            ExrLayer{"depth", {"Z"}, f.depth.pixels}};
+}
+
 /// The path tracer's render with the accelerator named --accel; prints what it did.
 int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
     std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n", scene.name.c_str(),
@@ -455,7 +486,10 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
         r.passes = 1;
     }
     const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
-    write_exr(exr, r.image, exr_layers(r));
+    std::vector<ExrLayer> layers = exr_layers(r);
+    if (g.aov)
+        for (ExrLayer& l : first_hit_exr_layers(scene, accel, o, r.passes * o.image.spp)) layers.push_back(std::move(l));
+    write_exr(exr, r.image, layers, exr_attributes(g, o, r.passes * o.image.spp, r.seconds));
     write_png(png, r.image, g.exposure, g.tonemap == "reinhard");
     std::printf("rendered %s in %.3f s (build %s %.3f s): %.2f Mrays/s, %llu rays, %.2f rays/path; wrote %s and %s\n",
                 scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, double(r.rays) / r.seconds * 1e-6,
@@ -471,9 +505,9 @@ int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& 
 }
 
 /// The render's EXR (no variance layer: progressive photon mapping keeps none) and PNG.
-void write_images(const Args& g, const Image<Rgb<float>>& image) {
+void write_images(const Args& g, const Image<Rgb<float>>& image, const std::vector<ExrAttribute>& attributes) {
     const std::string stem = g.out.substr(0, g.out.size() - 4);
-    write_exr(stem + ".exr", image, {});
+    write_exr(stem + ".exr", image, {}, attributes);
     write_png(stem + ".png", image, g.exposure, g.tonemap == "reinhard");
 }
 
@@ -481,7 +515,7 @@ void write_images(const Args& g, const Image<Rgb<float>>& image) {
 int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
     const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, o.image.spp};
     const SppmResult r = render_sppm_cli(scene, g.photons, o.image, budget, o.seed);
-    write_images(g, r.image);
+    write_images(g, r.image, exr_attributes(g, o, r.passes * g.photons.camera_samples, r.seconds));
     std::printf("rendered %s with SPPM in %.3f s (build 0 s): %d passes of %zu photons (%zu emitted), mean radius %.4g "
                 "(from %.4g), photon passes %.3f s; wrote %s\n",
                 scene.name.c_str(), r.seconds, r.passes, g.photons.photons, r.photons_emitted, r.mean_radius,
@@ -495,7 +529,7 @@ int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<flo
 int render_photons_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
     const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, 1};
     const ProgressiveResult r = render_photons_cli(scene, g.photons, o.image, budget, o.seed);
-    write_images(g, r.image);
+    write_images(g, r.image, exr_attributes(g, o, r.passes * o.image.spp, r.seconds));
     std::printf("rendered %s with photon maps in %.3f s (build 0 s): %zu + %zu photons per pass, k %d, radius %.4g, "
                 "%d gather rays, %d spp per pass; wrote %s\n",
                 scene.name.c_str(), r.seconds, g.photons.photons, 4 * g.photons.photons, g.photons.knn, g.photons.radius,
@@ -544,7 +578,8 @@ int main(int argc, char** argv) {
                                                             scene.triangles.size() - before_insert);
         const VplResult r = render_vpl_cli(scene, mesh, g.vpl, o.image, st);
         const std::string stem = g.out.substr(0, g.out.size() - 4);
-        write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}});
+        write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}},
+                  exr_attributes(g, o, o.image.spp, r.seconds));
         write_png(stem + ".png", r.image, g.exposure, g.tonemap == "reinhard");
         std::printf("rendered %s with %zu VPLs (%s visibility, gather %s) in %.3f s (shooting %.3f s); wrote %s.exr and %s.png\n",
                     scene.name.c_str(), r.vpls, g.vpl.visibility.c_str(), g.vpl.gather.c_str(), r.seconds, r.shooting_seconds,

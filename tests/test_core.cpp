@@ -2,12 +2,15 @@
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
 #include <set>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/camera.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/core/offset.hpp>
 #include <glint/core/random.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
@@ -152,4 +155,38 @@ TEST_CASE("version: the string is the three numbers") {
     CHECK(std::to_string(glint::version_major) + "." + std::to_string(glint::version_minor) + "." +
               std::to_string(glint::version_patch) ==
           glint::version_string);
+}
+
+TEST_CASE("offset: a ray leaving a far-off triangle starts strictly on the side it leaves to") {
+    // A triangle far from the origin, where o + t d would err by many ulps: the interpolated
+    // point, moved past its error bound, lies on the requested side of the exact plane.
+    const std::array<glint::Vec3<float>, 3> tri{glint::Vec3<float>(1e4f, 2e4f, -3e4f),
+                                                glint::Vec3<float>(1e4f + 1, 2e4f, -3e4f + 0.5f),
+                                                glint::Vec3<float>(1e4f, 2e4f + 1, -3e4f + 0.25f)};
+    const glint::Vec3d e1 = glint::Vec3d(tri[1]) - glint::Vec3d(tri[0]), e2 = glint::Vec3d(tri[2]) - glint::Vec3d(tri[0]);
+    const glint::Vec3d nd = glm::normalize(glm::cross(e1, e2));
+    const glint::Vec3<float> n(nd);
+    glint::Pcg32 rng(5);
+    int wrong = 0;
+    for (int i = 0; i < 1000; ++i) {
+        const float u = rng.uniform<float>() * 0.5f, v = rng.uniform<float>() * 0.5f;
+        const glint::SurfacePoint<float> p = glint::surface_point(tri, u, v);
+        CHECK(p.err.x > 0);
+        for (float side : {1.f, -1.f}) {
+            const glint::Vec3<float> o = glint::offset_origin(p.x, p.err, n, n * side);
+            const double h = glm::dot(glint::Vec3d(o) - glint::Vec3d(tri[0]), nd);  // signed distance, in double
+            wrong += !(h * side > 0);
+        }
+    }
+    CHECK(wrong == 0);
+}
+
+TEST_CASE("camera: the film centre looks at the target, the top left corner up and to the left") {
+    const glint::Camera<double> cam{{1, 2, 3}, {1, 2, -7}, {0, 1, 0}, 1.0};
+    const auto c = cam.ray(0.5, 0.5, 2.0);
+    CHECK(glm::length(c.direction - glint::Vec3d(0, 0, -1)) < 1e-12);
+    const auto tl = cam.ray(0, 0, 2.0);
+    CHECK(tl.direction.y / -tl.direction.z == doctest::Approx(std::tan(0.5)));
+    CHECK(tl.direction.x / -tl.direction.z == doctest::Approx(-2 * std::tan(0.5)));
+    CHECK(tl.origin == cam.eye);
 }

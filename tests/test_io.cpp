@@ -14,8 +14,11 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
+#include <glint/core/random.hpp>
+#include <glint/io/exr.hpp>
 #include <glint/io/gltf.hpp>
 #include <glint/io/json.hpp>
 #include <glint/io/scene_json.hpp>
@@ -407,5 +410,47 @@ TEST_CASE("scene json: meshes by path, relative to the scene file") {
         FAIL("no error");
     } catch (const Error& e) {
         CHECK(std::string(e.what()).find("no_such_mesh.obj") != std::string::npos);
+    }
+}
+
+TEST_CASE("EXR: layers and header attributes written and read back, with ZIP, PIZ and no compression") {
+    const int w = 37, h = 21;  // not a multiple of ZIP's 16 or PIZ's 32 lines
+    Image<Rgb<float>> rgb(w, h);
+    ExrLayer albedo{"albedo", {"R", "G", "B"}, {}}, normal{"normal", {"X", "Y", "Z"}, {}}, depth{"depth", {"Z"}, {}};
+    Pcg32 rng(17);
+    for (int i = 0; i < w * h; ++i) {
+        for (std::size_t c = 0; c < 3; ++c) rgb.pixels[std::size_t(i)][c] = rng.uniform<float>() * 100.0f;
+        for (std::size_t c = 0; c < 3; ++c) albedo.data.push_back(rng.uniform<float>());
+        const Vec3f n = glm::normalize(Vec3f(rng.uniform<float>() - 0.5f, rng.uniform<float>() - 0.5f, 1.0f));
+        normal.data.insert(normal.data.end(), {n.x, n.y, n.z});
+        depth.data.push_back(i % 7 == 0 ? std::numeric_limits<float>::infinity() : 1.0f + float(i) * 1e-3f);
+    }
+    const std::vector<ExrAttribute> attributes{{"glint:spp", 64}, {"glint:render_seconds", 1.25},
+                                               {"glint:policies", std::string("roulette=throughput direct=mis")}};
+    for (const ExrCompression compression : {ExrCompression::zip, ExrCompression::piz, ExrCompression::none}) {
+        const std::string path = temp_path("layers_" + std::to_string(int(compression)) + ".exr");
+        write_exr(path, rgb, {albedo, normal, depth}, attributes, compression);
+        const ExrChannels back = read_exr_channels(path);
+        REQUIRE(back.width == w);
+        REQUIRE(back.height == h);
+        CHECK(back.channels.size() == 10);
+        int differ = 0;
+        for (std::size_t i = 0; i < std::size_t(w * h); ++i) {
+            for (std::size_t c = 0; c < 3; ++c) {
+                differ += back.channel(std::string(1, "RGB"[c]))[i] != rgb.pixels[i][c];
+                differ += back.channel("albedo." + albedo.channels[c])[i] != albedo.data[3 * i + c];
+                differ += back.channel("normal." + normal.channels[c])[i] != normal.data[3 * i + c];
+            }
+            differ += back.channel("depth.Z")[i] != depth.data[i];  // +inf too
+        }
+        CHECK(differ == 0);
+        REQUIRE(back.attribute("glint:spp"));
+        CHECK(std::get<int>(back.attribute("glint:spp")->value) == 64);
+        CHECK(std::get<double>(back.attribute("glint:render_seconds")->value) == 1.25);
+        CHECK(std::get<std::string>(back.attribute("glint:policies")->value) == "roulette=throughput direct=mis");
+        CHECK(back.attribute("glint:nothing") == nullptr);
+        CHECK_THROWS_WITH_AS(back.channel("normal.W"), doctest::Contains("no channel 'normal.W' (it has B, G, R, albedo.B"),
+                             Error);
+        CHECK(read_exr_rgb(path).pixels == rgb.pixels);
     }
 }

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -28,6 +29,7 @@
 #include <glint/io/scene_json.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/correlated_environment.hpp>
+#include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/intersection/ivm.hpp>
@@ -1250,4 +1252,97 @@ TEST_CASE("depth cap: far out of reach by default, and walks it cuts are counted
     image_mean(capped, mean, se);
     CHECK(double(capped.capped_walks) > 0.3 * paths);
     CHECK(mean[0] < 0.7);
+}
+
+namespace {
+
+/// A square [-1, 1]^2 at z = 0 facing the camera on +z, Lambertian `kd` and emitting 1: alone
+/// in the dark, every camera ray that hits it carries exactly radiance 1 (it cannot light itself).
+Scene<float> lone_emitting_square(const Rgb<float>& kd) {
+    Scene<float> s;
+    s.name = "square";
+    const std::uint32_t m = s.add_material(Material<float>::lambertian(kd, Rgb<float>(1.0f)));
+    s.add_quad(Vec3f(-1, -1, 0), Vec3f(1, -1, 0), Vec3f(1, 1, 0), Vec3f(-1, 1, 0), m);
+    s.camera = Camera<float>{Vec3f(0.1f, 0.2f, 4.0f), Vec3f(0.1f, 0.2f, 0.0f), Vec3f(0, 1, 0), 0.7f};
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("first-hit layers: the beauty pass's pixel filter, unit normals inside a plane, depth the ray distance") {
+    const Rgb<float> kd(0.6f, 0.4f, 0.2f);
+    const Scene<float> s = lone_emitting_square(kd);
+    const DefaultAccel accel(s.triangles);
+    NamedRender<float> o;
+    o.image.width = 24;
+    o.image.height = 20;
+    o.image.spp = 8;
+    o.image.threads = 2;
+    o.seed = 3;
+    // Jittered samples: each pixel's albedo is kd times the share of its rays that hit, the
+    // share the beauty pass (radiance 1 on the square, 0 elsewhere) sees, to float rounding.
+    const RenderResult beauty = render_named(s, accel, o);
+    const FirstHitImages f = render_first_hit_named(s, accel, o);
+    int partial = 0, full = 0, empty = 0, bad = 0;
+    for (std::size_t i = 0; i < beauty.image.pixels.size(); ++i) {
+        const float cover = beauty.image.pixels[i][0];
+        for (std::size_t c = 0; c < 3; ++c) bad += std::abs(f.albedo.pixels[i][c] - kd[c] * cover) > 1e-6f;
+        const Rgb<float> n = f.normal.pixels[i];
+        bad += std::abs(n[2] - cover) > 1e-6f || n[0] != 0.0f || n[1] != 0.0f;  // (0, 0, 1) times the share
+        if (cover == 1.0f) ++full;
+        else if (cover == 0.0f) {
+            ++empty;
+            bad += !std::isinf(f.depth.pixels[i]);
+        } else ++partial;
+        if (cover > 0.0f) bad += !(f.depth.pixels[i] >= 4.0f && f.depth.pixels[i] < 4.5f);
+    }
+    CHECK(bad == 0);
+    CHECK(partial > 10);  // pixels straddling the square's edges were compared too
+    CHECK(full > 100);
+    CHECK(empty > 10);
+    // Pixel centres: the depth is the distance to the plane along the centre ray.
+    o.image.pixel_jitter = false;
+    const FirstHitImages c = render_first_hit_named(s, accel, o);
+    int hits = 0, wrong = 0;
+    for (int y = 0; y < o.image.height; ++y)
+        for (int x = 0; x < o.image.width; ++x) {
+            const Ray<float> r = s.camera.ray((float(x) + 0.5f) / 24.0f, (float(y) + 0.5f) / 20.0f, 24.0f / 20.0f);
+            const Vec3f p = r.origin + r.direction * (4.0f / -r.direction.z);
+            const bool in = std::abs(p.x) < 1 && std::abs(p.y) < 1;
+            if (!in) continue;
+            ++hits;
+            wrong += std::abs(c.depth.at(x, y) - glm::length(p - r.origin)) > 1e-5f * 4 ||
+                     std::abs(glm::length(Vec3f(c.normal.at(x, y)[0], c.normal.at(x, y)[1], c.normal.at(x, y)[2])) - 1) > 1e-6f;
+        }
+    CHECK(hits > 100);
+    CHECK(wrong == 0);
+}
+
+TEST_CASE("first-hit layers: a diffuse Cornell wall's albedo is its reflectance") {
+    // Centre rays, traced again here through the same tree: the box's edge with the floor lies
+    // on the image's diagonal, where another tree or triangle test may pick the other side.
+    const Scene<float> s = builtin_scene<float>("cornell");
+    const DefaultAccel accel(s.triangles);
+    NamedRender<float> o;
+    o.image.width = o.image.height = 32;
+    o.image.spp = 2;
+    o.image.pixel_jitter = false;
+    const FirstHitImages f = render_first_hit_named(s, accel, o);
+    std::map<std::uint32_t, int> seen;  // material -> pixels showing it
+    int differ = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            StoreHit<float> hit;
+            const Ray<float> r = s.camera.ray((float(x) + 0.5f) / 32.0f, (float(y) + 0.5f) / 32.0f, 1.0f);
+            if (!accel.closest_hit(r, hit)) continue;
+            const std::uint32_t m = s.material_of[hit.id];
+            const Material<float>& mat = s.materials[m];
+            if (mat.kind != MaterialKind::lambertian) continue;
+            differ += f.albedo.at(x, y) != mat.kd;  // exactly: both samples of a centre see the same
+            ++seen[m];
+        }
+    CHECK(differ == 0);
+    int coloured = 0;  // the red and the green wall, each seen over many pixels
+    for (const auto& [m, pixels] : seen) coloured += s.materials[m].kd.max() > 3 * s.materials[m].kd.min() && pixels > 50;
+    CHECK(coloured == 2);
 }

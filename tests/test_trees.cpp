@@ -31,6 +31,7 @@
 #include <map>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -1324,6 +1325,41 @@ TEST_CASE("wide BVH: the user's indexed mesh with a stride, hits report the user
     thin.stride_bytes = 8;
     CHECK_THROWS_AS(MeshBvh<Watertight<float>>{thin}, Error);
     CHECK_THROWS_AS(WideBvh<8>(triangle_boxes(soup), BvhBuildOptions{.max_leaf = 17}), Error);
+}
+
+static_assert(std::is_same_v<MeshBvh<>, MeshBvh<MollerTrumbore<float>, 8, WideBoxes::floats, WideBuildOrder>>);
+
+TEST_CASE("MeshBvh<>: the geometric normal of a hit, in the triangle's winding, by the user's id") {
+    Mesh<float> soup = make_torus_knot<float>(60, 8);
+    soup.push_back({Vec3f(0), Vec3f(1, 0, 0), Vec3f(2, 0, 0)});  // degenerate: normal 0
+    std::vector<std::uint32_t> idx;
+    std::vector<Vec3f> verts;
+    for (std::size_t j = soup.size(); j-- > 0;)  // reversed, and the winding flipped
+        for (int k : {0, 2, 1}) {
+            idx.push_back(std::uint32_t(verts.size()));
+            verts.push_back(soup[j][std::size_t(k)]);
+        }
+    const MeshBvh<> a(soup);
+    const MeshBvh<Watertight<float>, 4> b(IndexedMesh<float>{verts.data(), verts.size(), sizeof(Vec3f), idx.data(),
+                                                             soup.size()},
+                                          BvhBuildOptions{.spatial_splits = true});
+    REQUIRE(a.triangle_count() == soup.size());
+    CHECK(a.geometric_normal(std::uint32_t(soup.size() - 1)) == Vec3f(0));
+    CHECK(b.geometric_normal(0) == Vec3f(0));
+    int hits = 0, bad = 0;
+    for (const auto& r : make_incoherent_rays<float>(soup, 5000, 9)) {
+        StoreHit<float> ha;
+        if (!a.closest_hit(r, ha)) continue;
+        ++hits;
+        const auto& t = soup[ha.id];
+        const Vec3d e = glm::cross(Vec3d(t[1]) - Vec3d(t[0]), Vec3d(t[2]) - Vec3d(t[0]));
+        const Vec3f n = a.geometric_normal(ha.id);
+        // Unit, along e1 x e2 (to float rounding), and the flipped winding's is the opposite.
+        bad += std::abs(glm::length(Vec3d(n)) - 1.0) > 1e-6 || glm::length(Vec3d(n) - e / glm::length(e)) > 1e-6 ||
+               b.geometric_normal(std::uint32_t(soup.size() - 1 - ha.id)) != -n;
+    }
+    CHECK(hits > 1000);
+    CHECK(bad == 0);
 }
 
 TEST_CASE("wide BVH: NaN tmax, empty interval, NaN and zero rays, degenerate and flat scenes") {

@@ -1,6 +1,6 @@
 // glint/tracer/scene.hpp: what the reference path tracer renders: triangle meshes with
 // per-face materials, polygon area lights, point lights (isotropic, spot, oriented: lights/light.hpp), an optional environment map and a
-// pinhole camera; plus the scene's features, checked once, before rendering.
+// pinhole camera (core/camera.hpp); plus the scene's features, checked once, before rendering.
 //
 // Materials (Szécsi 2009, §1.3, and §2.1 for the combined BRDF):
 //   lambertian  f = kd / pi;
@@ -22,6 +22,7 @@
 #include <vector>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/camera.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
@@ -68,23 +69,6 @@ struct AreaLight {
     Rgb<T> emission{T(0)};
     Vec3<T> normal{0, 0, 1};
     T area = 0;
-};
-
-/// Pinhole camera: `fov_y` is the full vertical field of view in radians.
-template <Scalar T>
-struct Camera {
-    Vec3<T> eye{0, 0, 5}, target{0}, up{0, 1, 0};
-    T fov_y = T(0.7);
-
-    /// Ray through film position (sx, sy) in [0,1]^2, (0,0) at the top left.
-    Ray<T> ray(T sx, T sy, T aspect) const {
-        const Vec3<T> w = safe_normalize(target - eye);
-        const Vec3<T> u = safe_normalize(glm::cross(w, up), Vec3<T>(1, 0, 0));
-        const Vec3<T> v = glm::cross(u, w);
-        const T h = std::tan(fov_y * T(0.5));
-        const Vec3<T> d = w + u * ((T(2) * sx - T(1)) * h * aspect) + v * ((T(1) - T(2) * sy) * h);
-        return Ray<T>{eye, safe_normalize(d), T(0), infinity<T>};
-    }
 };
 
 /// Which capabilities a scene uses, checked once before rendering (the path tracer skips the

@@ -4,9 +4,9 @@
 // ShadingPoint is a vertex's position (with its rounding-error bound), normal, local frame and
 // BRDF; RayQueries<Accel> traces a sample's rays through an accelerator and counts them (the
 // count is the sample's result, PathSample::rays, so no function takes a counter to update).
-// Ray origins are offset past the point's error bound (Pharr, Jakob, Humphreys 2023, sections
-// 6.8.5-6.8.6), so that the same scene renders the same image at any translation and scale
-// float resolves.
+// Ray origins are offset past the point's error bound (core/offset.hpp: Pharr, Jakob,
+// Humphreys 2023, sections 6.8.5-6.8.6), so that the same scene renders the same image at any
+// translation and scale float resolves.
 #pragma once
 
 #include <algorithm>
@@ -16,6 +16,7 @@
 #include <limits>
 
 #include <glint/core/math.hpp>
+#include <glint/core/offset.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/triangle.hpp>
 #include <glint/sampling/correlated.hpp>
@@ -60,55 +61,11 @@ struct Arrival {
     Vec3<T> x{0}, n{0};
 };
 
-/// A hit point and the bound on its rounding error, per axis.
-template <Scalar T>
-struct SurfacePoint {
-    Vec3<T> x, err;
-};
-
-/// gamma(n) = n u / (1 - n u), u = unit roundoff: the relative error bound of n roundings.
-template <Scalar T>
-constexpr T rounding_gamma(int n) {
-    const T u = std::numeric_limits<T>::epsilon() / T(2);
-    return T(n) * u / (T(1) - T(n) * u);
-}
-
-/// Bound on the rounding error, per axis, of a point computed from vertices whose largest
-/// coordinate is m, and of the triangle tests' distances to their planes: gamma(16) m on
-/// every axis. Interpolation alone errs by gamma(7) sum |b_i v_i| per axis (Pharr, Jakob,
-/// Humphreys 2023, section 6.8.5), but an intersector mixes the axes (cross products), so
-/// the floor at y = 0 of a box 1 wide still has distance errors of ulps of 1, not of 0.
-template <Scalar T>
-Vec3<T> coordinate_error(T m) {
-    return Vec3<T>(rounding_gamma<T>(16) * m);
-}
-
 /// The hit point interpolated from the triangle's vertices by the hit's barycentrics, and
-/// its error bound. Unlike o + t d, whose error grows with the ray's length and origin, the
-/// bound depends only on the triangle's own coordinates.
+/// its error bound (core/offset.hpp).
 template <Scalar T>
 SurfacePoint<T> surface_point(const Scene<T>& scene, const StoreHit<T>& hit) {
-    const auto& v = scene.triangles[hit.id];
-    const T b0 = T(1) - hit.u - hit.v;
-    const Vec3<T> p = v[0] * b0 + v[1] * hit.u + v[2] * hit.v;
-    const Vec3<T> m = glm::max(glm::max(glm::abs(v[0]), glm::abs(v[1])), glm::abs(v[2]));
-    return {p, coordinate_error(std::max({m.x, m.y, m.z}))};
-}
-
-/// Origin of a ray leaving point p (rounding error `err` per axis) of a surface with normal
-/// n towards `dir`: p moved along n, to the side dir leaves to, past its error bound, and
-/// each coordinate then rounded away from the surface (Pharr, Jakob, Humphreys 2023, section
-/// 6.8.6). The offset scales with the coordinates' own rounding.
-template <Scalar T>
-Vec3<T> offset_origin(const Vec3<T>& p, const Vec3<T>& err, const Vec3<T>& n, const Vec3<T>& dir) {
-    const T d = glm::dot(glm::abs(n), err) * T(2);
-    const Vec3<T> offset = glm::dot(dir, n) >= T(0) ? n * d : -n * d;
-    Vec3<T> po = p + offset;
-    for (int i = 0; i < 3; ++i) {
-        if (offset[i] > T(0)) po[i] = std::nextafter(po[i], infinity<T>);
-        else if (offset[i] < T(0)) po[i] = std::nextafter(po[i], -infinity<T>);
-    }
-    return po;
+    return surface_point(scene.triangles[hit.id], hit.u, hit.v);
 }
 
 /// A ray leaving shading point sp in direction dir.

@@ -1,0 +1,30 @@
+// glint/core/camera.hpp: a pinhole camera, the rays through film positions (eye, target,
+// up vector and vertical field of view, as in pbrt-v4's perspective camera: Pharr, Jakob,
+// Humphreys 2023, section 5.2).
+#pragma once
+
+#include <cmath>
+
+#include <glint/core/math.hpp>
+#include <glint/core/ray.hpp>
+
+namespace glint {
+
+/// Pinhole camera: `fov_y` is the full vertical field of view in radians.
+template <Scalar T>
+struct Camera {
+    Vec3<T> eye{0, 0, 5}, target{0}, up{0, 1, 0};
+    T fov_y = T(0.7);
+
+    /// Ray through film position (sx, sy) in [0,1]^2, (0,0) at the top left.
+    Ray<T> ray(T sx, T sy, T aspect) const {
+        const Vec3<T> w = safe_normalize(target - eye);
+        const Vec3<T> u = safe_normalize(glm::cross(w, up), Vec3<T>(1, 0, 0));
+        const Vec3<T> v = glm::cross(u, w);
+        const T h = std::tan(fov_y * T(0.5));
+        const Vec3<T> d = w + u * ((T(2) * sx - T(1)) * h * aspect) + v * ((T(1) - T(2) * sy) * h);
+        return Ray<T>{eye, safe_normalize(d), T(0), infinity<T>};
+    }
+};
+
+}  // namespace glint
