@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(g++ cmake make libglm-dev doctest-dev libbenchmark-dev libembree-dev libopenexr-dev
           libtinyobjloader-dev libtinygltf-dev libstb-dev gnuplot-nox clang libclang-rt-14-dev pkg-config
-          doxygen pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib)
+          doxygen pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib openexr)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
