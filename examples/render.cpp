@@ -33,6 +33,7 @@
 #include <glint/io/gltf.hpp>
 #include <glint/version.hpp>
 #include <glint/io/obj.hpp>
+#include <glint/io/obj_scene.hpp>
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
@@ -127,13 +128,6 @@ void usage() {
     std::fputs(text.c_str(), stdout);
 }
 
-/// A camera that frames `box` from the front and a little above.
-Camera<float> frame_box(const AABB<float>& box) {
-    const Vec3f c = box.center();
-    const float r = glm::length(box.extent()) * 0.5f;
-    return Camera<float>{c + Vec3f(0.0f, 0.3f, 1.0f) * (r * 2.6f), c, Vec3f(0, 1, 0), 0.7f};
-}
-
 /// load_obj, its warnings printed.
 ObjMesh load_obj_warning(const std::string& path) {
     ObjMesh mesh = load_obj(path);
@@ -141,31 +135,11 @@ ObjMesh load_obj_warning(const std::string& path) {
     return mesh;
 }
 
-/// A scene from an OBJ: MTL materials (illum 5 mirror, 7 glass, Ns > 0 and Ks > 0 glossy),
-/// emissive faces as area lights; a sky if nothing emits; camera framing the bounding box.
+/// A scene from an OBJ (io/obj_scene.hpp: MTL materials mapped, emissive faces as lights, a
+/// sky if nothing emits, a camera framing it); --env replaces the sky.
 Scene<float> scene_from_obj(const std::string& path, const std::string& env_path) {
-    const ObjMesh mesh = load_obj_warning(path);
-    Scene<float> s;
-    s.name = path;
-    for (const ObjMaterial& m : mesh.materials) {
-        Material<float> mat = Material<float>::lambertian(m.kd, m.ke);
-        if (m.illum == 5) mat = Material<float>::mirror(m.ks.max() > 0 ? m.ks : Rgb<float>(0.9f));
-        else if (m.illum == 7) mat = Material<float>::dielectric(m.ni > 1.0f ? m.ni : 1.5f);
-        else if (m.ks.max() > 0 && m.ns > 0) mat = Material<float>::glossy(m.kd, m.ks, m.ns);
-        mat.emission = m.ke;
-        s.add_material(mat);
-    }
-    AABB<float> box;
-    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-        s.add_polygon(mesh.triangles[i], mesh.material[i]);
-        for (const auto& p : mesh.triangles[i]) box.extend(p);
-    }
-    if (!env_path.empty()) {
-        s.environment = EnvironmentMap<float>(read_exr_rgb(env_path));
-    } else if (s.area_lights.empty()) {
-        s.environment = default_sky<float>();
-    }
-    s.camera = frame_box(box);
+    Scene<float> s = obj_scene(load_obj_warning(path), path);
+    if (!env_path.empty()) s.environment = EnvironmentMap<float>(read_exr_rgb(env_path));
     return s;
 }
 

@@ -10,6 +10,7 @@
 
 #include <glint/io/gltf.hpp>
 #include <glint/io/obj.hpp>
+#include <glint/io/obj_scene.hpp>
 #include <glint/io/scene_json_read.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
@@ -34,21 +35,23 @@ bool ends_with(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-/// A glTF scene: its camera, or the caller's (required where it has none); a sky if nothing emits.
-Scene<float> gltf_scene(const std::string& path, const CameraArgs& cam) {
+/// A glTF scene: its camera, or one framing it where it has none; a sky if nothing emits.
+Scene<float> gltf_scene(const std::string& path) {
     GltfScene<float> g = read_gltf<float>(path);
-    if (!g.has_camera && !(cam.eye && cam.look_at))
-        throw Error(path + " has no camera: give eye= and look_at=");
+    if (!g.has_camera) {
+        AABB<float> box;
+        for (const auto& t : g.scene.triangles)
+            for (const auto& p : t) box.extend(p);
+        g.scene.camera = frame_box(box);
+    }
     if (g.scene.area_lights.empty() && g.scene.point_lights.empty()) g.scene.environment = default_sky<float>();
     return std::move(g.scene);
 }
 
-Scene<float> load_scene(const std::string& name, const CameraArgs& cam) {
-    if (ends_with(name, ".gltf") || ends_with(name, ".glb")) return gltf_scene(name, cam);
+Scene<float> load_scene(const std::string& name) {
+    if (ends_with(name, ".gltf") || ends_with(name, ".glb")) return gltf_scene(name);
     if (ends_with(name, ".json")) return read_scene_json<float>(name).scene;
-    if (ends_with(name, ".obj"))
-        throw Error("render: an OBJ file as the whole scene is not supported yet; put it on the Cornell box with "
-                    "render(scene='cornell', insert_mesh='" + name + "') or convert it to glTF");
+    if (ends_with(name, ".obj")) return obj_scene(load_obj(name), name);  // a sky and a framing camera
     return builtin_scene<float>(name);  // glint::Error listing the names for an unknown one
 }
 
@@ -102,7 +105,7 @@ py::tuple render(const std::string& scene_name, int width, int height, int spp, 
     RenderResult r;
     {
         py::gil_scoped_release release;
-        Scene<float> scene = load_scene(scene_name, cam);
+        Scene<float> scene = load_scene(scene_name);
         apply_camera(cam, scene.camera);
         if (insert)
             insert_mesh<float>(scene, load_obj(*insert).triangles,
@@ -129,8 +132,8 @@ void bind_render(py::module_& m) {
         py::arg("direct") = "mis", py::arg("sampler") = "halton", py::arg("eye") = py::none(),
         py::arg("look_at") = py::none(), py::arg("up") = py::none(), py::arg("fov") = py::none(),
         py::arg("insert_mesh") = py::none(),
-        "Path-traces `scene` (a built-in name such as 'cornell', a .gltf/.glb file, or a .json file that\n"
-        "glint-render --export-scene wrote) at width x height with spp samples per pixel; returns\n"
+        "Path-traces `scene` (a built-in name such as 'cornell', a .gltf/.glb file, an .obj (+.mtl) file, or\n"
+        "a .json file that glint-render --export-scene wrote) at width x height with spp samples per pixel; returns\n"
         "(image, variance), float32 arrays (height, width, 3): the mean radiance per pixel and the variance\n"
         "of that mean. roulette, direct and sampler take glint-render's names; eye, look_at, up (3 numbers)\n"
         "and fov (degrees) replace the scene's camera; insert_mesh puts an OBJ on the Cornell box's floor.\n"

@@ -32,11 +32,24 @@ def test_camera_and_inserted_mesh(tmp_path):
     assert np.all(np.isfinite(img))
 
 
+def test_obj_as_the_scene(tmp_path):
+    # An OBJ whose material emits lights itself; one without lights gets a sky. Both framed.
+    (tmp_path / "lamp.mtl").write_text("newmtl lamp\nKd 0 0 0\nKe 4 4 4\nnewmtl grey\nKd 0.5 0.5 0.5\n")
+    (tmp_path / "lit.obj").write_text("mtllib lamp.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n"
+                                      "v -0.2 1 -0.2\nv 0.2 1 -0.2\nv 0.2 1 0.2\nv -0.2 1 0.2\n"
+                                      "usemtl grey\nf 1 4 3 2\nusemtl lamp\nf 5 6 7 8\n")
+    (tmp_path / "dark.obj").write_text("v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 4 3 2\n")
+    for name in ("lit.obj", "dark.obj"):
+        img, var = glint.render(str(tmp_path / name), width=16, height=12, spp=4)
+        assert img.shape == (12, 16, 3) and np.all(np.isfinite(img)) and np.all(var >= 0)
+        assert img.mean() > 0.01  # lit by its lamp or by the sky, and in view
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(scene="nowhere"), "unknown scene 'nowhere'"),
     (dict(direct="best"), "unknown direct lighting 'best'"),
     (dict(width=0), r"width = 0 is outside \[1, 16384\]"),
-    (dict(scene="room.obj"), "not supported yet"),
+    (dict(scene="/no/such/room.obj"), "cannot read the file"),
     (dict(scene="/no/such/room.gltf"), "cannot read the file"),
     (dict(scene="furnace", insert_mesh="x.obj"), "not one"),
     (dict(eye=(0, 0, 0), look_at=(0, 0, 0)), "eye and look_at must differ"),

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include <glint/core/aabb.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
 
@@ -26,5 +27,16 @@ struct Camera {
         return Ray<T>{eye, safe_normalize(d), T(0), infinity<T>};
     }
 };
+
+/// A camera that frames `box`: looking at its centre from the front (+z) and a little above
+/// (+y), 2.6 times its half diagonal away, with a 0.7 rad vertical field of view, so that the
+/// whole box is in view for any aspect ratio of at least 1. An empty box gives the default camera.
+template <Scalar T>
+Camera<T> frame_box(const AABB<T>& box) {
+    if (box.empty()) return Camera<T>{};
+    const Vec3<T> c = box.center();
+    const T r = glm::length(box.extent()) * T(0.5);
+    return Camera<T>{c + Vec3<T>(T(0), T(0.3), T(1)) * (r * T(2.6)), c, Vec3<T>(0, 1, 0), T(0.7)};
+}
 
 }  // namespace glint

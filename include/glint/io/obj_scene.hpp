@@ -1,0 +1,49 @@
+// glint/io/obj_scene.hpp: a path-tracing scene from a loaded OBJ (io/obj.hpp): each MTL
+// material mapped onto glint's materials, emissive faces as area lights, a sky where nothing
+// emits, and a camera framing the mesh. glint-render --mesh and the Python module's render()
+// use it.
+//
+// The material mapping (MTL illumination models as in the Wavefront MTL specification):
+//   illum 5 (reflection, ray traced)       -> mirror of reflectance Ks (0.9 grey where Ks = 0);
+//   illum 7 (refraction, ray traced)       -> dielectric of index Ni (1.5 where Ni <= 1);
+//   Ks > 0 and Ns > 0 (any other illum)    -> glossy: Kd diffuse plus Ks Phong lobe of exponent Ns;
+//   otherwise                              -> Lambertian Kd.
+// Ke is every material's emission.
+#pragma once
+
+#include <string>
+
+#include <glint/core/camera.hpp>
+#include <glint/io/obj.hpp>
+#include <glint/tracer/scene.hpp>
+#include <glint/tracer/scenes.hpp>
+
+namespace glint {
+
+/// glint's material for an OBJ/MTL material (the mapping of the header comment).
+inline Material<float> scene_material(const ObjMaterial& m) {
+    Material<float> mat = Material<float>::lambertian(m.kd, m.ke);
+    if (m.illum == 5) mat = Material<float>::mirror(m.ks.max() > 0 ? m.ks : Rgb<float>(0.9f));
+    else if (m.illum == 7) mat = Material<float>::dielectric(m.ni > 1.0f ? m.ni : 1.5f);
+    else if (m.ks.max() > 0 && m.ns > 0) mat = Material<float>::glossy(m.kd, m.ks, m.ns);
+    mat.emission = m.ke;
+    return mat;
+}
+
+/// The scene of a loaded OBJ, named `name`: its triangles and mapped materials, its emissive
+/// faces as area lights, default_sky() when none emits, the camera frame_box() of its bounds.
+inline Scene<float> obj_scene(const ObjMesh& mesh, std::string name) {
+    Scene<float> s;
+    s.name = std::move(name);
+    for (const ObjMaterial& m : mesh.materials) s.add_material(scene_material(m));
+    AABB<float> box;
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+        s.add_polygon(mesh.triangles[i], mesh.material[i]);
+        for (const auto& p : mesh.triangles[i]) box.extend(p);
+    }
+    if (s.area_lights.empty()) s.environment = default_sky<float>();
+    s.camera = frame_box(box);
+    return s;
+}
+
+}  // namespace glint
