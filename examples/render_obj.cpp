@@ -7,8 +7,8 @@
 // 1. Triangles: the OBJ's (io/obj.hpp) or a generated sphere, and a floor under them.
 // 2. The tree: MeshBvh<> (trees/mesh_bvh.hpp), glint's fastest.
 // 3. A camera framing the bounds (core/camera.hpp) and a point light above it.
-// 4. Per pixel: the closest hit, its geometric normal, a shadow ray from an origin offset past
-//    the hit point's rounding error (core/offset.hpp), Lambert's cosine over r^2.
+// 4. Per pixel: the closest hit, its triangle's geometric normal, a shadow ray from an origin
+//    offset past the hit point's rounding error (core/offset.hpp), Lambert's cosine over r^2.
 // 5. The image as EXR (io/exr.hpp).
 #include <cmath>
 #include <cstdio>
@@ -63,7 +63,7 @@ int main(int argc, char** argv) try {
             const Ray<float> ray = camera.ray((float(px) + 0.5f) / float(size), (float(py) + 0.5f) / float(size), 1.0f);
             StoreHit<float> hit;
             if (!bvh.closest_hit(ray, hit)) continue;
-            Vec3f n = bvh.geometric_normal(hit.id);
+            Vec3f n = geometric_normal(tris[hit.id]);  // hit.id: the index of your triangle
             if (glm::dot(n, ray.direction) > 0) n = -n;  // the side the camera sees
             const SurfacePoint<float> p = surface_point(tris[hit.id], hit.u, hit.v);
             const Vec3f to_light = light - p.x;

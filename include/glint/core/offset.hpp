@@ -1,9 +1,11 @@
-// glint/core/offset.hpp: where a ray leaving a surface starts. A hit point interpolated from
-// its triangle's vertices carries a bound on its rounding error; the ray's origin is moved
-// along the surface normal past that bound, so that it cannot hit the surface it leaves
-// (Pharr, Jakob, Humphreys 2023, sections 6.8.5-6.8.6). The same scene then renders the same
-// image at any translation and scale float resolves.
+// glint/core/offset.hpp: a hit on a triangle as shading needs it, and where a ray leaving it
+// starts. The geometric normal is the triangle's own; the hit point interpolated from its
+// vertices carries a bound on its rounding error, and the leaving ray's origin is moved along
+// the normal past that bound, so that it cannot hit the surface it leaves (Pharr, Jakob,
+// Humphreys 2023, sections 6.8.5-6.8.6). The same scene then renders the same image at any
+// translation and scale float resolves.
 //
+//   const glint::Vec3<float> n = glint::geometric_normal(triangle);  // your triangle hit.id
 //   const glint::SurfacePoint<float> p = glint::surface_point(triangle, hit.u, hit.v);
 //   const glint::Ray<float> shadow{glint::offset_origin(p.x, p.err, n, to_light), to_light, 0, 1};
 #pragma once
@@ -38,6 +40,15 @@ constexpr T rounding_gamma(int n) {
 template <Scalar T>
 Vec3<T> coordinate_error(T m) {
     return Vec3<T>(rounding_gamma<T>(16) * m);
+}
+
+/// The unit normal (v1 - v0) x (v2 - v0) of triangle v, in its winding (not turned toward any
+/// ray), computed in double precision; 0 for a triangle without area or with a non-finite vertex.
+template <Scalar T>
+Vec3<T> geometric_normal(const std::array<Vec3<T>, 3>& v) {
+    const Vec3<double> n = glm::cross(Vec3<double>(v[1]) - Vec3<double>(v[0]), Vec3<double>(v[2]) - Vec3<double>(v[0]));
+    const double length = glm::length(n);
+    return length > 0 && std::isfinite(length) ? Vec3<T>(n / length) : Vec3<T>(0);
 }
 
 /// The point of triangle v at barycentrics (u, v) of vertices 1 and 2 (a hit's), and its

@@ -26,6 +26,7 @@
 
 #include <glint/core/image.hpp>
 #include <glint/core/math.hpp>
+#include <glint/core/offset.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/renderer.hpp>
@@ -62,8 +63,7 @@ public:
         ++state.samples;
         StoreHit<T> hit;
         if (!accel_.closest_hit(ray, hit)) return out;
-        const auto& v = scene_.triangles[hit.id];
-        Vec3<T> n = safe_normalize(glm::cross(v[1] - v[0], v[2] - v[0]), Vec3<T>(0));
+        Vec3<T> n = geometric_normal(scene_.triangles[hit.id]);
         if (glm::dot(n, ray.direction) > T(0)) n = -n;
         state.normal += n;
         state.depth += hit.t * glm::length(ray.direction);

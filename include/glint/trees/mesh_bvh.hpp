@@ -4,19 +4,19 @@
 //   const glint::IndexedMesh<float> mesh{positions, vertex_count, stride_bytes, indices, triangle_count};
 //   const glint::MeshBvh<> bvh(mesh, {.threads = 2});  // Möller-Trumbore, 8 wide: the fastest
 //   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
-//   if (bvh.closest_hit(ray, hit)) n = bvh.geometric_normal(hit.id);
+//   if (bvh.closest_hit(ray, hit)) n = mesh.geometric_normal(hit.id);  // core/offset.hpp
 //
 // Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
 // intersector's batch kernel through the leaf callable, a LeafQuery, WideBvh::intersect takes), laid out
 // in the order traversal meets the nodes.
-// The mesh is read only while building; the accelerator keeps its own records and each
-// triangle's unit geometric normal (12 bytes a triangle), which hits look up by id.
+// The mesh is read only while building; the accelerator keeps its own records and nothing
+// else per triangle: a hit's geometric normal comes from the user's mesh
+// (IndexedMesh::geometric_normal(hit.id), or geometric_normal(tris[hit.id]) for a soup).
 // With BvhBuildOptions::spatial_splits (bvh_builder.hpp) a triangle may have a record in
 // several leaves; hits still report the user's triangle index.
 // Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
 
-#include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -28,6 +28,7 @@
 
 #include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
+#include <glint/core/offset.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/intersection/triangle.hpp>
@@ -37,18 +38,6 @@
 #include <glint/trees/wide_bvh.hpp>
 
 namespace glint {
-
-namespace detail {
-
-/// The unit normal (v1 - v0) x (v2 - v0) of a triangle, in double precision; 0 where the
-/// cross product has no length (a degenerate triangle).
-inline Vec3<float> unit_normal(const TriangleVertices<float>& t) {
-    const Vec3d n = glm::cross(Vec3d(t[1]) - Vec3d(t[0]), Vec3d(t[2]) - Vec3d(t[0]));
-    const double len = glm::length(n);
-    return len > 0 && std::isfinite(len) ? Vec3<float>(n / len) : Vec3<float>(0);
-}
-
-}  // namespace detail
 
 /// A triangle mesh in the user's arrays: vertex i's x, y, z are the three T at byte offset
 /// i * stride_bytes of `positions`; triangle j is vertices indices[3j], [3j+1], [3j+2].
@@ -68,6 +57,8 @@ struct IndexedMesh {
     TriangleVertices<T> triangle(std::size_t j) const {
         return {vertex(indices[3 * j]), vertex(indices[3 * j + 1]), vertex(indices[3 * j + 2])};
     }
+    /// Triangle j's unit geometric normal in its winding (core/offset.hpp): a hit's, by hit.id.
+    Vec3<T> geometric_normal(std::size_t j) const { return glint::geometric_normal(triangle(j)); }
     /// Throws glint::Error naming the first bad field, triangle or index.
     void check() const {
         if (triangle_count > 0 && (!positions || !indices))
@@ -128,20 +119,11 @@ public:
     Isa isa() const { return bvh_.isa(); }
     void set_isa(Isa isa) { bvh_.set_isa(isa); }
 
-    /// The unit geometric normal of triangle `id` (a hit's id), e1 x e2 in the triangle's own
-    /// winding (v0, v1, v2), computed in double precision when the tree was built; the zero
-    /// vector for a degenerate triangle (never hit). Not flipped towards any ray.
-    Vec3<float> geometric_normal(std::uint32_t id) const { return normals_[id]; }
-    /// The number of the user's triangles (ids are 0 .. triangle_count() - 1).
-    std::size_t triangle_count() const { return normals_.size(); }
-
     const WideBvh<N, B, L>& bvh() const { return bvh_; }
     /// The triangle records of the leaves.
     const TriangleLeaves<P>& leaves() const { return leaves_; }
-    /// Node bytes plus triangle-record bytes plus the normals' bytes.
-    std::size_t total_bytes() const {
-        return bvh_.stats().node_bytes + leaves_.bytes() + normals_.size() * sizeof(Vec3<float>);
-    }
+    /// Node bytes plus triangle-record bytes.
+    std::size_t total_bytes() const { return bvh_.stats().node_bytes + leaves_.bytes(); }
 
 private:
     [[gnu::noinline]] bool closest(const Ray<float>& ray, StoreHit<float>& hit) const {
@@ -189,11 +171,9 @@ private:
         if (n > std::size_t(detail::wide_max_first))
             throw Error("MeshBvh: " + std::to_string(n) + " triangles, at most 2^27 - 2");
         std::vector<AABB<float>> boxes(n);
-        normals_.assign(n, Vec3<float>(0));
         for (std::size_t j = 0; j < n; ++j) {
             const TriangleVertices<float> t = tri(j);
             if (!detail::can_be_hit(t)) continue;  // an empty box: left out
-            normals_[j] = detail::unit_normal(t);
             for (const auto& p : t) boxes[j].extend(p);
         }
         bvh_ = WideBvh<N, B, L>(boxes, opt, [&](std::uint32_t j, int axis, const AABB<float>& region) {
@@ -211,7 +191,6 @@ private:
 
     WideBvh<N, B, L> bvh_;
     TriangleLeaves<P> leaves_;
-    std::vector<Vec3<float>> normals_;  // by the user's triangle index
 };
 
 }  // namespace glint
