@@ -22,7 +22,8 @@ namespace glint {
 /// A hit point and the bound on its rounding error, per axis.
 template <Scalar T>
 struct SurfacePoint {
-    Vec3<T> x, err;
+    Vec3<T> x;    ///< The point, as computed.
+    Vec3<T> err;  ///< Per axis, a bound on |x - exact point| (>= 0).
 };
 
 /// gamma(n) = n u / (1 - n u), u = unit roundoff: the relative error bound of n roundings.

@@ -37,8 +37,9 @@ namespace glint {
 
 /// The first-hit layers of an image: albedo (RGB), normal (XYZ in R, G, B) and depth.
 struct FirstHitImages {
-    Image<Rgb<float>> albedo, normal;
-    Image<float> depth;
+    Image<Rgb<float>> albedo;  ///< The first hit's reflectance kd + ks, each band at most 1; 0 where rays miss.
+    Image<Rgb<float>> normal;  ///< The mean unit geometric normal, turned toward the camera; 0 where rays miss.
+    Image<float> depth;        ///< The mean distance from the camera to the hit; +inf where no ray hits.
 };
 
 /// The integrator whose radiance is the first hit's albedo, and which keeps each pixel's
@@ -46,16 +47,21 @@ struct FirstHitImages {
 template <RayAccelerator A>
 class FirstHitLayers {
 public:
-    using scalar_type = typename A::scalar_type;
-    using T = scalar_type;
+    using scalar_type = typename A::scalar_type;  ///< The accelerator's float type.
+    using T = scalar_type;                         ///< Short for scalar_type.
+    /// One pixel's sums over its samples, for finish().
     struct pixel_state {
-        Vec3<T> normal{0};
-        T depth = 0;
-        std::uint32_t samples = 0, hits = 0;
+        Vec3<T> normal{0};         ///< Sum of the hits' normals (turned toward the camera).
+        T depth = 0;               ///< Sum of the hits' distances from the camera.
+        std::uint32_t samples = 0;  ///< Camera rays traced.
+        std::uint32_t hits = 0;     ///< Camera rays that hit something.
     };
 
+    /// Over `scene` traced through `accel` (both must outlive the integrator).
     FirstHitLayers(const Scene<T>& scene, const A& accel) : scene_(scene), accel_(accel) {}
 
+    /// One camera ray: its first hit's albedo as the radiance (one ray traced); adds the
+    /// hit's normal and depth to the pixel's state.
     template <class S>
     PathSample<T> radiance(const Ray<T>& ray, S&, pixel_state& state) const {
         PathSample<T> out;
@@ -73,6 +79,7 @@ public:
         return out;
     }
 
+    /// Adds the film layers "normal" (RGB) and "depth" (grey) from the pixels' states.
     void finish(Film& film, std::span<const pixel_state> states) const {
         FilmLayer normal{"normal", Image<Rgb<float>>(film.image.width, film.image.height), false};
         FilmLayer depth{"depth", Image<Rgb<float>>(film.image.width, film.image.height), true};

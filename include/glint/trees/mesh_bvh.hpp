@@ -43,17 +43,19 @@ namespace glint {
 /// i * stride_bytes of `positions`; triangle j is vertices indices[3j], [3j+1], [3j+2].
 template <Scalar T>
 struct IndexedMesh {
-    const void* positions = nullptr;
-    std::size_t vertex_count = 0;
-    std::size_t stride_bytes = 3 * sizeof(T);
-    const std::uint32_t* indices = nullptr;
-    std::size_t triangle_count = 0;
+    const void* positions = nullptr;           ///< The first vertex's x (the user's array, not copied).
+    std::size_t vertex_count = 0;              ///< Vertices in `positions`.
+    std::size_t stride_bytes = 3 * sizeof(T);  ///< Bytes from one vertex to the next.
+    const std::uint32_t* indices = nullptr;    ///< 3 * triangle_count vertex indices.
+    std::size_t triangle_count = 0;            ///< Triangles in `indices`.
 
+    /// Vertex i (unchecked: check() validates the indices once).
     Vec3<T> vertex(std::uint32_t i) const {
         T p[3];
         std::memcpy(p, static_cast<const char*>(positions) + std::size_t(i) * stride_bytes, sizeof p);
         return {p[0], p[1], p[2]};
     }
+    /// Triangle j's three vertices.
     TriangleVertices<T> triangle(std::size_t j) const {
         return {vertex(indices[3 * j]), vertex(indices[3 * j + 1]), vertex(indices[3 * j + 2])};
     }
@@ -81,9 +83,9 @@ template <TriangleIntersector P = MollerTrumbore<float>, int N = 8, WideBoxes B 
     requires std::same_as<typename P::scalar_type, float>
 class MeshBvh {
 public:
-    using scalar_type = float;
-    using T = float;
-    using intersector_type = P;
+    using scalar_type = float;     ///< Queries take float rays.
+    using T = float;               ///< Short for scalar_type.
+    using intersector_type = P;    ///< The leaf records' triangle test.
 
     /// From the user's indexed mesh (hits report the index of the user's triangle).
     explicit MeshBvh(const IndexedMesh<float>& mesh, const BvhBuildOptions& opt = {}) {
@@ -117,9 +119,9 @@ public:
     /// The kernels queries run (core/isa.hpp): the best this CPU supports, checked when the
     /// tree is built; set_isa() picks another (the same hits; for tests and comparisons).
     Isa isa() const { return bvh_.isa(); }
-    void set_isa(Isa isa) { bvh_.set_isa(isa); }
+    void set_isa(Isa isa) { bvh_.set_isa(isa); }  ///< Runs queries with `isa`'s kernels (one the CPU supports).
 
-    const WideBvh<N, B, L>& bvh() const { return bvh_; }
+    const WideBvh<N, B, L>& bvh() const { return bvh_; }  ///< The wide BVH over the leaves (nodes, stats).
     /// The triangle records of the leaves.
     const TriangleLeaves<P>& leaves() const { return leaves_; }
     /// Node bytes plus triangle-record bytes.
