@@ -14,7 +14,14 @@ namespace glint {
 /// Pinhole camera: `fov_y` is the full vertical field of view in radians.
 template <Scalar T>
 struct Camera {
-    Vec3<T> eye{0, 0, 5}, target{0}, up{0, 1, 0};
+    /// Centre of projection, in world space (default: 5 units along +z).
+    Vec3<T> eye{0, 0, 5};
+    /// World-space point the camera looks at; the view direction is target - eye (default: the origin).
+    Vec3<T> target{0};
+    /// World-space up direction; need not be unit or orthogonal to the view direction. If
+    /// parallel to it, the film's horizontal axis falls back to +x.
+    Vec3<T> up{0, 1, 0};
+    /// Full vertical field of view in radians, in (0, pi) (default 0.7, about 40 degrees).
     T fov_y = T(0.7);
 
     /// Ray through film position (sx, sy) in [0,1]^2, (0,0) at the top left.
