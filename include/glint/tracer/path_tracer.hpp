@@ -48,18 +48,30 @@
 
 namespace glint {
 
+/// The reference path tracer (Szécsi 2009, §1.3): an Integrator that estimates the radiance
+/// along camera rays by random walks with next-event estimation by direct-lighting policy D,
+/// environment light by policy E and Russian roulette and BRDF selection by PathTracerSettings.
+/// It keeps references to the scene and the accelerator, which must outlive it; radiance() is
+/// const and may be called from many threads at once, each with its own sampler.
 template <RayAccelerator Accel, class S, class D, class E = MisEnvironment<typename Accel::scalar_type>>
     requires Sampler<S, typename Accel::scalar_type> &&
              DirectLighting<D, typename Accel::scalar_type, RayQueries<Accel>, S> &&
              EnvironmentLighting<E, typename Accel::scalar_type, RayQueries<Accel>, S>
 class PathTracer {
 public:
+    /// The floating-point type of rays, radiance and the scene (the accelerator's).
     using scalar_type = typename Accel::scalar_type;
+    /// Short name for scalar_type.
     using T = scalar_type;
+    /// Per-pixel statistics of the direct-lighting policy D (an empty struct when it keeps none).
     using pixel_state = typename D::pixel_state;
+    /// The counting ray-query wrapper over Accel that the walk traces through (one per radiance() call).
     using Queries = RayQueries<Accel>;
+    /// Russian roulette, BRDF selection and depth cap of the walk.
     using Settings = PathTracerSettings<T>;
 
+    /// A tracer of `scene` through `accel` (built over the same scene's triangles) with the given
+    /// lighting policies, which are copied. Throws glint::Error if scene.validate() fails.
     PathTracer(const Scene<T>& scene, const Accel& accel, const D& direct, const E& environment, const Settings& settings)
         : scene_(scene), accel_(accel), direct_(direct), env_(environment), settings_(settings), features_(scene.features()) {
         scene.validate();
@@ -90,7 +102,9 @@ public:
         direct_.finish(film, states);
     }
 
+    /// The direct-lighting policy the tracer owns.
     const D& direct() const { return direct_; }
+    /// The settings the tracer was built with.
     const Settings& settings() const { return settings_; }
 
     /// Pilot observations for Szécsi 2009, §2.3's radiance estimate: at the first diffuse
