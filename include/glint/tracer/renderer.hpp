@@ -37,15 +37,23 @@ namespace glint {
 /// What the renderer reports after each finished tile: tiles finished and in all, and the
 /// seconds since the render started.
 struct RenderProgress {
-    int tiles_done = 0, tiles = 0;
+    /// Tiles finished so far, including the one just finished (1 to tiles).
+    int tiles_done = 0;
+    /// Tiles in the whole image (16x16 pixels each, the last row and column possibly smaller).
+    int tiles = 0;
+    /// Wall-clock seconds since render() started.
     double seconds = 0;
 };
 
 /// The image's settings; each integrator has its own (PathTracerSettings, VplSettings).
 struct RenderSettings {
-    int width = 256, height = 256;
+    /// Image width in pixels (> 0).
+    int width = 256;
+    /// Image height in pixels (> 0).
+    int height = 256;
+    /// Samples per pixel; values below 1 count as 1.
     int spp = 16;
-    int threads = 0;  // workers; 0: std::thread::hardware_concurrency()
+    int threads = 0;  ///< workers; 0: std::thread::hardware_concurrency()
     /// Runs the workers on the host's threads (empty: glint's own std::threads).
     Executor executor{};
     /// Called after each finished tile, from the rendering threads but never two calls at once
@@ -66,9 +74,11 @@ struct RenderSettings {
 /// An integrator's own layer of the image, by name (the VPL method's "indirect" part,
 /// correlated sampling's "lambda").
 struct FilmLayer {
+    /// The name film users look it up by (Film::layer), e.g. "indirect" or "lambda".
     std::string name;
+    /// The layer's values, one per pixel of the image, in the image's size.
     Image<Rgb<float>> pixels;
-    bool grey = false;  // one value per pixel, in all three bands
+    bool grey = false;  ///< one value per pixel, in all three bands
 };
 
 /// A film policy: what the renderer does with each pixel's estimate. resize(width, height)
@@ -83,10 +93,11 @@ concept FilmPolicy = Scalar<T> && requires(F& film, int x, const Rgb<T>& value) 
 
 /// The renderer's default film: the image's layers.
 struct Film {
-    Image<Rgb<float>> image;     // mean radiance per pixel
-    Image<Rgb<float>> variance;  // variance of that mean (sample variance / spp)
-    std::vector<FilmLayer> layers;  // what integrators add in finish()
+    Image<Rgb<float>> image;     ///< mean radiance per pixel
+    Image<Rgb<float>> variance;  ///< variance of that mean (sample variance / spp)
+    std::vector<FilmLayer> layers;  ///< what integrators add in finish()
 
+    /// Makes image and variance width x height pixels of zero and drops all layers.
     void resize(int width, int height) {
         image = Image<Rgb<float>>(width, height);
         variance = Image<Rgb<float>>(width, height);
@@ -98,6 +109,8 @@ struct Film {
             if (l.name == name) return &l;
         return nullptr;
     }
+    /// Stores pixel (x, y)'s mean radiance and the variance of that mean, rounded to float.
+    /// (x, y) must lie inside the size of the last resize(); it is not checked.
     template <Scalar T>
     void set_pixel(int x, int y, const Rgb<T>& mean, const Rgb<T>& variance_of_mean) {
         for (std::size_t c = 0; c < 3; ++c) {
@@ -109,10 +122,11 @@ struct Film {
 
 /// What a render measured.
 struct RenderStats {
+    /// Wall-clock seconds of the whole render, the integrator's finish() included.
     double seconds = 0;
-    std::uint64_t rays = 0;          // closest-hit plus shadow rays
-    std::uint64_t paths = 0;         // camera paths (pixel samples)
-    std::uint64_t capped_walks = 0;  // walks cut by the integrator's depth cap (biased)
+    std::uint64_t rays = 0;          ///< closest-hit plus shadow rays
+    std::uint64_t paths = 0;         ///< camera paths (pixel samples)
+    std::uint64_t capped_walks = 0;  ///< walks cut by the integrator's depth cap (biased)
 };
 
 /// A render on the default film.
@@ -122,8 +136,11 @@ struct RenderResult : Film, RenderStats {};
 /// whether its walk was cut by a depth cap.
 template <Scalar T>
 struct PathSample {
+    /// Radiance along the ray (linear RGB); a non-finite value is counted as zero by the renderer.
     Rgb<T> L{T(0)};
+    /// Rays traced for this sample (closest-hit plus shadow rays).
     std::uint64_t rays = 0;
+    /// Whether the walk was cut by a depth cap rather than ended by roulette or a miss (biased).
     bool capped = false;
 };
 
@@ -141,10 +158,14 @@ concept CameraPolicy = requires(const C& c, S& sampler, int x, std::uint64_t ind
 template <Scalar T>
 class PixelCamera {
 public:
+    /// The floating-point type of the rays it makes.
     using scalar_type = T;
+    /// Over `camera`, with the image size and pixel_jitter of `s` (height must be > 0).
     PixelCamera(const Camera<T>& camera, const RenderSettings& s)
         : camera_(camera), width_(s.width), height_(s.height), jitter_(s.pixel_jitter) {}
 
+    /// The world-space ray of sample `index` of pixel (x, y), (0, 0) at the top left; starts
+    /// `sampler` at that pixel sample and draws its 2D pixel sample.
     template <class S>
         requires Sampler<S, T>
     Ray<T> ray(int x, int y, std::uint64_t index, S& sampler) const {
@@ -200,9 +221,13 @@ auto make_thread_state(const I& in) {
 
 }  // namespace detail
 
+/// Renders images with camera policy C (a CameraPolicy, e.g. PixelCamera): tiles over threads,
+/// progress, statistics and each pixel's mean and variance of the mean, with any Integrator.
+/// Renders are deterministic for a given sampler prototype, whatever the thread count.
 template <class C>
 class Renderer {
 public:
+    /// A renderer that copies `camera` and `settings` (the image size, spp, threads, progress).
     Renderer(const C& camera, const RenderSettings& settings) : camera_(camera), settings_(settings) {}
 
     /// Renders with `integrator` and one sampler per thread, copied from `prototype`, on the
