@@ -39,10 +39,17 @@ def test_obj_as_the_scene(tmp_path):
                                       "v -0.2 1 -0.2\nv 0.2 1 -0.2\nv 0.2 1 0.2\nv -0.2 1 0.2\n"
                                       "usemtl grey\nf 1 4 3 2\nusemtl lamp\nf 5 6 7 8\n")
     (tmp_path / "dark.obj").write_text("v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 4 3 2\n")
+    images = {}
     for name in ("lit.obj", "dark.obj"):
         img, var = glint.render(str(tmp_path / name), width=16, height=12, spp=4)
         assert img.shape == (12, 16, 3) and np.all(np.isfinite(img)) and np.all(var >= 0)
-        assert img.mean() > 0.01  # lit by its lamp or by the sky, and in view
+        images[name] = img
+    # The lamp (Ke 4, 0.4 x 0.4, 1 above the floor) lights the floor in view: radiance up to
+    # kd / pi * 4 * 0.16 = 0.10 below it; the lamp's back and the sky-less rest are black.
+    lit = images["lit.obj"].sum(2)
+    assert lit.max() > 0.02 * 3 and 0.05 < (lit > 0).mean() < 0.9
+    # Without a light the sky lights everything: no black pixel.
+    assert np.all(images["dark.obj"].sum(2) > 0)
 
 
 @pytest.mark.parametrize("kwargs, message", [

@@ -38,15 +38,15 @@ namespace glint {
 /// An extra EXR layer: one channel per name in `channels`, taken from consecutive floats of
 /// each pixel of `data` (data.size() == width * height * channels.size()).
 struct ExrLayer {
-    std::string name;                   // e.g. "variance"
-    std::vector<std::string> channels;  // e.g. {"R", "G", "B"} or {"Y"}
-    std::vector<float> data;
+    std::string name;                   ///< Layer name, prefixed to its channels, e.g. "variance".
+    std::vector<std::string> channels;  ///< Channel names within the layer, e.g. {"R", "G", "B"} or {"Y"}.
+    std::vector<float> data;  ///< Interleaved pixel values, row by row from the top, channels.size() floats per pixel.
 };
 
 /// A header attribute: an int, a double or a string, by name (e.g. "glint:spp").
 struct ExrAttribute {
-    std::string name;
-    std::variant<int, double, std::string> value;
+    std::string name;                              ///< Attribute name as stored in the header.
+    std::variant<int, double, std::string> value;  ///< Value; its alternative selects the EXR attribute type (int, double, string).
 };
 
 /// How write_exr compresses: ZIP (glint's default: zlib over 16 lines), PIZ (wavelet and
@@ -110,8 +110,8 @@ inline void write_exr(const std::string& path, const Image<Rgb<float>>& rgb, con
 /// best ratio of OpenEXR's lossless compressors (zlib's is about 1032:1; the default bound is
 /// looser, for headroom).
 struct ExrLimits {
-    std::uint64_t max_pixels = std::uint64_t(1) << 28;  // 268M pixels: 3.2 GB as RGB float
-    double max_compression_ratio = 4096.0;
+    std::uint64_t max_pixels = std::uint64_t(1) << 28;  ///< Most pixels (width * height) a header may declare; default 2^28, 3.2 GB as RGB float.
+    double max_compression_ratio = 4096.0;  ///< Largest accepted ratio of the declared pixel data (bytes, by channel type) to the file size.
 };
 
 namespace detail {
@@ -173,9 +173,10 @@ inline Image<Rgb<float>> read_exr_rgb(const std::string& path, const ExrLimits& 
 /// Every float channel of an EXR file (half and uint channels converted), by name, row by
 /// row, and the header's int, double and string attributes.
 struct ExrChannels {
-    int width = 0, height = 0;
-    std::map<std::string, std::vector<float>> channels;
-    std::vector<ExrAttribute> attributes;
+    /// Image width in pixels (data window).
+    int width = 0, height = 0;  ///< Image height in pixels (data window).
+    std::map<std::string, std::vector<float>> channels;  ///< Full channel name -> width * height floats, row by row from the top.
+    std::vector<ExrAttribute> attributes;  ///< The header's int, double and string attributes; other types are skipped.
 
     /// The channel called `name`; throws glint::Error naming it and the file's channels.
     const std::vector<float>& channel(const std::string& name) const {

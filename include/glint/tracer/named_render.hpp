@@ -38,10 +38,10 @@ namespace glint {
 /// depth, the "none" rule's cut-off, and whether the scene is grey (SceneFeatures::grey).
 template <Scalar T>
 struct RouletteParams {
-    Rgb<T> weights = Rgb<T>::default_luminance_weights();
-    int min_depth = 3;
-    T cutoff = T(1e-3);
-    bool grey = false;
+    Rgb<T> weights = Rgb<T>::default_luminance_weights();  ///< Band weights H that turn an RGB throughput into a scalar; default luminance.
+    int min_depth = 3;      ///< Throughput rules: path vertices before the first roulette decision.
+    T cutoff = T(1e-3);     ///< "none" rule: throughput (weighted by H) below which a walk stops.
+    bool grey = false;      ///< Whether every material of the scene is grey (SceneFeatures::grey).
 };
 
 /// The roulette rules by name. In a grey scene every throughput F stays grey, and there the
@@ -204,14 +204,23 @@ std::span<const Choice<Rgb<T> (*)()>> weights_choices() {
 /// A render's settings with its policies by name (each table's first entry is the default).
 template <Scalar T = float>
 struct NamedRender {
+    /// Image and run settings for the Renderer (tracer/renderer.hpp).
     RenderSettings image{};
     /// The tracer's settings; render_named sets roulette and selection from the names.
     PathTracerSettings<T> tracer{};
-    std::string roulette = "throughput", direct = "mis", selection = "mis", sampler = "halton";
-    std::string weights = "luminance", estimate = "pilot";
-    int rr_depth = 3;               // throughput rules: vertices before the first decision
-    T throughput_cutoff = T(1e-3);  // roulette "none"
-    std::uint64_t seed = 0;
+    /// Russian-roulette rule, a name of the roulette table (optionally ending in "+estimate").
+    std::string roulette = "throughput", direct = "mis", selection = "mis", sampler = "halton";  ///< Sampler, a name of the sampler table (e.g. "halton").
+    /// \var direct
+    /// Direct-lighting policy, a name of the direct-lighting table (e.g. "mis").
+
+    /// \var selection
+    /// BRDF-selection rule at a vertex, a name of the selection table (e.g. "mis").
+
+    /// Band weights H for the roulette, a name of the weights table (e.g. "luminance").
+    std::string weights = "luminance", estimate = "pilot";  ///< Source of the radiance estimate of "+estimate" roulettes (e.g. "pilot").
+    int rr_depth = 3;               ///< Throughput rules: vertices before the first decision.
+    T throughput_cutoff = T(1e-3);  ///< Roulette "none": the throughput below which a walk stops.
+    std::uint64_t seed = 0;         ///< Seed of the samplers' random streams.
     /// "+estimate" roulettes: shorten walks by the goodness d of the estimate measured on pilot
     /// paths (Roulette::goodness, Szécsi 2009, §2.3).
     bool reduce_continuation = false;
@@ -223,13 +232,17 @@ struct NamedRender {
 /// The table entries a NamedRender names, each looked up once (resolve_names).
 template <Scalar T>
 struct NamedChoices {
+    /// The roulette table's entry, which makes the Roulette from RouletteParams.
     const Choice<Roulette<T, 3> (*)(const RouletteParams<T>&)>* roulette;
-    bool estimate;  // the roulette name ends in "+estimate"
+    bool estimate;  ///< Whether the roulette name ends in "+estimate".
+    /// Makes the direct-lighting policy for a scene, tracer settings and image settings.
     DirectChoice<T> (*direct)(const Scene<T>&, const PathTracerSettings<T>&, const RenderSettings&);
-    BrdfSelection selection;
+    BrdfSelection selection;  ///< The BRDF-selection rule named.
+    /// Makes the sampler from the image width and height in pixels and the seed.
     SamplerChoice<T> (*sampler)(int, int, std::uint64_t);
+    /// Returns the band weights H named.
     Rgb<T> (*weights)();
-    EstimateSource estimate_source;
+    EstimateSource estimate_source;  ///< Where "+estimate" roulettes take their radiance estimate.
 };
 
 /// Looks up every name of `o`; throws glint::Error for the first unknown one, naming it and

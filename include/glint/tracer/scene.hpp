@@ -35,27 +35,34 @@ namespace glint {
 
 enum class MaterialKind : std::uint8_t { lambertian, glossy, mirror, dielectric };
 
+/// A surface material: its BRDF kind and parameters, and the radiance it emits.
 template <Scalar T>
 struct Material {
-    MaterialKind kind = MaterialKind::lambertian;
-    Rgb<T> kd{T(0.5)};
-    Rgb<T> ks{T(0)};
-    T exponent = T(20);
-    Rgb<T> emission{T(0)};
-    T ior = T(1.5);
+    MaterialKind kind = MaterialKind::lambertian;  ///< Which BRDF the parameters below describe.
+    Rgb<T> kd{T(0.5)};      ///< Diffuse reflectance per band, in [0, 1] (lambertian, glossy).
+    Rgb<T> ks{T(0)};        ///< Specular reflectance per band, in [0, 1] (glossy, mirror).
+    T exponent = T(20);     ///< Glossy lobe exponent; larger is sharper.
+    Rgb<T> emission{T(0)};  ///< Emitted radiance per band; zero for a non-emitter.
+    T ior = T(1.5);         ///< Index of refraction of a dielectric (relative to outside).
 
+    /// Whether the material emits (any band of `emission` above zero).
     bool emissive() const { return emission.max() > T(0); }
+    /// Whether the BRDF is a delta distribution (mirror or dielectric).
     bool specular() const { return kind == MaterialKind::mirror || kind == MaterialKind::dielectric; }
 
+    /// Diffuse material of reflectance kd, emitting `emission`.
     static Material lambertian(const Rgb<T>& kd, const Rgb<T>& emission = Rgb<T>(T(0))) {
         return Material{MaterialKind::lambertian, kd, Rgb<T>(T(0)), T(20), emission, T(1.5)};
     }
+    /// Diffuse kd plus a glossy lobe of reflectance ks and the given exponent.
     static Material glossy(const Rgb<T>& kd, const Rgb<T>& ks, T exponent) {
         return Material{MaterialKind::glossy, kd, ks, exponent, Rgb<T>(T(0)), T(1.5)};
     }
+    /// Perfect mirror of reflectance ks.
     static Material mirror(const Rgb<T>& ks) {
         return Material{MaterialKind::mirror, Rgb<T>(T(0)), ks, T(0), Rgb<T>(T(0)), T(1.5)};
     }
+    /// Smooth glass-like interface of index of refraction `ior` (Fresnel reflection and refraction).
     static Material dielectric(T ior) {
         return Material{MaterialKind::dielectric, Rgb<T>(T(0)), Rgb<T>(T(1)), T(0), Rgb<T>(T(0)), ior};
     }
@@ -65,38 +72,40 @@ struct Material {
 /// from the vertices' counter-clockwise order, points to).
 template <Scalar T>
 struct AreaLight {
-    std::vector<Vec3<T>> vertices;
-    Rgb<T> emission{T(0)};
-    Vec3<T> normal{0, 0, 1};
-    T area = 0;
+    std::vector<Vec3<T>> vertices;  ///< Polygon corners in world space, counter-clockwise seen from the front.
+    Rgb<T> emission{T(0)};          ///< Emitted radiance per band, uniform over the front side.
+    Vec3<T> normal{0, 0, 1};        ///< Unit normal of the front side.
+    T area = 0;                     ///< Polygon area in squared world units.
 };
 
 /// Which capabilities a scene uses, checked once before rendering (the path tracer skips the
 /// point lights and the environment where a scene has none; glint-render's roulette choice
 /// reads `grey`).
 struct SceneFeatures {
-    bool environment = false;
-    bool point_lights = false;
-    bool area_lights = false;
-    bool specular = false;
+    bool environment = false;   ///< The scene has an environment map.
+    bool point_lights = false;  ///< The scene has at least one point light.
+    bool area_lights = false;   ///< The scene has at least one area light.
+    bool specular = false;      ///< Some material is specular (mirror or dielectric).
     /// Every reflectance (kd, ks) equal in all bands, so that every walk's throughput stays
     /// grey whatever the lights' colours: the spectral roulettes then reduce exactly to the
     /// classic ones.
     bool grey = true;
 };
 
+/// A renderable scene: triangles with per-triangle materials and area lights, point lights,
+/// an optional environment map and a camera, all in world space. validate() checks it.
 template <Scalar T>
 class Scene {
 public:
-    std::string name = "scene";
-    std::vector<TriangleVertices<T>> triangles;
-    std::vector<std::uint32_t> material_of;  // per triangle
-    std::vector<Material<T>> materials;
-    std::vector<AreaLight<T>> area_lights;
-    std::vector<std::int32_t> light_of;  // per triangle: index of its area light, or -1
-    std::vector<PointLight<T>> point_lights;
-    std::optional<EnvironmentMap<T>> environment;
-    Camera<T> camera;
+    std::string name = "scene";  ///< Name used in error messages and reports.
+    std::vector<TriangleVertices<T>> triangles;  ///< Every triangle's vertices, world space.
+    std::vector<std::uint32_t> material_of;  ///< Per triangle: index into `materials`.
+    std::vector<Material<T>> materials;  ///< Materials the triangles refer to.
+    std::vector<AreaLight<T>> area_lights;  ///< Emitting polygons, each made of scene triangles.
+    std::vector<std::int32_t> light_of;  ///< Per triangle: index of its area light, or -1.
+    std::vector<PointLight<T>> point_lights;  ///< Point lights (no geometry).
+    std::optional<EnvironmentMap<T>> environment;  ///< Distant illumination, if any.
+    Camera<T> camera;  ///< The view rendered.
 
     /// Adds a material, returns its index.
     std::uint32_t add_material(const Material<T>& m) {
@@ -128,6 +137,7 @@ public:
             light_of.push_back(light);
         }
     }
+    /// Adds the planar quad a, b, c, d (in order) with material index m, as add_polygon does.
     void add_quad(const Vec3<T>& a, const Vec3<T>& b, const Vec3<T>& c, const Vec3<T>& d, std::uint32_t m) {
         const std::array<Vec3<T>, 4> q{a, b, c, d};
         add_polygon(q, m);
@@ -143,6 +153,7 @@ public:
         for (std::size_t i = 0; i < point_lights.size(); ++i) point_lights[i].validate(i);
     }
 
+    /// Which capabilities the scene uses (scans materials and lights; linear cost).
     SceneFeatures features() const {
         SceneFeatures f;
         f.environment = environment.has_value();

@@ -29,11 +29,11 @@ namespace glint {
 /// The per-vertex inputs of a lighting policy.
 template <Scalar T>
 struct ShadingPoint {
-    Vec3<T> x;          // position
-    Vec3<T> err;        // bound on x's rounding error, per axis
-    Vec3<T> n;          // normal on the side of the outgoing direction
-    Frame<T> frame;     // local frame about n
-    const SurfaceBrdf<T>* brdf;
+    Vec3<T> x;          ///< Position in world space.
+    Vec3<T> err;        ///< Bound on x's rounding error, per axis (for offsetting shadow-ray origins).
+    Vec3<T> n;          ///< Unit normal on the side of the outgoing direction.
+    Frame<T> frame;     ///< Local frame about n (z = n), in which the BRDF is evaluated.
+    const SurfaceBrdf<T>* brdf;  ///< The surface's BRDF; not owned.
 };
 
 /// Point light pl's f I cos / r^2 at sp, without visibility, into `out`; false (no ray to
@@ -56,9 +56,10 @@ bool point_light_unshadowed(const PointLight<T>& pl, const ShadingPoint<T>& sp, 
 /// that vertex's position and normal (a light selector's probabilities depend on them).
 template <Scalar T>
 struct Arrival {
-    bool lights_sampled = false;
-    T pdf = T(0);
-    Vec3<T> x{0}, n{0};
+    bool lights_sampled = false;  ///< Whether lights were sampled at the vertex the ray left; false weighs emission whole.
+    T pdf = T(0);                 ///< Solid-angle density of the BRDF sample that made the ray (used only if lights_sampled).
+    /// Position of the vertex the ray left, in world space.
+    Vec3<T> x{0}, n{0};  ///< Unit normal at the vertex the ray left.
 };
 
 /// The hit point interpolated from the triangle's vertices by the hit's barycentrics, and
@@ -90,9 +91,11 @@ concept ShadowQueries = requires(Q& q, const ShadingPoint<T>& sp, const PolygonL
 template <RayAccelerator A>
 class RayQueries {
 public:
-    using T = typename A::scalar_type;
+    using T = typename A::scalar_type;  ///< Floating-point type of the rays, the accelerator's.
+    /// Queries against `accel`, which must outlive this object; the count starts at zero.
     explicit RayQueries(const A& accel) : accel_(accel) {}
 
+    /// Nearest hit of `ray` within its [tmin, tmax] into `hit`; false if the ray hits nothing.
     bool closest_hit(const Ray<T>& ray, StoreHit<T>& hit) {
         ++rays_;
         return accel_.closest_hit(ray, hit);
@@ -116,6 +119,7 @@ public:
         for (const auto& v : light.sampler().vertices()) m = std::max({m, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
         return visible(sp, y, coordinate_error(m), light.sampler().normal());
     }
+    /// Number of rays cast through this object so far (closest-hit and shadow rays).
     std::uint64_t rays() const { return rays_; }
 
 private:
