@@ -252,7 +252,10 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
             has_given = true;
         }
         auto value = [&]() -> const char* {
-            if (has_given) return has_given = false, given.c_str();
+            if (has_given) {
+                has_given = false;
+                return given.c_str();
+            }
             if (i + 1 >= argc) throw Error(a + " expects a value");
             return argv[++i];
         };
@@ -349,14 +352,8 @@ Scene<float> scene_from_gltf(const Args& g, NamedRender<float>& o) {
     for (const std::string& w : f.warnings) std::fprintf(stderr, "glint-render: warning: %s\n", w.c_str());
     if (f.aspect > 0.0f && !g.width_given && !g.height_given)
         o.image.height = std::clamp(int(std::lround(float(o.image.width) / f.aspect)), 1, 16384);
-    if (!f.has_camera) {
-        AABB<float> box;
-        for (const auto& t : f.scene.triangles)
-            for (const auto& p : t) box.extend(p);
-        f.scene.camera = frame_box(box);
-    }
+    sky_and_framing(f.scene, f.has_camera);
     if (!g.env.empty()) f.scene.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
-    else if (f.scene.area_lights.empty() && f.scene.point_lights.empty()) f.scene.environment = default_sky<float>();
     return std::move(f.scene);
 }
 

@@ -38,13 +38,7 @@ bool ends_with(const std::string& s, const std::string& tail) {
 /// A glTF scene: its camera, or one framing it where it has none; a sky if nothing emits.
 Scene<float> gltf_scene(const std::string& path) {
     GltfScene<float> g = read_gltf<float>(path);
-    if (!g.has_camera) {
-        AABB<float> box;
-        for (const auto& t : g.scene.triangles)
-            for (const auto& p : t) box.extend(p);
-        g.scene.camera = frame_box(box);
-    }
-    if (g.scene.area_lights.empty() && g.scene.point_lights.empty()) g.scene.environment = default_sky<float>();
+    sky_and_framing(g.scene, g.has_camera);
     return std::move(g.scene);
 }
 

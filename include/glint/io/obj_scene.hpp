@@ -13,7 +13,6 @@
 
 #include <string>
 
-#include <glint/core/camera.hpp>
 #include <glint/io/obj.hpp>
 #include <glint/tracer/scene.hpp>
 #include <glint/tracer/scenes.hpp>
@@ -31,18 +30,13 @@ inline Material<float> scene_material(const ObjMaterial& m) {
 }
 
 /// The scene of a loaded OBJ, named `name`: its triangles and mapped materials, its emissive
-/// faces as area lights, default_sky() when none emits, the camera frame_box() of its bounds.
+/// faces as area lights, a sky when none emits and a framing camera (sky_and_framing).
 inline Scene<float> obj_scene(const ObjMesh& mesh, std::string name) {
     Scene<float> s;
     s.name = std::move(name);
     for (const ObjMaterial& m : mesh.materials) s.add_material(scene_material(m));
-    AABB<float> box;
-    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-        s.add_polygon(mesh.triangles[i], mesh.material[i]);
-        for (const auto& p : mesh.triangles[i]) box.extend(p);
-    }
-    if (s.area_lights.empty()) s.environment = default_sky<float>();
-    s.camera = frame_box(box);
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) s.add_polygon(mesh.triangles[i], mesh.material[i]);
+    sky_and_framing(s, false);
     return s;
 }
 

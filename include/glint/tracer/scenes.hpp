@@ -54,6 +54,19 @@ EnvironmentMap<T> default_sky() {
                                   Rgb<float>(0.25f, 0.45f, 0.9f), Rgb<float>(0.8f, 0.85f, 0.95f), Rgb<float>(0.15f));
 }
 
+/// A loaded scene (an OBJ, a glTF) made ready to render: default_sky() where nothing emits
+/// (no area or point light) and, where its file gave no camera (`has_camera` false), the
+/// frame_box() camera of its triangles' bounds.
+template <Scalar T>
+void sky_and_framing(Scene<T>& s, bool has_camera) {
+    if (s.area_lights.empty() && s.point_lights.empty()) s.environment = default_sky<T>();
+    if (has_camera) return;
+    AABB<T> box;
+    for (const auto& t : s.triangles)
+        for (const auto& p : t) box.extend(p);
+    s.camera = frame_box(box);
+}
+
 namespace detail {
 
 /// An axis-aligned box [lo, hi] rotated by `angle` about the vertical axis through its
