@@ -3,8 +3,9 @@
 # checks at -O1 (any report is fatal) and run; the heavy agreement and statistics cases run
 # in their quick form (GLINT_SANITIZER_TESTS: test_trees' agreement cases on 4000 rays per
 # scene; ASan is there for memory errors, the portable build's suites for rare edge cases).
-# (2) glint-render built with TSan and all of UBSan, short multithreaded renders (the path
-# tracer; the LIE, whose construction is threaded). Build folders: build-asan, build-tsan.
+# (2) glint-render built with TSan and all of UBSan at -O0 (the renders are tiny: compile
+# time is what counts), short multithreaded renders (the path tracer; the LIE, whose
+# construction is threaded). Build folders: build-asan, build-tsan.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${CI_JOBS:-$(nproc)}
@@ -50,7 +51,7 @@ echo "ci-sanitizers: suites ran in $((SECONDS - t)) s"
 t0=$SECONDS
 cmake -S . -B build-tsan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DGLINT_NATIVE=OFF \
       -DGLINT_BUILD_TESTS=OFF -DGLINT_BUILD_BENCHMARKS=OFF -DGLINT_BUILD_EXAMPLES=ON \
-      -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only -fsanitize=thread,undefined -fno-sanitize-recover=undefined" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread,undefined" > build-tsan/ci.log
+      -DCMAKE_CXX_FLAGS="-O0 -gline-tables-only -fsanitize=thread,undefined -fno-sanitize-recover=undefined" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread,undefined" > build-tsan/ci.log
 cmake --build build-tsan -j"$jobs" --target glint-render >> build-tsan/ci.log
 export TSAN_OPTIONS=halt_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 ./build-tsan/examples/glint-render --scene cornell --size 32 --spp 4 --threads 4 --direct combined \
