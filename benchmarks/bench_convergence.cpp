@@ -421,7 +421,7 @@ RenderResult envmap_direct(const Scene<float>& scene, const DefaultAccel& accel,
                     const SurfacePoint<float> p = surface_point(scene, hit);
                     const Frame<float> frame = Frame<float>::from_normal(n);
                     const SurfaceBrdf<float> brdf(scene.materials[scene.material_of[hit.id]], frame.to_local(-ray.direction));
-                    const ShadingPoint<float> sp{p.x, p.err, n, frame, &brdf};
+                    const ShadingPoint<float> sp{p.x, p.err, n, n, frame, &brdf};
                     L = env.estimate(sp, sampler, queries);
                     const Vec3<float> wi = brdf.sample_by_albedo(sampler.get_2d());
                     const float pdf = brdf.sampling_pdf(wi);

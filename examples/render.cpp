@@ -43,6 +43,7 @@
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
+#include <glint/tracer/smooth_normals.hpp>
 
 #include "photon_cli.hpp"
 #include "vpl_cli.hpp"
@@ -84,6 +85,8 @@ void usage() {
         "                      KHR_lights_punctual lights; a sky if nothing emits); FILE.json: a scene\n"
         "                      --export-scene wrote (its size and --max-depth unless given)\n"
         "  --env FILE.exr      lat-long environment map (envmap scene, --mesh or --scene-file)\n"
+        "  --smooth DEGREES    --mesh or --scene-file: shade smoothly with corner normals averaged over the\n"
+        "                      faces within DEGREES (0-180) of each other, replacing the file's normals\n"
         "  --size N            image width and height (default 256; at most 16384)\n"
         "  --width N, --height N  image width, height (rectangular images)\n"
         "  --spp N             samples per pixel (default 16)\n"
@@ -213,6 +216,7 @@ struct Args {
     std::string integrator = "path";
     double time_budget = 0;  // --time-budget: seconds of passes, 0: one render
     bool aov = false;        // --aov: the first-hit layers (path integrator)
+    std::optional<float> smooth;  // --smooth DEGREES: corner normals for a mesh or scene file
     VplCliOptions vpl;
     PhotonCliOptions photons;
 };
@@ -235,6 +239,8 @@ void check_scene_flags(const Args& g) {
     if (!g.insert.empty() && g.scene_name != "cornell" && g.scene_name != "cornell-glossy")
         throw Error("--insert-mesh applies to --scene cornell and cornell-glossy (it stands the mesh on their free floor), "
                     "not to " + (g.scene_name.empty() ? std::string("--mesh or --scene-file") : "'" + g.scene_name + "'"));
+    if (g.smooth && !g.scene_name.empty())
+        throw Error("--smooth applies to --mesh and --scene-file, not to the built-in scene '" + g.scene_name + "'");
     if (!g.env.empty() && !g.scene_name.empty() && g.scene_name != "envmap")
         throw Error("--env applies to --scene envmap, --mesh and --scene-file, not to the built-in scene '" + g.scene_name +
                     "' (lit by its own lights)");
@@ -271,6 +277,7 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         else if (a == "--spp") o.image.spp = int(to_int(a, value(), 1, 1 << 20));
         else if (a == "--out") g.out = value();
         else if (a == "--aov") g.aov = true;
+        else if (a == "--smooth") g.smooth = to_float(a, value(), 0.0f, 180.0f);
         else if (a == "--roulette") o.roulette = value();
         else if (a == "--rr-depth") o.rr_depth = int(to_int(a, value(), 0, 1 << 20));
         else if (a == "--direct") o.direct = value();
@@ -359,13 +366,15 @@ Scene<float> scene_from_gltf(const Args& g, NamedRender<float>& o) {
 
 /// The scene the flags name (the image size and depth cap from a scene file where no flag set them).
 Scene<float> load_scene(const Args& g, NamedRender<float>& o) {
-    if (!g.mesh.empty()) return scene_from_obj(g.mesh, g.env);
-    if (g.scene_file.empty()) {
+    if (g.scene_file.empty() && g.mesh.empty()) {
         Scene<float> s = builtin_scene<float>(g.scene_name);
         if (!g.env.empty()) s.environment = EnvironmentMap<float>(read_exr_rgb(g.env));
         return s;
     }
-    return ends_with(g.scene_file, ".json") ? scene_from_json(g, o) : scene_from_gltf(g, o);
+    Scene<float> s = !g.mesh.empty() ? scene_from_obj(g.mesh, g.env)
+                     : ends_with(g.scene_file, ".json") ? scene_from_json(g, o) : scene_from_gltf(g, o);
+    if (g.smooth) smooth_corner_normals(s, *g.smooth);
+    return s;
 }
 
 /// The camera as the flags that give it again.

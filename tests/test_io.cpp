@@ -56,6 +56,7 @@ std::string base64(const std::vector<unsigned char>& in) {
 struct GltfFixture {
     std::vector<float> positions{-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
     std::vector<std::uint16_t> indices{0, 1, 2, 0, 2, 3};
+    std::vector<float> normals;  // a NORMAL accessor (2) where not empty, after the indices
     int mode = 4;
     std::size_t position_count = 4;  // the POSITION accessor's count
     std::string extra;               // more top-level members, after a comma
@@ -68,26 +69,30 @@ struct GltfFixture {
     std::string lights = R"([{"type": "point", "color": [1, 1, 1], "intensity": 3415}])";
 
     std::vector<unsigned char> buffer() const {
-        std::vector<unsigned char> b(positions.size() * 4 + indices.size() * 2);
+        std::vector<unsigned char> b(positions.size() * 4 + indices.size() * 2 + normals.size() * 4);
         std::memcpy(b.data(), positions.data(), positions.size() * 4);
         std::memcpy(b.data() + positions.size() * 4, indices.data(), indices.size() * 2);
+        if (!normals.empty()) std::memcpy(b.data() + positions.size() * 4 + indices.size() * 2, normals.data(), normals.size() * 4);
         return b;
     }
 
     /// The JSON; `uri` empty: the buffer is a .glb's BIN chunk.
     std::string json(const std::string& uri) const {
-        const std::size_t pb = positions.size() * 4, ib = indices.size() * 2;
+        const std::size_t pb = positions.size() * 4, ib = indices.size() * 2, nb = normals.size() * 4;
         std::ostringstream j;
         j << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 2, 3]}], "nodes": )" << nodes
           << R"(, "meshes": [{"primitives": [{"attributes": {"POSITION": )" << position_accessor
-          << R"(}, "indices": 1, "material": 0, "mode": )" << mode
+          << (normals.empty() ? "" : R"(, "NORMAL": 2)") << R"(}, "indices": 1, "material": 0, "mode": )" << mode
           << R"(}]}], "materials": [)" << material << R"(], "cameras": [{"type": "perspective", "perspective": )"
           << R"({"yfov": 0.8, "aspectRatio": 1.5, "znear": 0.01}}], "extensionsUsed": ["KHR_lights_punctual"], )"
-          << R"("extensions": {"KHR_lights_punctual": {"lights": )" << lights << "}}, \"buffers\": [{\"byteLength\": " << pb + ib
+          << R"("extensions": {"KHR_lights_punctual": {"lights": )" << lights << "}}, \"buffers\": [{\"byteLength\": " << pb + ib + nb
           << (uri.empty() ? "" : ", \"uri\": \"" + uri + "\"") << R"(}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": )"
-          << pb << R"(}, {"buffer": 0, "byteOffset": )" << pb << R"(, "byteLength": )" << ib
-          << R"(}], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << position_count
-          << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}]" << extra << "}";
+          << pb << R"(}, {"buffer": 0, "byteOffset": )" << pb << R"(, "byteLength": )" << ib << "}"
+          << (normals.empty() ? "" : R"(, {"buffer": 0, "byteOffset": )" + std::to_string(pb + ib) + R"(, "byteLength": )" + std::to_string(nb) + "}")
+          << R"(], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << position_count
+          << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}"
+          << (normals.empty() ? "" : R"(, {"bufferView": 2, "componentType": 5126, "type": "VEC3", "count": )" + std::to_string(normals.size() / 3) + "}")
+          << "]" << extra << "}";
         return j.str();
     }
 
@@ -453,4 +458,54 @@ TEST_CASE("EXR: layers and header attributes written and read back, with ZIP, PI
                              Error);
         CHECK(read_exr_rgb(path).pixels == rgb.pixels);
     }
+}
+
+TEST_CASE("scene json: corner normals are written and read back exactly; meshes keep their vertex normals") {
+    Scene<float> s = builtin_scene<float>("cornell");
+    s.fill_corner_normals();
+    s.corner_normals[3][1] = glm::normalize(Vec3f(0.1f, 0.7f, -0.3f));  // one corner leans
+    std::ostringstream text;
+    write_scene_json(text, s, SceneJsonView{});
+    const Scene<float> r = parse_scene_json<float>(text.str(), "normals.json").scene;
+    CHECK(r.corner_normals == s.corner_normals);
+    std::string bad = text.str();  // the first triangle's entry left out
+    const std::size_t first = bad.find("\n    [", bad.find("\"corner_normals\""));
+    bad.erase(first, bad.find("\n    [", first + 1) - first);
+    CHECK_THROWS_WITH_AS(parse_scene_json<float>(bad, "bad.json"), doctest::Contains("corner_normals needs one entry"), Error);
+
+    // An OBJ with vertex normals after a mesh without: the first is shaded flat.
+    std::ofstream(temp_path("flat.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::ofstream(temp_path("smooth.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0.6 0.8\nvn 0 0 1\nf 1//1 2//2 3//2\n";
+    const std::string path = temp_path("normals.json");
+    std::ofstream(path) << R"({"width": 8, "height": 6, "max_depth": 4,
+        "camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 0.8},
+        "materials": [{"kind": "lambertian", "kd": [0.5, 0.5, 0.5], "ks": [0, 0, 0], "exponent": 1, "emission": [0, 0, 0], "ior": 1.5}],
+        "area_lights": [], "point_lights": [],
+        "meshes": [{"path": "glint_test_io_flat.obj", "material": 0}, {"path": "glint_test_io_smooth.obj", "material": 0}]})";
+    const Scene<float> m = read_scene_json<float>(path).scene;
+    REQUIRE(m.corner_normals.size() == 2);
+    const Vec3f z(0, 0, 1);
+    CHECK(m.corner_normals[0] == std::array<Vec3f, 3>{z, z, z});
+    CHECK(glm::length(m.corner_normals[1][0] - Vec3f(0, 0.6f, 0.8f)) < 1e-6f);
+    CHECK((m.corner_normals[1][1] == z && m.corner_normals[1][2] == z));
+}
+
+TEST_CASE("gltf: NORMAL becomes corner normals, turned by the node transforms; bad ones name the accessor") {
+    GltfFixture f;
+    // Corner normals leaning in the quad's frame; the nodes rotate +z to +y and scale by 2
+    // (uniformly: the normals only turn).
+    f.normals = {0, 0, 1, 0.6f, 0, 0.8f, 0, 0.6f, 0.8f, -0.6f, 0, 0.8f};
+    const Scene<float> s = load_gltf<float>(f.write_gltf("normals"));
+    REQUIRE(s.corner_normals.size() == 2);
+    // Rotation by -90 degrees about x: (x, y, z) -> (x, z, -y).
+    require_close(s.corner_normals[0][0], {0, 1, 0});
+    require_close(s.corner_normals[0][1], {0.6f, 0.8f, 0});
+    require_close(s.corner_normals[0][2], {0, 0.8f, -0.6f});
+    require_close(s.corner_normals[1][2], {-0.6f, 0.8f, 0});
+    s.validate();
+    f.normals = {0, 0, 1, 0, 0, 0, 0, 0, 1, 0, 0, 1};
+    CHECK_THROWS_WITH_AS(load_gltf<float>(f.write_gltf("zero_normal")), doctest::Contains("mesh 0, primitive 0: normal 1 has length 0"), Error);
+    f.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+    CHECK_THROWS_WITH_AS(load_gltf<float>(f.write_gltf("few_normals")), doctest::Contains("3 normals for 4 positions"), Error);
+    CHECK(load_gltf<float>(GltfFixture{}.write_gltf("no_normals")).corner_normals.empty());
 }

@@ -113,7 +113,7 @@ struct ShadingPoints {
                 const SurfacePoint<float> p = surface_point(s, hit);
                 frames.push_back(Frame<float>::from_normal(n));
                 brdfs.emplace_back(s.materials[s.material_of[hit.id]], frames.back().to_local(-ray.direction));
-                points.push_back({p.x, p.err, n, frames.back(), &brdfs.back()});
+                points.push_back({p.x, p.err, n, n, frames.back(), &brdfs.back()});
             }
     }
 };

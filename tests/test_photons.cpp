@@ -301,7 +301,7 @@ TEST_CASE("final gather: a Lambertian point returns kd under uniform radiance an
     const Vec3<float> n(0, 1, 0);
     const Frame<float> frame = Frame<float>::from_normal(n);
     const SurfaceBrdf<float> brdf(m, Vec3<float>(0, 0, 1));
-    const ShadingPoint<float> sp{Vec3<float>(0, -1, 0), coordinate_error(1.0f), n, frame, &brdf};
+    const ShadingPoint<float> sp{Vec3<float>(0, -1, 0), coordinate_error(1.0f), n, n, frame, &brdf};
     Pcg32 rng(17);
     auto uniform = [&] { return rng.uniform<float>(); };
     const Rgb<float> all = final_gather(queries, sp, 50, uniform,

@@ -24,6 +24,7 @@
 
 #include <glint/io/exr.hpp>
 #include <glint/io/obj.hpp>
+#include <glint/io/obj_scene.hpp>
 #define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions, compiled in this file
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
@@ -32,6 +33,7 @@
 #include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
+#include <glint/tracer/smooth_normals.hpp>
 #include <glint/intersection/ivm.hpp>
 #include <glint/trees/brute_force.hpp>
 
@@ -428,7 +430,7 @@ struct EnvVertex {
     ShadingPoint<float> sp;
     EnvVertex(const Material<float>& m, const Vec3f& n, const Vec3f& view)
         : frame(Frame<float>::from_normal(n)), brdf(m, frame.to_local(view)),
-          sp{Vec3f(0.0f), Vec3f(0.0f), n, frame, &brdf} {}
+          sp{Vec3f(0.0f), Vec3f(0.0f), n, n, frame, &brdf} {}
 };
 
 }  // namespace
@@ -1345,4 +1347,183 @@ TEST_CASE("first-hit layers: a diffuse Cornell wall's albedo is its reflectance"
     int coloured = 0;  // the red and the green wall, each seen over many pixels
     for (const auto& [m, pixels] : seen) coloured += s.materials[m].kd.max() > 3 * s.materials[m].kd.min() && pixels > 50;
     CHECK(coloured == 2);
+}
+
+TEST_CASE("shading normals: corner normals interpolate, turn to the shaded side, and are validated") {
+    Scene<float> s;
+    s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    const std::array<Vec3f, 3> tri{Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
+    s.add_polygon(tri, 0);
+    const Vec3f ng(0, 0, 1);
+    CHECK(s.shading_normal(0, 0.2f, 0.3f, ng) == ng);  // no corner normals: the geometric one
+    const Vec3f a = glm::normalize(Vec3f(0.3f, 0, 1)), b = glm::normalize(Vec3f(0, 0.4f, 1)), c = glm::normalize(Vec3f(-0.2f, -0.1f, 1));
+    s.corner_normals = {{a, b, c}};
+    s.validate();
+    CHECK(glm::length(s.shading_normal(0, 0, 0, ng) - a) < 1e-6f);  // the corners, in vertex order
+    CHECK(glm::length(s.shading_normal(0, 1, 0, ng) - b) < 1e-6f);
+    CHECK(glm::length(s.shading_normal(0, 0, 1, ng) - c) < 1e-6f);
+    const Vec3f mid = glm::normalize(0.5f * a + 0.2f * b + 0.3f * c);
+    CHECK(glm::length(s.shading_normal(0, 0.2f, 0.3f, ng) - mid) < 1e-6f);
+    CHECK(glm::length(s.shading_normal(0, 0.2f, 0.3f, -ng) + mid) < 1e-6f);  // the back side: turned over
+    s.corner_normals = {{a, b, -a}};  // cancel at the midpoint of the first and last corner
+    CHECK(s.shading_normal(0, 0, 0.5f, ng) == ng);
+    s.corner_normals = {{a, b, Vec3f(0, 0, 2)}};
+    CHECK_THROWS_WITH_AS(s.validate(), doctest::Contains("triangle 0 has a corner normal of length 2"), Error);
+    s.corner_normals = {{a, b, c}, {a, b, c}};
+    CHECK_THROWS_WITH_AS(s.validate(), doctest::Contains("2 triangles' corner normals for 1 triangles"), Error);
+}
+
+TEST_CASE("shading normals: a point light's direct light uses the interpolated normal's cosine, exactly") {
+    // One triangle in z = 0 facing +z whose corners' normals lean different ways; camera rays
+    // straight down at points of known barycentrics; an isotropic point light above. With one
+    // vertex (max_depth 1) the radiance is kd / pi * I * cos(n_s, wi) / r^2: no randomness.
+    Scene<float> s;
+    s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    const std::array<Vec3f, 3> tri{Vec3f(-1, -1, 0), Vec3f(2, -1, 0), Vec3f(-1, 2, 0)};
+    s.add_polygon(tri, 0);
+    const std::array<Vec3f, 3> corner{glm::normalize(Vec3f(0.6f, 0, 1)), glm::normalize(Vec3f(0, -0.7f, 1)),
+                                      glm::normalize(Vec3f(-0.5f, 0.5f, 1))};
+    s.corner_normals = {corner};
+    s.point_lights.push_back(PointLight<float>{Vec3f(0.4f, 0.3f, 1.5f), Rgb<float>(4.0f)});
+    const BruteForce<Ivm<float>> accel(s.triangles);
+    PathTracerSettings<float> settings{.roulette = Roulette<float, 3>::classic()};
+    settings.max_depth = 1;
+    PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, MisDirect<float>> pt(s, accel, settings);
+    RandomSampler<float> sampler(3);
+    for (const auto& [u, v] : {std::pair{0.2f, 0.3f}, std::pair{0.6f, 0.1f}, std::pair{0.05f, 0.8f}}) {
+        const Vec3f x = tri[0] * (1 - u - v) + tri[1] * u + tri[2] * v;
+        const Vec3f ns = glm::normalize(corner[0] * (1 - u - v) + corner[1] * u + corner[2] * v);
+        const Vec3f d = s.point_lights[0].position - x;
+        const float cos_s = glm::dot(ns, glm::normalize(d)), cos_g = glm::normalize(d).z;
+        const float expected = 0.5f / pi<float> * 4.0f * cos_s / glm::dot(d, d);
+        sampler.start_pixel_sample(0, 0, 0);
+        const float L = pt.radiance(Ray<float>{x + Vec3f(0, 0, 1), Vec3f(0, 0, -1)}, sampler).L[0];
+        CAPTURE(u);
+        CHECK(L == doctest::Approx(expected).epsilon(1e-4));
+        CHECK(std::abs(cos_s - cos_g) > 0.05f * cos_g);  // the geometric normal would give another value
+    }
+}
+
+TEST_CASE("io: OBJ vertex normals become per-corner shading normals; bad ones name the line") {
+    const std::string dir = temp_path("obj_vn");
+    std::filesystem::create_directories(dir);
+    {
+        // A quad with v//vn (fan-triangulated: corners 1 2 3 and 1 3 4), a triangle with
+        // v/vt/vn, and one without normals (its geometric normal at every corner).
+        std::ofstream(dir + "/vn.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n"
+                                          "vn 0 0 2\nvn 0 1 1\nvn 1 0 1\nvn 0 0 -3\n"
+                                          "f 1//1 2//2 3//3 4//4\nf 1/1/2 2/1/3 4/1/1\nf 1 4 2\n";
+        std::ofstream(dir + "/none.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        std::ofstream(dir + "/zero.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 0 0 1\nf 1//2 2//1 3//2\n";
+        std::ofstream(dir + "/missing.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n\nf 1//1 2//1 3//5\n";
+    }
+    const ObjMesh m = load_obj(dir + "/vn.obj");
+    REQUIRE(m.triangles.size() == 4);
+    REQUIRE(m.normals.size() == 4);
+    const Vec3f z(0, 0, 1), y = glm::normalize(Vec3f(0, 1, 1)), x = glm::normalize(Vec3f(1, 0, 1));
+    auto near = [](const Vec3f& p, const Vec3f& q) { return glm::length(p - q) < 1e-6f; };
+    CHECK((near(m.normals[0][0], z) && near(m.normals[0][1], y) && near(m.normals[0][2], x)));
+    CHECK((near(m.normals[1][0], z) && near(m.normals[1][1], x) && near(m.normals[1][2], -z)));
+    CHECK((near(m.normals[2][0], y) && near(m.normals[2][1], x) && near(m.normals[2][2], z)));
+    CHECK((near(m.normals[3][0], -z) && near(m.normals[3][1], -z) && near(m.normals[3][2], -z)));  // f 1 4 2 winds to -z
+    const Scene<float> s = obj_scene(m, "vn");
+    CHECK(s.corner_normals == m.normals);
+    s.validate();
+    CHECK(load_obj(dir + "/none.obj").normals.empty());
+    CHECK(obj_scene(load_obj(dir + "/none.obj"), "none").corner_normals.empty());
+    CHECK_THROWS_WITH_AS(load_obj(dir + "/zero.obj"), doctest::Contains("zero.obj:6: the face's normal vn 1 has length 0"), Error);
+    CHECK_THROWS_WITH_AS(load_obj(dir + "/missing.obj"), doctest::Contains("missing.obj:6: the face names normal 5 but there are 1 vn lines"), Error);
+}
+
+namespace {
+
+/// The cube [-1, 1]^3 as six quads facing out (two triangles each).
+Scene<float> cube_scene() {
+    Scene<float> s;
+    const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    for (int axis = 0; axis < 3; ++axis)
+        for (float side : {-1.0f, 1.0f}) {
+            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            std::array<Vec3f, 4> q{};
+            const float uv[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+            for (int k = 0; k < 4; ++k) {
+                q[std::size_t(k)][axis] = side;
+                q[std::size_t(k)][u] = uv[k][0] * side;  // counter-clockwise seen from outside
+                q[std::size_t(k)][v] = uv[k][1];
+            }
+            s.add_polygon(q, m);
+        }
+    return s;
+}
+
+/// Checks the rays a render casts from the plane z = 0 (camera rays start at z = 1 or above):
+/// each must start on the side its direction leaves to; counts them and those going down.
+struct PlaneSideRecorder {
+    using scalar_type = float;
+    const BruteForce<Ivm<float>>& inner;
+    mutable std::uint64_t from_floor = 0, wrong_side = 0, below = 0;
+    void check(const Ray<float>& r) const {
+        if (std::abs(r.origin.z) >= 0.5f) return;  // a camera ray
+        ++from_floor;
+        if (!(r.origin.z * r.direction.z > 0.0f)) ++wrong_side;
+        below += r.direction.z < 0.0f;
+    }
+    bool closest_hit(const Ray<float>& r, StoreHit<float>& h) const {
+        check(r);
+        return inner.closest_hit(r, h);
+    }
+    bool any_hit(const Ray<float>& r) const {
+        check(r);
+        return inner.any_hit(r);
+    }
+};
+
+}  // namespace
+
+TEST_CASE("smooth_corner_normals: angle-weighted within the crease angle; a cube's edges stay sharp below 90 degrees") {
+    Scene<float> s = cube_scene();
+    smooth_corner_normals(s, 60.0f);
+    s.validate();
+    for (std::size_t t = 0; t < s.triangles.size(); ++t)
+        for (const Vec3f& c : s.corner_normals[t]) CHECK(glm::length(c - s.normal(t)) < 1e-6f);
+    smooth_corner_normals(s, 100.0f);  // every corner: the three faces' mean, whatever their triangulation
+    for (std::size_t t = 0; t < s.triangles.size(); ++t)
+        for (std::size_t k = 0; k < 3; ++k) {
+            CAPTURE(t);
+            CHECK(glm::length(s.corner_normals[t][k] - s.triangles[t][k] / std::sqrt(3.0f)) < 1e-5f);
+        }
+    CHECK_THROWS_WITH_AS(smooth_corner_normals(s, 200.0f), doctest::Contains("crease angle 200"), Error);
+}
+
+TEST_CASE("shading normals never start a ray on the wrong side of the geometric surface") {
+    // A floor z = 0 whose corner normals all lean 70 degrees towards +x: the shading
+    // hemisphere reaches far below the floor. Every ray the path tracer casts from the floor
+    // (BRDF samples, shadow rays to the point light above and to the lamp) must start on the
+    // side of the geometric surface it leaves to; some do leave downwards (the lean's cost).
+    Scene<float> s;
+    const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.7f)));
+    s.add_quad({-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}, m);
+    const auto lamp = s.add_material(Material<float>::lambertian(Rgb<float>(0), Rgb<float>(3)));
+    s.add_quad({-0.5f, -0.5f, 2}, {-0.5f, 0.5f, 2}, {0.5f, 0.5f, 2}, {0.5f, -0.5f, 2}, lamp);
+    s.fill_corner_normals();
+    const Vec3f lean(std::sin(1.22f), 0, std::cos(1.22f));
+    for (std::size_t t = 0; t < 2; ++t) s.corner_normals[t] = {lean, lean, lean};
+    s.point_lights.push_back(PointLight<float>{Vec3f(0.3f, 0.2f, 1.0f), Rgb<float>(2.0f)});
+    s.camera = Camera<float>{{0, -3, 3}, {0, 0, 0}, {0, 0, 1}, 0.8f};
+    const BruteForce<Ivm<float>> bf(s.triangles);
+    const PlaneSideRecorder rec{bf};
+    PathTracerSettings<float> settings{.roulette = Roulette<float, 3>::classic()};
+    settings.max_depth = 4;
+    PathTracer<PlaneSideRecorder, RandomSampler<float>, MisDirect<float>> pt(s, rec, settings);
+    RandomSampler<float> sampler(5);
+    RenderSettings image;
+    image.width = image.height = 16;
+    const PixelCamera<float> camera(s.camera, image);
+    for (int i = 0; i < 4096; ++i) {
+        const Rgb<float> L = pt.radiance(camera.ray(i % 16, i / 16 % 16, std::uint64_t(i), sampler), sampler).L;
+        REQUIRE(L.is_finite());
+    }
+    CHECK(rec.from_floor > 2000);  // 4513 when written
+    CHECK(rec.below > 100);  // the lean sends rays below the floor: the check below is not vacuous
+    CHECK(rec.wrong_side == 0);
 }

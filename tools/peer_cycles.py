@@ -206,8 +206,13 @@ def blender_build(bpy, scene_json):
     for i, m in enumerate(scene_json['materials']):
         mesh.materials.append(blender_material(bpy, 'm%d' % i, m))
     mesh.polygons.foreach_set('material_index', scene_json['material_of'])
-    mesh.polygons.foreach_set('use_smooth', [False] * len(tris))
+    normals = scene_json.get('corner_normals')  # glint's shading normals, per triangle corner
+    mesh.polygons.foreach_set('use_smooth', [normals is not None] * len(tris))
     mesh.update()
+    if normals is not None:  # one loop per corner, in the triangles' order (Blender 3.x custom split normals)
+        mesh.use_auto_smooth = True
+        mesh.normals_split_custom_set(np.array(normals, float).reshape(-1, 3).tolist())
+        mesh.update()
     obj = bpy.data.objects.new('glint', mesh)
     sc.collection.objects.link(obj)
     cam = scene_json['camera']

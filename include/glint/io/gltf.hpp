@@ -11,8 +11,8 @@
 //    (glTF 2.0, §3.5.2), composed from the root; a world matrix of negative determinant
 //    mirrors, so its triangles' vertex order is swapped to keep the front face (§3.7.2.1);
 //  - meshes: primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN (POSITION: VEC3
-//    float; indices: unsigned byte, short or int, or none); NORMAL and TEXCOORD are not read
-//    (glint shades with the geometric normal); emissive triangles become area lights, one
+//    float; indices: unsigned byte, short or int, or none; NORMAL: VEC3 float, the scene's
+//    corner normals, flat where a primitive has none); TEXCOORD is not read; emissive triangles become area lights, one
 //    per triangle, emitting from their front face (doubleSided is ignored);
 //  - materials (base = baseColorFactor's RGB, alpha ignored; m = metallic, r = roughness,
 //    alpha = r^2 as glTF 2.0, Appendix B, defines it; F0 = 0.04 for dielectrics, ibid.):
@@ -56,6 +56,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/spectrum.hpp>
+#include <glint/io/gltf_accessors.hpp>
 #include <glint/lights/light.hpp>
 #include <glint/tracer/scene.hpp>
 
@@ -89,126 +90,6 @@ struct GltfContext {
     std::vector<std::string>& warnings;
     std::vector<std::int64_t> materials;  // glTF material -> glint material (-1: not yet added)
 };
-
-inline tinygltf::Model gltf_read_model(const std::string& path) {
-    if (!std::ifstream(path, std::ios::binary)) throw Error("load_gltf(" + path + "): cannot read the file");
-    tinygltf::TinyGLTF loader;
-    // Textures are not used: their images are neither decoded nor required to exist.
-    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
-                             void*) { return true; }, nullptr);
-    tinygltf::Model model;
-    std::string err, warn;
-    const bool glb = path.size() >= 4 && path.compare(path.size() - 4, 4, ".glb") == 0;
-    const bool ok = glb ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                        : loader.LoadASCIIFromFile(&model, &err, &warn, path);
-    if (!ok) throw Error("load_gltf(" + path + "): " + (err.empty() ? "cannot parse the file" : err));
-    return model;
-}
-
-/// A node's local matrix: `matrix`, or translation * rotation * scale.
-inline glm::dmat4 gltf_local_matrix(const tinygltf::Node& n, const std::string& where) {
-    glm::dmat4 m(1.0);
-    if (n.matrix.size() == 16) {
-        for (int c = 0; c < 4; ++c)
-            for (int r = 0; r < 4; ++r) m[c][r] = n.matrix[std::size_t(4 * c + r)];  // column-major
-    } else {
-        if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
-        if (n.rotation.size() == 4)  // glTF stores x, y, z, w
-            m *= glm::mat4_cast(glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
-        if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
-    }
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r)
-            if (!std::isfinite(m[c][r])) throw Error(where + ": the transform is not finite");
-    return m;
-}
-
-/// An accessor's bytes, checked to lie inside its buffer view and buffer.
-struct GltfElements {
-    const unsigned char* data = nullptr;
-    std::size_t stride = 0, count = 0;
-    int component = 0;
-};
-
-inline GltfElements gltf_elements(const GltfContext& c, int index, int type, const std::string& where) {
-    const std::string at = where + " accessor " + std::to_string(index);
-    if (index < 0 || std::size_t(index) >= c.model.accessors.size()) throw Error(at + ": no such accessor");
-    const tinygltf::Accessor& a = c.model.accessors[std::size_t(index)];
-    if (a.sparse.isSparse) throw Error(at + ": sparse accessors are not supported");
-    if (a.type != type)
-        throw Error(at + ": expected type " + (type == TINYGLTF_TYPE_VEC3 ? "VEC3" : "SCALAR") + ", got type code " + std::to_string(a.type));
-    if (a.bufferView < 0 || std::size_t(a.bufferView) >= c.model.bufferViews.size()) throw Error(at + ": no buffer view");
-    const tinygltf::BufferView& v = c.model.bufferViews[std::size_t(a.bufferView)];
-    if (v.buffer < 0 || std::size_t(v.buffer) >= c.model.buffers.size()) throw Error(at + ": its buffer view has no buffer");
-    const std::vector<unsigned char>& b = c.model.buffers[std::size_t(v.buffer)].data;
-    const int stride = a.ByteStride(v);
-    const int size = tinygltf::GetComponentSizeInBytes(std::uint32_t(a.componentType)) *
-                     tinygltf::GetNumComponentsInType(std::uint32_t(a.type));
-    if (stride <= 0 || size <= 0) throw Error(at + ": invalid component type or stride");
-    // In bounds: byteOffset + stride (count - 1) + size <= byteLength, written without overflow.
-    const bool inside = v.byteOffset <= b.size() && v.byteLength <= b.size() - v.byteOffset &&
-                        (a.count == 0 || (a.byteOffset <= v.byteLength && std::size_t(size) <= v.byteLength - a.byteOffset &&
-                                          a.count - 1 <= (v.byteLength - a.byteOffset - std::size_t(size)) / std::size_t(stride)));
-    if (!inside) throw Error(at + ": " + std::to_string(a.count) + " elements reach past the end of its buffer");
-    return {b.data() + v.byteOffset + a.byteOffset, std::size_t(stride), a.count, a.componentType};
-}
-
-inline std::vector<glm::dvec3> gltf_positions(const GltfContext& c, int index, const std::string& where) {
-    const GltfElements e = gltf_elements(c, index, TINYGLTF_TYPE_VEC3, where + ", POSITION");
-    if (e.component != TINYGLTF_COMPONENT_TYPE_FLOAT)
-        throw Error(where + ", POSITION accessor " + std::to_string(index) + ": positions must be floats");
-    std::vector<glm::dvec3> out(e.count);
-    for (std::size_t i = 0; i < e.count; ++i) {
-        float p[3];
-        std::memcpy(p, e.data + i * e.stride, sizeof(p));
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-            throw Error(where + ", POSITION accessor " + std::to_string(index) + ": position " + std::to_string(i) +
-                        " is not finite");
-        out[i] = glm::dvec3(p[0], p[1], p[2]);
-    }
-    return out;
-}
-
-/// The vertex indices of a primitive (0, 1, ... without an indices accessor), each checked.
-inline std::vector<std::uint32_t> gltf_indices(const GltfContext& c, int index, std::size_t vertices, const std::string& where) {
-    std::vector<std::uint32_t> out;
-    if (index < 0) {
-        for (std::size_t i = 0; i < vertices; ++i) out.push_back(std::uint32_t(i));
-        return out;
-    }
-    const GltfElements e = gltf_elements(c, index, TINYGLTF_TYPE_SCALAR, where + ", indices");
-    for (std::size_t i = 0; i < e.count; ++i) {
-        const unsigned char* p = e.data + i * e.stride;
-        std::uint32_t v = 0;
-        if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) v = *p;
-        else if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) { std::uint16_t s; std::memcpy(&s, p, 2); v = s; }
-        else if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) std::memcpy(&v, p, 4);
-        else throw Error(where + ", indices accessor " + std::to_string(index) + ": indices must be unsigned integers");
-        if (v >= vertices)
-            throw Error(where + ", indices accessor " + std::to_string(index) + ": index " + std::to_string(i) + " = " +
-                        std::to_string(v) + " is past the " + std::to_string(vertices) + " vertices");
-        out.push_back(v);
-    }
-    return out;
-}
-
-/// Triangles of a TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive (glTF 2.0, §3.7.2.1).
-inline std::vector<std::array<std::uint32_t, 3>> gltf_triangles(int mode, const std::vector<std::uint32_t>& idx,
-                                                                const std::string& where) {
-    std::vector<std::array<std::uint32_t, 3>> out;
-    if (mode == TINYGLTF_MODE_TRIANGLES || mode == -1) {
-        for (std::size_t i = 0; i + 2 < idx.size(); i += 3) out.push_back({idx[i], idx[i + 1], idx[i + 2]});
-    } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-        for (std::size_t i = 0; i + 2 < idx.size(); ++i)
-            out.push_back(i % 2 ? std::array{idx[i + 1], idx[i], idx[i + 2]} : std::array{idx[i], idx[i + 1], idx[i + 2]});
-    } else if (mode == TINYGLTF_MODE_TRIANGLE_FAN) {
-        for (std::size_t i = 1; i + 1 < idx.size(); ++i) out.push_back({idx[0], idx[i], idx[i + 1]});
-    } else {
-        throw Error(where + ": primitive mode " + std::to_string(mode) +
-                    " (points or lines) is not triangles; glint renders triangle meshes only");
-    }
-    return out;
-}
 
 /// A number from an extension object's field, or `fallback`.
 inline double gltf_extension_number(const tinygltf::ExtensionMap& ext, const char* name, const char* field, double fallback) {
@@ -259,6 +140,33 @@ std::uint32_t gltf_material_index(GltfContext& c, Scene<T>& s, int index, const 
     return std::uint32_t(c.materials[slot]);
 }
 
+/// The corner normals of a primitive's triangles (the last `tris.size()` of s) from its
+/// NORMAL accessor (-1: none), by the inverse transpose of `world` (glTF 2.0, §3.7.2.1); a
+/// scene whose primitives differ in having normals shades those without flat.
+template <Scalar T>
+void gltf_add_normals(const GltfContext& c, Scene<T>& s, int accessor, std::size_t vertices,
+                      const std::vector<std::array<std::uint32_t, 3>>& tris, const glm::dmat4& world, const std::string& where) {
+    if (accessor < 0) {
+        if (!s.corner_normals.empty()) s.fill_corner_normals();
+        return;
+    }
+    const std::vector<glm::dvec3> n = gltf_vec3s(c.model, accessor, where, "NORMAL");
+    if (n.size() != vertices)
+        throw Error(where + ": " + std::to_string(n.size()) + " normals for " + std::to_string(vertices) + " positions");
+    const glm::dmat3 to_world = glm::transpose(glm::inverse(glm::dmat3(world)));
+    s.fill_corner_normals(s.triangles.size() - tris.size());  // the triangles before, flat where they have none
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+        std::array<Vec3<T>, 3> corner;
+        for (std::size_t k = 0; k < 3; ++k) {
+            const glm::dvec3 w = to_world * n[tris[t][k]];
+            if (!(glm::length(w) > 0.0)) throw Error(where + ": normal " + std::to_string(tris[t][k]) + " has length 0");
+            corner[k] = Vec3<T>(glm::normalize(w));
+        }
+        if (glm::determinant(glm::dmat3(world)) < 0.0) std::swap(corner[1], corner[2]);
+        s.corner_normals.push_back(corner);
+    }
+}
+
 template <Scalar T>
 void gltf_add_mesh(GltfContext& c, Scene<T>& s, int mesh, const glm::dmat4& world) {
     if (mesh < 0 || std::size_t(mesh) >= c.model.meshes.size()) throw Error(c.file + ": mesh " + std::to_string(mesh) + " does not exist");
@@ -268,8 +176,8 @@ void gltf_add_mesh(GltfContext& c, Scene<T>& s, int mesh, const glm::dmat4& worl
         const std::string where = c.file + ": mesh " + std::to_string(mesh) + ", primitive " + std::to_string(p);
         const auto pos = prims[p].attributes.find("POSITION");
         if (pos == prims[p].attributes.end()) throw Error(where + ": no POSITION attribute");
-        const std::vector<glm::dvec3> v = gltf_positions(c, pos->second, where);
-        const auto tris = gltf_triangles(prims[p].mode, gltf_indices(c, prims[p].indices, v.size(), where), where);
+        const std::vector<glm::dvec3> v = gltf_vec3s(c.model, pos->second, where, "POSITION");
+        const auto tris = gltf_triangles(prims[p].mode, gltf_indices(c.model, prims[p].indices, v.size(), where), where);
         const std::uint32_t m = gltf_material_index(c, s, prims[p].material, where);
         for (std::size_t t = 0; t < tris.size(); ++t) {
             std::array<Vec3<T>, 3> tri;
@@ -279,6 +187,8 @@ void gltf_add_mesh(GltfContext& c, Scene<T>& s, int mesh, const glm::dmat4& worl
                 throw Error(where + ": emissive triangle " + std::to_string(t) + " has zero area");
             s.add_polygon(tri, m);
         }
+        const auto normal = prims[p].attributes.find("NORMAL");
+        gltf_add_normals(c, s, normal == prims[p].attributes.end() ? -1 : normal->second, v.size(), tris, world, where);
     }
 }
 

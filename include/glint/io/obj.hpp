@@ -3,7 +3,9 @@
 // Needs tinyobjloader 2 (Debian libtinyobjloader-dev): link tinyobjloader::tinyobjloader.
 // Polygons are triangulated as fans; every face gets the index of its material (faces
 // without one get a default grey Lambertian material). From the MTL: Kd, Ks, Ns, Ke
-// (emission), Ni (index of refraction) and illum.
+// (emission), Ni (index of refraction) and illum. Vertex normals (`vn`, named by faces as
+// v//vn or v/vt/vn) become per-corner shading normals (ObjMesh::normals); texture
+// coordinates are not read.
 //
 // Validation (tinyobjloader reads what it cannot parse as 0 and stores a face's vertex count
 // in an unsigned char, so glint scans the text itself before handing it over):
@@ -16,18 +18,21 @@
 //  - an emissive face (a triangle of its fan) of zero area is an error; other triangles of
 //    zero area are kept (no ray ever hits them) with one warning naming their count and the
 //    first one's line;
+//  - a face's vertex normal must exist and have a finite, non-zero length (it is normalized);
 //  - a missing MTL file, or a material name no MTL defines, is a warning (ObjMesh::warnings):
 //    its faces get the default material.
 // Every error is a glint::Error naming the file, the line and the value.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <span>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -65,6 +70,10 @@ struct ObjMesh {
     std::vector<TriangleVertices<float>> triangles;
     std::vector<std::uint32_t> material;  ///< per triangle, index into materials
     std::vector<std::uint32_t> line;      ///< per triangle, the OBJ line of its face (1-based)
+    /// Per triangle, its corners' unit normals (the faces' `vn`, normalized) in the order of
+    /// its vertices; a face without `vn` has its triangles' geometric normal at every corner.
+    /// Empty where no face names a normal.
+    std::vector<std::array<Vec3f, 3>> normals;
     /// The MTL materials in file order, then the default grey material (always last, used by
     /// faces without a known material).
     std::vector<ObjMaterial> materials;
@@ -263,14 +272,52 @@ struct ObjDegenerates {
     std::uint32_t first_line = 0;
 };
 
-/// Appends the fan of one face; throws for an emissive fan triangle of zero area and counts
-/// the others.
-inline void obj_add_face(ObjMesh& mesh, const std::vector<Vec3f>& poly, std::uint32_t mat, std::uint32_t line,
+/// A face's vertices and, where it names them, its vertex normals (one per vertex, or none).
+struct ObjFace {
+    std::vector<Vec3f> poly, normals;
+};
+
+/// The vertices of one face (its `count` indices) into face.poly, and its normals, unit
+/// length, into face.normals where it names one at every vertex (none otherwise); a named
+/// normal that is missing, not finite or of zero length is an error naming the face's line.
+inline void obj_face(const tinyobj::attrib_t& attrib, std::span<const tinyobj::index_t> idx, const std::string& path,
+                     std::uint32_t line, ObjFace& face) {
+    face.poly.clear();
+    face.normals.clear();
+    const std::string where = path + ":" + std::to_string(line) + ": ";
+    for (const tinyobj::index_t& k : idx) {
+        const auto i = std::size_t(k.vertex_index);
+        if (3 * i + 2 >= attrib.vertices.size())  // the scan rules this out; never index past it
+            throw Error(where + "a face parsed with vertex " + std::to_string(i + 1) + " of " +
+                        std::to_string(attrib.vertices.size() / 3));
+        face.poly.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
+        if (k.normal_index < 0) continue;
+        const auto j = std::size_t(k.normal_index);
+        if (3 * j + 2 >= attrib.normals.size())
+            throw Error(where + "the face names normal " + std::to_string(j + 1) + " but there are " +
+                        std::to_string(attrib.normals.size() / 3) + " vn lines");
+        const Vec3f n(attrib.normals[3 * j], attrib.normals[3 * j + 1], attrib.normals[3 * j + 2]);
+        const float len = glm::length(n);
+        if (!(len > 0.0f) || !std::isfinite(len))
+            throw Error(where + "the face's normal vn " + std::to_string(j + 1) + " has length " + std::to_string(len));
+        face.normals.push_back(n / len);
+    }
+    if (face.normals.size() != face.poly.size()) face.normals.clear();  // normals at some vertices only: none
+}
+
+/// Appends the fan of one face (and its corner normals); throws for an emissive fan triangle
+/// of zero area and counts the others.
+inline void obj_add_face(ObjMesh& mesh, const ObjFace& face, std::uint32_t mat, std::uint32_t line,
                          const std::string& path, ObjDegenerates& degenerate) {
     const bool emissive = mesh.materials[mat].ke.max() > 0.0f;
+    const std::vector<Vec3f>& poly = face.poly;
     for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
         const TriangleVertices<float> t{poly[0], poly[k], poly[k + 1]};
-        const bool zero_area = !(glm::length(glm::cross(t[1] - t[0], t[2] - t[0])) * 0.5f > 0.0f);
+        const Vec3f cross = glm::cross(t[1] - t[0], t[2] - t[0]);
+        const bool zero_area = !(glm::length(cross) * 0.5f > 0.0f);
+        const Vec3f g = safe_normalize(cross);
+        mesh.normals.push_back(face.normals.empty() ? std::array<Vec3f, 3>{g, g, g}
+                                                    : std::array<Vec3f, 3>{face.normals[0], face.normals[k], face.normals[k + 1]});
         if (zero_area && emissive)
             throw Error(path + ":" + std::to_string(line) + ": emissive face (material '" + mesh.materials[mat].name +
                         "') has a triangle of zero area");
@@ -307,28 +354,25 @@ inline ObjMesh load_obj(const std::string& path) {
     mesh.materials.push_back(ObjMaterial{});
     std::size_t face = 0;
     detail::ObjDegenerates degenerate;
-    std::vector<Vec3f> poly;
+    detail::ObjFace poly;
+    bool any_normal = false;
     for (const auto& shape : shapes) {
         std::size_t offset = 0;
         for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face) {
             const std::size_t count = shape.mesh.num_face_vertices[f];
-            poly.clear();
-            for (std::size_t k = 0; k < count; ++k) {
-                const auto i = std::size_t(shape.mesh.indices[offset + k].vertex_index);
-                if (3 * i + 2 >= attrib.vertices.size())  // the scan rules this out; never index past it
-                    throw Error("load_obj(" + path + "): a face parsed with vertex " + std::to_string(i + 1) +
-                                " of " + std::to_string(attrib.vertices.size() / 3));
-                poly.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
-            }
+            if (face >= scan.face_line.size()) throw Error("load_obj(" + path + "): more faces parsed than written");
+            const std::uint32_t line = scan.face_line[face];
+            detail::obj_face(attrib, std::span(shape.mesh.indices).subspan(offset, count), path, line, poly);
+            any_normal |= !poly.normals.empty();
             const int mid = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
             const std::uint32_t mat =
                 mid >= 0 && std::size_t(mid) < default_material ? static_cast<std::uint32_t>(mid) : default_material;
-            if (face >= scan.face_line.size()) throw Error("load_obj(" + path + "): more faces parsed than written");
-            detail::obj_add_face(mesh, poly, mat, scan.face_line[face], path, degenerate);
+            detail::obj_add_face(mesh, poly, mat, line, path, degenerate);
             offset += count;
         }
     }
     if (mesh.triangles.empty()) throw Error("load_obj(" + path + "): no faces");
+    if (!any_normal) mesh.normals.clear();
     if (degenerate.count > 0)
         mesh.warnings.push_back(path + ":" + std::to_string(degenerate.first_line) + ": " +
                                 std::to_string(degenerate.count) + " triangle(s) of zero area, the first on this line; "

@@ -1,7 +1,7 @@
 // glint/io/obj_scene.hpp: a path-tracing scene from a loaded OBJ (io/obj.hpp): each MTL
 // material mapped onto glint's materials, emissive faces as area lights, a sky where nothing
-// emits, and a camera framing the mesh. glint-render --mesh and the Python module's render()
-// use it.
+// emits, a camera framing the mesh, and the OBJ's vertex normals as the scene's corner
+// normals (shading normals). glint-render --mesh and the Python module's render() use it.
 //
 // The material mapping (MTL illumination models as in the Wavefront MTL specification):
 //   illum 5 (reflection, ray traced)       -> mirror of reflectance Ks (0.9 grey where Ks = 0);
@@ -36,6 +36,7 @@ inline Scene<float> obj_scene(const ObjMesh& mesh, std::string name) {
     s.name = std::move(name);
     for (const ObjMaterial& m : mesh.materials) s.add_material(scene_material(m));
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) s.add_polygon(mesh.triangles[i], mesh.material[i]);
+    s.corner_normals = mesh.normals;  // add_polygon made one scene triangle per mesh triangle
     sky_and_framing(s, false);
     return s;
 }

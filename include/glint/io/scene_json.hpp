@@ -2,8 +2,9 @@
 // renderer (tools/peer_cycles.py builds the same scene in Blender's Cycles from it).
 //
 // Written: the triangles (three vertices each, in the tracer's order, whose vertex order
-// gives the geometric normal and so an emitter's front face), the material of each triangle
-// (material_of) and its area light (light_of, -1 for none),
+// gives the geometric normal and so an emitter's front face), their corner (shading) normals
+// where the scene has them (corner_normals, nine numbers per triangle like "triangles"), the
+// material of each triangle (material_of) and its area light (light_of, -1 for none),
 // the materials (kind, kd, ks, Phong exponent, emission, ior: the model of
 // glint/tracer/scene.hpp), the area lights (polygon, emission, unit normal, area), the point
 // lights (kind isotropic | spot | cosine, position, intensity, axis, cos_outer, cos_inner:
@@ -13,6 +14,7 @@
 // io/scene_json_read.hpp reads the file back.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -164,17 +166,25 @@ void json_integers(std::ostream& out, const std::vector<Int>& v) {
     out << ']';
 }
 
+/// Member `name`: one row of nine numbers per triangle (three points or three vectors).
 template <Scalar T>
-void json_triangles(std::ostream& out, const Scene<T>& s) {
-    out << "  \"triangles\": [\n";
-    for (std::size_t i = 0; i < s.triangles.size(); ++i) {
-        const auto& t = s.triangles[i];
+void json_corner_rows(std::ostream& out, const char* name, const std::vector<std::array<Vec3<T>, 3>>& rows) {
+    out << "  \"" << name << "\": [\n";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        const auto& t = rows[i];
         const T a[9] = {t[0].x, t[0].y, t[0].z, t[1].x, t[1].y, t[1].z, t[2].x, t[2].y, t[2].z};
         out << "    ";
-        json_numbers(out, a, 9, "triangles");
-        out << (i + 1 < s.triangles.size() ? ",\n" : "\n");
+        json_numbers(out, a, 9, name);
+        out << (i + 1 < rows.size() ? ",\n" : "\n");
     }
-    out << "  ],\n  \"material_of\": ";
+    out << "  ],\n";
+}
+
+template <Scalar T>
+void json_triangles(std::ostream& out, const Scene<T>& s) {
+    json_corner_rows(out, "triangles", s.triangles);
+    if (!s.corner_normals.empty()) json_corner_rows(out, "corner_normals", s.corner_normals);
+    out << "  \"material_of\": ";
     json_integers(out, s.material_of);
     out << ",\n  \"light_of\": ";
     json_integers(out, s.light_of);

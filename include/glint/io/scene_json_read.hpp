@@ -6,8 +6,9 @@
 //
 // A hand-written scene may also name meshes by path: "meshes": [{"path": "bunny.obj",
 // "material": 2}] loads each OBJ (io/obj.hpp; a relative path is taken from the scene file's
-// folder) and gives all its triangles material 2 (the OBJ's own materials are not used), after
-// the inline triangles; an emissive material makes each of them an area light. "triangles"
+// folder) and gives all its triangles material 2 (the OBJ's own materials are not used; its
+// vertex normals are), after the inline triangles; an emissive material makes each of them an
+// area light. Triangles without normals where others have them are shaded flat. "triangles"
 // may then be left out (with "material_of" and "light_of").
 //
 // Files written before `light_of` was exported get it rebuilt: each emissive triangle belongs
@@ -178,6 +179,15 @@ void read_json_triangles(const SceneJsonReader& r, const JsonValue& doc, Scene<T
         s.triangles.push_back({Vec3<T>(a[0], a[1], a[2]), Vec3<T>(a[3], a[4], a[5]), Vec3<T>(a[6], a[7], a[8])});
         s.material_of.push_back(std::uint32_t(r.integer(mats[i], "material_of", 0, (long long)s.materials.size() - 1)));
     }
+    if (const JsonValue* normals = doc.find("corner_normals")) {
+        if (normals->kind != JsonValue::Kind::array || normals->items.size() != tris.size())
+            r.fail(*normals, "corner_normals needs one entry (nine numbers) per triangle");
+        for (const JsonValue& n : normals->items) {
+            T a[9];
+            r.numbers(n, a, 9, "corner_normals");
+            s.corner_normals.push_back({Vec3<T>(a[0], a[1], a[2]), Vec3<T>(a[3], a[4], a[5]), Vec3<T>(a[6], a[7], a[8])});
+        }
+    }
     s.light_of.assign(tris.size(), -1);
     const JsonValue* lights = doc.find("light_of");
     if (!lights) return rebuild_light_of(r, doc, s);
@@ -200,12 +210,16 @@ void read_json_meshes(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& 
         const auto mat = std::uint32_t(r.integer(r.member(m, "material", JsonValue::Kind::number), "material", 0,
                                                  (long long)s.materials.size() - 1));
         const ObjMesh obj = load_obj(path.starts_with('/') ? path : dir + path);
+        const bool normals = !obj.normals.empty() || !s.corner_normals.empty();
+        if (normals) s.fill_corner_normals();  // the triangles before, flat where they have none
         for (const auto& t : obj.triangles) {
             const std::array<Vec3<T>, 3> tri{Vec3<T>(t[0]), Vec3<T>(t[1]), Vec3<T>(t[2])};
             if (s.materials[mat].emissive() && !(glm::length(glm::cross(tri[1] - tri[0], tri[2] - tri[0])) > T(0)))
                 r.fail(m, "mesh '" + path + "' has an emissive triangle of zero area");
             s.add_polygon(tri, mat);
         }
+        for (const auto& c : obj.normals) s.corner_normals.push_back({Vec3<T>(c[0]), Vec3<T>(c[1]), Vec3<T>(c[2])});
+        if (normals) s.fill_corner_normals();  // this mesh's, flat where it has none
     }
 }
 

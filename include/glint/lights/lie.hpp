@@ -115,7 +115,7 @@ std::vector<LieLight<T>> lie_lights(const Scene<T>& scene, int area_samples) {
 template <Scalar T>
 Ray<T> lie_shadow_ray(const ShadingPoint<T>& sp, const LieLight<T>& l) {
     const Vec3<T>& y = l.light.position;
-    const Vec3<T> xo = offset_origin(sp.x, sp.err, sp.n, y - sp.x);
+    const Vec3<T> xo = offset_origin(sp.x, sp.err, sp.ng, y - sp.x);
     const Vec3<T> yo = offset_origin(y, l.err, l.normal, xo - y);
     return Ray<T>{xo, yo - xo, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)};
 }
@@ -135,12 +135,9 @@ bool lie_camera_point(const Scene<T>& scene, const A& accel, const Ray<T>& ray, 
     if (!accel.closest_hit(ray, hit)) return false;
     const Material<T>& m = scene.materials[scene.material_of[hit.id]];
     if (m.specular()) return false;
-    const Vec3<T> ng = scene.normal(hit.id);
-    const Vec3<T> nn = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
-    const SurfacePoint<T> p = surface_point(scene, hit);
-    const Frame<T> frame = Frame<T>::from_normal(nn);
-    brdf.emplace(m, frame.to_local(-ray.direction));
-    sp = ShadingPoint<T>{p.x, p.err, nn, frame, &*brdf};
+    sp = shading_point(scene, hit, scene.normal(hit.id), ray.direction);
+    brdf.emplace(m, sp.frame.to_local(-ray.direction));
+    sp.brdf = &*brdf;
     return true;
 }
 

@@ -134,7 +134,7 @@ public:
             out.L += direct_at(scene_, rays, direct_, vp, sampler);
             const Frame<T> frame = Frame<T>::from_normal(vp.n);
             const SurfaceBrdf<T> brdf = vp.brdf(scene_, frame);
-            const ShadingPoint<T> sp{vp.x, vp.err, vp.n, frame, &brdf};
+            const ShadingPoint<T> sp{vp.x, vp.err, vp.n, vp.n, frame, &brdf};
             out.L += vp.beta * caustics(sp, scratch);
             out.L += vp.beta * final_gather(rays, sp, st_.gather_rays, uniform, [&](const Ray<T>& r, const StoreHit<T>* hit) {
                 return hit ? gathered(rays, r, *hit, uniform, scratch) : Rgb<T>(T(0));

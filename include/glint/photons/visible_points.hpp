@@ -92,7 +92,7 @@ template <class D, RayAccelerator A, class S, Scalar T>
 Rgb<T> direct_at(const Scene<T>& s, RayQueries<A>& rays, const D& direct, const VisiblePoint<T>& vp, S& sampler) {
     const Frame<T> frame = Frame<T>::from_normal(vp.n);
     const SurfaceBrdf<T> brdf = vp.brdf(s, frame);
-    const ShadingPoint<T> sp{vp.x, vp.err, vp.n, frame, &brdf};
+    const ShadingPoint<T> sp{vp.x, vp.err, vp.n, vp.n, frame, &brdf};
     Rgb<T> L = direct.estimate(sp, sampler, rays, static_cast<typename D::vertex_record*>(nullptr));
     const Vec3<T> wl = brdf.sample_by_albedo(sampler.get_2d());
     const T pdf = brdf.sampling_pdf(wl);

@@ -141,12 +141,10 @@ private:
         if (!queries.closest_hit(ray, hit)) return;
         const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
         if (m.specular()) return;
-        const Vec3<T> ng = scene_.normal(hit.id);
-        const Vec3<T> nn = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
-        const SurfacePoint<T> p = surface_point(scene_, hit);
-        const Frame<T> frame = Frame<T>::from_normal(nn);
+        ShadingPoint<T> sp = shading_point(scene_, hit, scene_.normal(hit.id), ray.direction);
+        const Frame<T>& frame = sp.frame;
         const SurfaceBrdf<T> brdf(m, frame.to_local(-ray.direction));
-        const ShadingPoint<T> sp{p.x, p.err, nn, frame, &brdf};
+        sp.brdf = &brdf;
         for (int j = 0; j < repeats; ++j) {
             const Vec3<T> wi = brdf.sample_by_albedo(sampler.get_2d());
             const T pdf = brdf.sampling_pdf(wi);
@@ -173,19 +171,16 @@ private:
                 break;
             }
             const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
-            const Vec3<T> ng = scene_.normal(hit.id);
-            const bool front = glm::dot(ng, ray.direction) < T(0);
-            const Vec3<T> n = front ? ng : -ng;
-            const SurfacePoint<T> p = surface_point(scene_, hit);
+            const Vec3<T> g = scene_.normal(hit.id);
+            const bool front = glm::dot(g, ray.direction) < T(0);
+            const ShadingPoint<T> sp = shading_point(scene_, hit, g, ray.direction);
             if (front && m.emissive()) out.L += F * m.emission * direct_.emission_weight(from, ray, hit);
-            if (m.specular()) {
-                if (!specular_step(m, ShadingPoint<T>{p.x, p.err, n, {}, nullptr}, ng, depth, sampler, ray, F, out.L)) break;
+            if (m.specular()) {  // about the shading normal, oriented as g
+                if (!specular_step(m, sp, front ? sp.n : -sp.n, depth, sampler, ray, F, out.L)) break;
                 from = Arrival<T>{};
                 continue;
             }
-            if (!surface_step(m, ShadingPoint<T>{p.x, p.err, n, Frame<T>::from_normal(n), nullptr}, depth, sampler, queries,
-                              depth == 0 ? rec : nullptr, ray, F, out.L, from))
-                break;
+            if (!surface_step(m, sp, depth, sampler, queries, depth == 0 ? rec : nullptr, ray, F, out.L, from)) break;
         }
         return out;
     }
@@ -221,10 +216,10 @@ private:
     /// A mirror or dielectric vertex: the deterministic direction (Fresnel choice for
     /// dielectrics), then the roulette on the one lobe. Updates ray, F and L (the roulette's
     /// offset); false when the walk stops.
-    bool specular_step(const Material<T>& m, const ShadingPoint<T>& sp, const Vec3<T>& ng, int depth, S& sampler,
+    bool specular_step(const Material<T>& m, const ShadingPoint<T>& sp, const Vec3<T>& n, int depth, S& sampler,
                        Ray<T>& ray, Rgb<T>& F, Rgb<T>& L) const {
         const T u = m.kind == MaterialKind::dielectric ? sampler.get_1d() : T(0);  // only a dielectric chooses
-        const Vec3<T> wi = specular_direction(m, ray.direction, ng, u);
+        const Vec3<T> wi = specular_direction(m, ray.direction, n, u);
         const std::array<Rgb<T>, 1> lobes{specular_albedo(m)};
         const auto sel = select_lobe(settings_.roulette, F, std::span<const Rgb<T>>(lobes), sampler.get_1d(), depth);
         L += F * sel.offset;

@@ -99,6 +99,10 @@ class Scene {
 public:
     std::string name = "scene";  ///< Name used in error messages and reports.
     std::vector<TriangleVertices<T>> triangles;  ///< Every triangle's vertices, world space.
+    /// Per triangle, the unit normals at its three corners (an OBJ's `vn`), in the order of
+    /// its vertices; empty where the scene has none (then it is shaded with the geometric
+    /// normal). See shading_normal().
+    std::vector<std::array<Vec3<T>, 3>> corner_normals;
     std::vector<std::uint32_t> material_of;  ///< Per triangle: index into `materials`.
     std::vector<Material<T>> materials;  ///< Materials the triangles refer to.
     std::vector<AreaLight<T>> area_lights;  ///< Emitting polygons, each made of scene triangles.
@@ -151,6 +155,14 @@ public:
         for (std::uint32_t m : material_of)
             if (m >= materials.size()) throw Error("scene '" + name + "': a triangle has no material");
         for (std::size_t i = 0; i < point_lights.size(); ++i) point_lights[i].validate(i);
+        if (!corner_normals.empty() && corner_normals.size() != triangles.size())
+            throw Error("scene '" + name + "': " + std::to_string(corner_normals.size()) + " triangles' corner normals for " +
+                        std::to_string(triangles.size()) + " triangles");
+        for (std::size_t i = 0; i < corner_normals.size(); ++i)
+            for (const Vec3<T>& c : corner_normals[i])
+                if (!(std::abs(glm::length(c) - T(1)) < T(1e-3)))
+                    throw Error("scene '" + name + "': triangle " + std::to_string(i) + " has a corner normal of length " +
+                                std::to_string(glm::length(c)) + " (unit normals are needed)");
     }
 
     /// Which capabilities the scene uses (scans materials and lights; linear cost).
@@ -171,6 +183,28 @@ public:
     Vec3<T> normal(std::size_t i) const {
         const auto& t = triangles[i];
         return safe_normalize(glm::cross(t[1] - t[0], t[2] - t[0]));
+    }
+
+    /// Gives the triangles that have no corner normals yet (those after the last that has),
+    /// up to triangle `end`, their geometric normal at each corner: a scene that mixes meshes
+    /// with and without vertex normals shades the latter flat.
+    void fill_corner_normals(std::size_t end = std::size_t(-1)) {
+        while (corner_normals.size() < std::min(end, triangles.size())) {
+            const Vec3<T> g = normal(corner_normals.size());
+            corner_normals.push_back({g, g, g});
+        }
+    }
+
+    /// The shading normal at barycentrics (u, v) of triangle i (the point (1 - u - v) v0 +
+    /// u v1 + v v2, as hits report it): its corner normals interpolated and normalized
+    /// (Phong 1975), turned to the side of `ng`, the unit geometric normal on the side being
+    /// shaded. `ng` itself where the scene has no corner normals, or where they cancel.
+    [[gnu::always_inline]] Vec3<T> shading_normal(std::size_t i, T u, T v, const Vec3<T>& ng) const {
+        if (corner_normals.empty()) return ng;
+        const auto& c = corner_normals[i];
+        const Vec3<T> s = safe_normalize(c[0] * (T(1) - u - v) + c[1] * u + c[2] * v, Vec3<T>(0));
+        const T side = glm::dot(s, ng);
+        return side > T(0) ? s : side < T(0) ? -s : ng;
     }
 
     /// Total emitted power of the area lights per band (Phi = pi Le A for a Lambertian

@@ -1,9 +1,10 @@
 // glint/tracer/shading.hpp: what light transport knows about a surface point, and the rays
 // one path sample traces from it.
 //
-// ShadingPoint is a vertex's position (with its rounding-error bound), normal, local frame and
-// BRDF; RayQueries<Accel> traces a sample's rays through an accelerator and counts them (the
-// count is the sample's result, PathSample::rays, so no function takes a counter to update).
+// ShadingPoint is a vertex's position (with its rounding-error bound), geometric normal (for
+// ray offsets), shading normal with its local frame, and BRDF; RayQueries<Accel> traces a
+// sample's rays through an accelerator and counts them (the count is the sample's result,
+// PathSample::rays, so no function takes a counter to update).
 // Ray origins are offset past the point's error bound (core/offset.hpp: Pharr, Jakob,
 // Humphreys 2023, sections 6.8.5-6.8.6), so that the same scene renders the same image at any
 // translation and scale float resolves.
@@ -31,7 +32,12 @@ template <Scalar T>
 struct ShadingPoint {
     Vec3<T> x;          ///< Position in world space.
     Vec3<T> err;        ///< Bound on x's rounding error, per axis (for offsetting shadow-ray origins).
-    Vec3<T> n;          ///< Unit normal on the side of the outgoing direction.
+    /// Unit geometric normal on the side of the outgoing direction: where rays leaving the
+    /// point are offset to (core/offset.hpp).
+    Vec3<T> ng;
+    /// Unit shading normal on ng's side (Scene::shading_normal; ng where the scene has no
+    /// vertex normals): the cosines of lighting and the BRDF's frame.
+    Vec3<T> n;
     Frame<T> frame;     ///< Local frame about n (z = n), in which the BRDF is evaluated.
     const SurfaceBrdf<T>* brdf;  ///< The surface's BRDF; not owned.
 };
@@ -69,10 +75,21 @@ SurfacePoint<T> surface_point(const Scene<T>& scene, const StoreHit<T>& hit) {
     return surface_point(scene.triangles[hit.id], hit.u, hit.v);
 }
 
+/// The shading point that a ray of direction d finds at `hit` on a triangle of geometric
+/// normal g (Scene::normal), without its BRDF: g turned towards the ray's origin, the shading
+/// normal on that side (Scene::shading_normal) and its frame.
+template <Scalar T>
+[[gnu::always_inline]] inline ShadingPoint<T> shading_point(const Scene<T>& scene, const StoreHit<T>& hit, const Vec3<T>& g, const Vec3<T>& d) {
+    const Vec3<T> ng = glm::dot(g, d) < T(0) ? g : -g;
+    const Vec3<T> n = scene.shading_normal(hit.id, hit.u, hit.v, ng);
+    const SurfacePoint<T> p = surface_point(scene, hit);
+    return {p.x, p.err, ng, n, Frame<T>::from_normal(n), nullptr};
+}
+
 /// A ray leaving shading point sp in direction dir.
 template <Scalar T>
 Ray<T> spawn(const ShadingPoint<T>& sp, const Vec3<T>& dir) {
-    return Ray<T>{offset_origin(sp.x, sp.err, sp.n, dir), dir, T(0), infinity<T>};
+    return Ray<T>{offset_origin(sp.x, sp.err, sp.ng, dir), dir, T(0), infinity<T>};
 }
 
 /// What a lighting policy asks of a sample's ray queries: shadow rays to a point of a polygon
@@ -108,7 +125,7 @@ public:
     /// Shadow ray from sp to point y (rounding error y_err, on a surface of normal ny; zero
     /// for a point light), both ends offset off their surfaces, stopping just short of y.
     bool visible(const ShadingPoint<T>& sp, const Vec3<T>& y, const Vec3<T>& y_err, const Vec3<T>& ny) {
-        const Vec3<T> xo = offset_origin(sp.x, sp.err, sp.n, y - sp.x);
+        const Vec3<T> xo = offset_origin(sp.x, sp.err, sp.ng, y - sp.x);
         const Vec3<T> yo = offset_origin(y, y_err, ny, xo - y);
         return unoccluded(Ray<T>{xo, yo - xo, T(0), T(1) - T(sizeof(T) == 4 ? 1e-4 : 1e-9)});
     }
