@@ -116,6 +116,30 @@ public:
         });
     }
 
+    /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it,
+    /// bit for bit; returns how many hits were updated. Throws glint::Error naming both sizes
+    /// when they differ.
+    std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const {
+        check_stream("closest_hit", rays.size(), hits.size());
+        std::size_t n = 0;
+        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            for (std::size_t i = 0; i < rays.size(); ++i) n += closest(kernels, rays[i], hits[i], uncounted, NoNodeHook{});
+            return true;
+        });
+        return n;
+    }
+    /// Any hits of a stream of rays: occluded[i] = any_hit(rays[i]); returns how many are
+    /// occluded. Throws glint::Error naming both sizes when they differ.
+    std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded) const {
+        check_stream("any_hit", rays.size(), occluded.size());
+        std::size_t n = 0;
+        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            for (std::size_t i = 0; i < rays.size(); ++i) n += occluded[i] = any(kernels, rays[i], uncounted, NoNodeHook{});
+            return true;
+        });
+        return n;
+    }
+
     /// The kernels queries run (core/isa.hpp): the best this CPU supports, checked when the
     /// tree is built; set_isa() picks another (the same hits; for tests and comparisons).
     Isa isa() const { return bvh_.isa(); }
@@ -166,6 +190,12 @@ private:
                 return leaf(first, count);
             };
         };
+    }
+
+    static void check_stream(const char* query, std::size_t rays, std::size_t out) {
+        if (rays != out)
+            throw Error(std::string("MeshBvh::") + query + ": " + std::to_string(rays) + " rays but " +
+                        std::to_string(out) + " results");
     }
 
     template <class Get>
