@@ -17,6 +17,8 @@
 // Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
 
+#include <algorithm>
+#include <bit>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -36,6 +38,7 @@
 #include <glint/trees/bvh_builder.hpp>
 #include <glint/trees/tree.hpp>
 #include <glint/trees/wide_bvh.hpp>
+#include <glint/trees/wide_packet.hpp>
 
 namespace glint {
 
@@ -116,28 +119,27 @@ public:
         });
     }
 
-    /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it,
-    /// bit for bit; returns how many hits were updated. Throws glint::Error naming both sizes
-    /// when they differ.
+    /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it
+    /// (the same t, u, v and id); returns how many hits were updated. Consecutive rays go in
+    /// packets of 8 sharing the node visits where they are coherent (trees/wide_packet.hpp),
+    /// as single rays otherwise. Throws glint::Error naming both sizes when they differ.
     std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const {
-        check_stream("closest_hit", rays.size(), hits.size());
-        std::size_t n = 0;
-        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
-            for (std::size_t i = 0; i < rays.size(); ++i) n += closest(kernels, rays[i], hits[i], uncounted, NoNodeHook{});
-            return true;
-        });
-        return n;
+        return closest_stream(rays, hits, uncounted, [](unsigned) {});
     }
-    /// Any hits of a stream of rays: occluded[i] = any_hit(rays[i]); returns how many are
-    /// occluded. Throws glint::Error naming both sizes when they differ.
+    /// The stream closest_hit(), counting into `counters` (nodes: ray-node tests; packets:
+    /// node visits of packets).
+    std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits,
+                            WideBvhCounters& counters) const {
+        return closest_stream(rays, hits, counting(counters), packet_counting(counters));
+    }
+    /// Any hits of a stream of rays: occluded[i] = any_hit(rays[i]), in packets as above;
+    /// returns how many are occluded. Throws glint::Error naming both sizes when they differ.
     std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded) const {
-        check_stream("any_hit", rays.size(), occluded.size());
-        std::size_t n = 0;
-        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
-            for (std::size_t i = 0; i < rays.size(); ++i) n += occluded[i] = any(kernels, rays[i], uncounted, NoNodeHook{});
-            return true;
-        });
-        return n;
+        return any_stream(rays, occluded, uncounted, [](unsigned) {});
+    }
+    /// The stream any_hit(), counting into `counters` (as the stream closest_hit()).
+    std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded, WideBvhCounters& counters) const {
+        return any_stream(rays, occluded, counting(counters), packet_counting(counters));
     }
 
     /// The kernels queries run (core/isa.hpp): the best this CPU supports, checked when the
@@ -189,6 +191,94 @@ private:
                 c.records += leaves_.records(first, count);
                 return leaf(first, count);
             };
+        };
+    }
+
+    /// The streams: one dispatch, then packets of packet_lanes rays (the last may be short).
+    template <class Wrap, class Hook>
+    std::size_t closest_stream(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits, Wrap&& wrap,
+                               Hook&& hook) const {
+        check_stream("closest_hit", rays.size(), hits.size());
+        std::size_t n = 0;
+        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
+                const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
+                n += closest_packet(kernels, rays.data() + i, hits.data() + i, k, wrap, hook);
+            }
+            return true;
+        });
+        return n;
+    }
+    template <class Wrap, class Hook>
+    std::size_t any_stream(std::span<const Ray<float>> rays, std::span<bool> occluded, Wrap&& wrap, Hook&& hook) const {
+        check_stream("any_hit", rays.size(), occluded.size());
+        std::size_t n = 0;
+        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
+                const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
+                n += any_packet(kernels, rays.data() + i, occluded.data() + i, k, wrap, hook);
+            }
+            return true;
+        });
+        return n;
+    }
+    /// One packet of n <= packet_lanes rays: the packet traversal where they are coherent,
+    /// single rays otherwise; returns the hits.
+    template <Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
+                                              Wrap& wrap, Hook& hook) const {
+        Ray<float> r[detail::packet_lanes];
+        for (int k = 0; k < n; ++k) r[k] = ray_before(rays[k], hits[k]);
+        const detail::PacketShape shape = detail::packet_shape(r, n);
+        int found = 0;
+        if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
+            for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, [&] { hook(1u); });
+            return found;
+        }
+        StoreHit<float> h[detail::packet_lanes];
+        RayDataOf<P> world[detail::packet_lanes];
+        for (int k = 0; k < n; ++k) h[k] = hits[k], world[k] = leaves_.prepare(r[k]);
+        auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
+            LeafQuery<P, false> q(leaves_, r[k], world[k], h[k]);
+            return wrap(q)(first, count);
+        };
+        const detail::PacketBoxTest<I> box(detail::PacketRays(r, shape));
+        const unsigned hit = detail::packet_traverse<false, N, I, WideBvh<N, B, L>::max_stack>(
+            bvh_.nodes().data(), box, r, shape.lanes, leaf, hook);
+        for (unsigned m = hit; m; m &= m - 1, ++found) {
+            const int k = std::countr_zero(m);
+            hits[k] = LeafQuery<P, false>(leaves_, r[k], world[k], h[k]).hit();
+        }
+        return found;
+    }
+    template <Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] int any_packet(IsaTag<I> kernels, const Ray<float>* rays, bool* occluded, int n, Wrap& wrap,
+                                          Hook& hook) const {
+        const detail::PacketShape shape = detail::packet_shape(rays, n);
+        int found = 0;
+        if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
+            for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, [&] { hook(1u); });
+            return found;
+        }
+        Ray<float> r[detail::packet_lanes];
+        StoreHit<float> h[detail::packet_lanes];
+        RayDataOf<P> world[detail::packet_lanes];
+        for (int k = 0; k < n; ++k) r[k] = rays[k], world[k] = leaves_.prepare(r[k]);
+        auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
+            LeafQuery<P, true> q(leaves_, r[k], world[k], h[k]);
+            return wrap(q)(first, count);
+        };
+        const detail::PacketBoxTest<I> box(detail::PacketRays(r, shape));
+        const unsigned hit = detail::packet_traverse<true, N, I, WideBvh<N, B, L>::max_stack>(
+            bvh_.nodes().data(), box, r, shape.lanes, leaf, hook);
+        for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
+        return found;
+    }
+    /// Counts a packet's node visit and its ray-node tests into `c`.
+    static auto packet_counting(WideBvhCounters& c) {
+        return [&c](unsigned lanes) {
+            ++c.packets;
+            c.nodes += std::uint64_t(std::popcount(lanes));
         };
     }
 

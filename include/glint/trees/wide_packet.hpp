@@ -1,0 +1,246 @@
+// glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 8
+// rays share each node visit (Wald, Slusallek, Benthin, Wagner 2001, §3: coherent rays
+// traced together, a node entered when any ray of the packet enters it).
+//
+// The rays sit in the 8 lanes of a vector; a node's children are tested one at a time
+// against all lanes (each child's 6 planes broadcast), which gives each child directly the
+// lanes that enter it: the child goes on the stack with that lane mask and the lanes' entry
+// distances, and is visited with only those lanes. Children are visited nearest first by the
+// entry distance of their lowest lane. A popped entry keeps only the lanes whose entry
+// distance is still within their interval (closest hit) or which have not found a hit yet
+// (any hit). Leaves are tested per lane with the caller's leaf callable `leaf(k, first,
+// count)` (ray k of the packet; closest hit lowers that ray's tmax).
+//
+// Each lane computes the very floats of the single-ray box test (wide_box_test.hpp: Ize
+// 2013's enlarged exit distance), so a lane never misses a box its single ray would enter;
+// a ray's hit is the nearest of the triangles it tests, whatever the order, so packet and
+// single ray give the same hit (up to exact ties between two triangles at one distance).
+//
+// The packet needs one near / far plane choice per axis: every ray's direction has the same
+// signs, and every interval starts at 0 or later (the unsigned box test). packet_shape()
+// says whether rays qualify; a caller traces the rest as single rays.
+#pragma once
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+#include <glint/core/isa.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/trees/wide_box_test.hpp>
+#include <glint/trees/wide_node.hpp>
+
+#if GLINT_X86
+#include <immintrin.h>
+#endif
+
+namespace glint {
+
+namespace detail {
+
+/// Rays per packet (lanes of an AVX2 vector of floats).
+inline constexpr int packet_lanes = 8;
+/// Fewer valid rays than this in a packet: single rays are cheaper.
+inline constexpr int packet_min_rays = 2;
+
+/// The valid rays of a packet (wide_ray_valid) as a lane mask, and whether they can share
+/// the packet traversal (at least packet_min_rays, one sign per axis, tmin >= 0).
+struct PacketShape {
+    unsigned lanes = 0;
+    bool coherent = false;
+};
+
+[[gnu::always_inline]] inline PacketShape packet_shape(const Ray<float>* rays, int n) {
+    PacketShape s;
+    int signs = -1;
+    bool same = true;
+    for (int k = 0; k < n; ++k) {
+        const Ray<float>& r = rays[k];
+        if (!wide_ray_valid(r)) continue;
+        s.lanes |= 1u << k;
+        const int sk = int(std::signbit(r.direction.x)) | int(std::signbit(r.direction.y)) << 1 |
+                       int(std::signbit(r.direction.z)) << 2;
+        same &= (signs < 0 || sk == signs) & !(r.tmin < 0.0f);
+        signs = sk;
+    }
+    s.coherent = same && std::popcount(s.lanes) >= packet_min_rays;
+    return s;
+}
+
+/// The rays of one coherent packet, structure of arrays; lanes not in the packet hold a ray
+/// that enters nothing.
+struct alignas(32) PacketRays {
+    float o[3][packet_lanes], inv[3][packet_lanes], tmin[packet_lanes];
+    int near[3], far[3];  // rows of the entry and exit planes per axis (WideBvhNode::bounds)
+
+    [[gnu::always_inline]] PacketRays(const Ray<float>* rays, const PacketShape& s) {
+        const int first = std::countr_zero(s.lanes);
+        for (int a = 0; a < 3; ++a) {
+            const int neg = std::signbit(rays[first].direction[a]) ? 1 : 0;
+            near[a] = 2 * a + neg;
+            far[a] = 2 * a + 1 - neg;
+        }
+        for (int k = 0; k < packet_lanes; ++k) {
+            const bool in = (s.lanes >> k) & 1u;
+            for (int a = 0; a < 3; ++a) {
+                o[a][k] = in ? rays[k].origin[a] : 0.0f;
+                inv[a][k] = in ? 1.0f / rays[k].direction[a] : 1.0f;
+            }
+            tmin[k] = in ? rays[k].tmin : infinity<float>;
+        }
+    }
+};
+
+/// One child's box against every lane: the lanes that enter it within (tmin, tmax[k]), their
+/// entry distances in tn; the single-ray test's operations lane by lane (portable, SSE2).
+template <Isa I>
+struct PacketBoxTest {
+    PacketRays p;
+
+    [[gnu::always_inline]] explicit PacketBoxTest(const PacketRays& rays) : p(rays) {}
+    template <int N>
+    [[gnu::always_inline]] unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
+        unsigned mask = 0;
+        for (int k = 0; k < packet_lanes; ++k) {
+            float t0 = p.tmin[k], t1 = tmax[k];
+            for (int a = 0; a < 3; ++a) {
+                const float tl = (n.bounds[p.near[a]][i] - p.o[a][k]) * p.inv[a][k];
+                const float th = (n.bounds[p.far[a]][i] - p.o[a][k]) * p.inv[a][k];
+                t0 = tl > t0 ? tl : t0;
+                t1 = th < t1 ? th : t1;
+            }
+            tn[k] = t0;
+            mask |= unsigned(t0 <= t1 * wide_exit_scale) << k;
+        }
+        return mask;
+    }
+    /// The lanes whose entry distance t[k] is still within their interval.
+    [[gnu::always_inline]] unsigned within(const float* t, const float* tmax) const {
+        unsigned mask = 0;
+        for (int k = 0; k < packet_lanes; ++k) mask |= unsigned(t[k] <= tmax[k] * wide_exit_scale) << k;
+        return mask;
+    }
+};
+
+#if GLINT_X86
+/// The same with AVX2: one child's planes broadcast against the 8 lanes.
+template <>
+struct PacketBoxTest<Isa::avx2> {
+    __m256 o[3], inv[3], tmin;
+    int near[3], far[3];
+
+    GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& p) {
+        for (int a = 0; a < 3; ++a) {
+            o[a] = _mm256_load_ps(p.o[a]);
+            inv[a] = _mm256_load_ps(p.inv[a]);
+            near[a] = p.near[a];
+            far[a] = p.far[a];
+        }
+        tmin = _mm256_load_ps(p.tmin);
+    }
+    template <int N>
+    GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
+        __m256 t0 = tmin, t1 = _mm256_load_ps(tmax);
+        for (int a = 0; a < 3; ++a) {
+            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(&n.bounds[near[a]][i]), o[a]), inv[a]);
+            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(&n.bounds[far[a]][i]), o[a]), inv[a]);
+            t0 = _mm256_max_ps(tl, t0);
+            t1 = _mm256_min_ps(th, t1);
+        }
+        _mm256_store_ps(tn, t0);
+        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+    }
+    GLINT_KERNEL_AVX2 unsigned within(const float* t, const float* tmax) const {
+        const __m256 t1 = _mm256_mul_ps(_mm256_load_ps(tmax), _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(t), t1, _CMP_LE_OQ)));
+    }
+};
+#endif
+
+/// A node as the packet test reads it: float nodes as they are, quantized ones decoded.
+template <int N>
+[[gnu::always_inline]] inline const WideBvhNode<N>& packet_node(const WideBvhNode<N>& n, WideBvhNode<N>&) {
+    return n;
+}
+template <int N>
+[[gnu::always_inline]] inline const WideBvhNode<N>& packet_node(const WideBvhQNode<N>& q, WideBvhNode<N>& buf) {
+    buf = wide_decode(q);
+    return buf;
+}
+
+/// A child on the packet's stack: its reference, lanes, and their entry distances.
+struct alignas(32) PacketEntry {
+    float t[packet_lanes];
+    std::uint32_t ref;
+    unsigned lanes;
+    float key;  // the entry distance of the lowest lane: the visiting order
+};
+
+/// Pushes the children of node n that some lane of `lanes` enters onto stack[sp...], the
+/// nearest last; returns how many.
+template <int N, class Test>
+[[gnu::always_inline]] inline int packet_children(const WideBvhNode<N>& n, const Test& box, unsigned lanes,
+                                                  const float* tmax, PacketEntry* stack, int sp) {
+    int c = 0;
+    for (int i = 0; i < N; ++i) {
+        if (n.child[i] == wide_empty_ref) continue;
+        PacketEntry& e = stack[sp + c];
+        e.lanes = box.test(n, i, tmax, e.t) & lanes;
+        if (e.lanes == 0) continue;
+        e.ref = n.child[i];
+        e.key = e.t[std::countr_zero(e.lanes)];
+        for (int j = sp + c; j > sp && stack[j - 1].key < stack[j].key; --j) std::swap(stack[j - 1], stack[j]);
+        ++c;
+    }
+    return c;
+}
+
+/// Closest (Any = false) or any hit of the packet's rays `rays` (lanes `lanes`, a coherent
+/// PacketShape's) through nodes (root at 0): `leaf(k, first, count)` tests ray k against a
+/// leaf, lowering rays[k].tmax to a hit (closest hit). `node_hook(lanes)` is called at every
+/// inner node with the lanes that test its children. Returns the lanes that found a hit.
+template <bool Any, int N, Isa I, int Stack, class Node, class Leaf, class Hook>
+[[gnu::always_inline]] inline unsigned packet_traverse(const Node* nodes, const PacketBoxTest<I>& box,
+                                                       Ray<float>* rays, unsigned lanes, Leaf& leaf, Hook& node_hook) {
+    PacketEntry stack[Stack];
+    alignas(32) float tmax[packet_lanes];
+    for (int k = 0; k < packet_lanes; ++k) tmax[k] = (lanes >> k) & 1u ? rays[k].tmax : -infinity<float>;
+    WideBvhNode<N> decoded;
+    unsigned found = 0, cur = lanes;
+    std::uint32_t ref = 0;
+    int sp = 0;
+    for (;;) {
+        if (!wide_is_leaf(ref)) {
+            node_hook(cur);
+            const int c = packet_children<N>(packet_node(nodes[ref], decoded), box, cur, tmax, stack, sp);
+            if (c > 0) {  // the nearest child next, the others on the stack
+                sp += c - 1;
+                ref = stack[sp].ref;
+                cur = stack[sp].lanes;
+                continue;
+            }
+        } else {
+            const std::uint32_t first = wide_leaf_first(ref), count = wide_leaf_count(ref);
+            for (unsigned m = cur; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                if (!leaf(k, first, count)) continue;
+                found |= 1u << k;
+                if constexpr (Any) lanes &= ~(1u << k);
+                else tmax[k] = rays[k].tmax;
+            }
+            if (Any && lanes == 0) return found;
+        }
+        do {
+            if (sp == 0) return found;
+            --sp;
+            cur = stack[sp].lanes & lanes;
+            if constexpr (!Any) cur &= box.within(stack[sp].t, tmax);
+        } while (cur == 0);
+        ref = stack[sp].ref;
+    }
+}
+
+}  // namespace detail
+
+}  // namespace glint
