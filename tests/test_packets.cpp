@@ -44,24 +44,15 @@ std::vector<Ray<float>> primary(const Mesh<float>& m, std::size_t n) {
     return make_primary_rays<float>(m, side, side);
 }
 
-/// Shadow rays from the primary rays' hit points (in pixel order) to one point light above
-/// the mesh: direction light - p, interval (1e-4, 1 - 1e-4).
+/// Shadow rays from the primary rays' hit points to one point light above the mesh.
 std::vector<Ray<float>> shadow(const MeshBvh<>& bvh, const Mesh<float>& m, std::size_t n) {
-    const AABB<float> b = mesh_bounds<float>(m);
-    const Vec3f light = b.center() + Vec3f(0.1f, 0.2f, 1.5f) * glm::length(b.extent());
-    std::vector<Ray<float>> out;
-    for (const Ray<float>& r : primary(m, 8 * n)) {  // the mesh covers part of the image
-        if (out.size() == n) break;
+    const auto hit_t = [&](const Ray<float>& r, float& t) {
         StoreHit<float> h;
-        if (!bvh.closest_hit(r, h)) continue;
-        Ray<float> s;
-        s.origin = r.origin + h.t * r.direction;
-        s.direction = light - s.origin;
-        s.tmin = 1e-4f;
-        s.tmax = 1.0f - 1e-4f;
-        out.push_back(s);
-    }
-    return out;
+        const bool hit = bvh.closest_hit(r, h);
+        t = h.t;
+        return hit;
+    };
+    return make_light_shadow_rays(primary(m, 8 * n), mesh_bounds<float>(m), hit_t, n);  // the mesh covers part of the image
 }
 
 /// Primary rays with invalid rays (NaN, zero direction, infinite origin, tmin > tmax) and

@@ -194,33 +194,31 @@ private:
         };
     }
 
-    /// The streams: one dispatch, then packets of packet_lanes rays (the last may be short).
-    template <class Wrap, class Hook>
-    std::size_t closest_stream(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits, Wrap&& wrap,
-                               Hook&& hook) const {
-        check_stream("closest_hit", rays.size(), hits.size());
+    /// The streams: one dispatch, then `packet(kernels, rays, out, n)` on packets of
+    /// packet_lanes rays (the last may be short); returns the sum of what it returns.
+    template <class Out, class Packet>
+    std::size_t stream(const char* query, std::span<const Ray<float>> rays, std::span<Out> out, Packet&& packet) const {
+        check_stream(query, rays.size(), out.size());
         std::size_t n = 0;
         bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
             for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
                 const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
-                n += closest_packet(kernels, rays.data() + i, hits.data() + i, k, wrap, hook);
+                n += packet(kernels, rays.data() + i, out.data() + i, k);
             }
             return true;
         });
         return n;
     }
     template <class Wrap, class Hook>
+    std::size_t closest_stream(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits, Wrap&& wrap,
+                               Hook&& hook) const {
+        return stream("closest_hit", rays, hits, [&](auto kernels, const Ray<float>* r, StoreHit<float>* h, int k)
+                          __attribute__((always_inline)) { return closest_packet(kernels, r, h, k, wrap, hook); });
+    }
+    template <class Wrap, class Hook>
     std::size_t any_stream(std::span<const Ray<float>> rays, std::span<bool> occluded, Wrap&& wrap, Hook&& hook) const {
-        check_stream("any_hit", rays.size(), occluded.size());
-        std::size_t n = 0;
-        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
-            for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
-                const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
-                n += any_packet(kernels, rays.data() + i, occluded.data() + i, k, wrap, hook);
-            }
-            return true;
-        });
-        return n;
+        return stream("any_hit", rays, occluded, [&](auto kernels, const Ray<float>* r, bool* o, int k)
+                          __attribute__((always_inline)) { return any_packet(kernels, r, o, k, wrap, hook); });
     }
     /// One packet of n <= packet_lanes rays: the packet traversal where they are coherent,
     /// single rays otherwise; returns the hits.

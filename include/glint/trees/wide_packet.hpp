@@ -21,6 +21,7 @@
 // says whether rays qualify; a caller traces the rest as single rays.
 #pragma once
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -72,6 +73,10 @@ struct PacketShape {
 struct alignas(32) PacketRays {
     float o[3][packet_lanes], inv[3][packet_lanes], tmin[packet_lanes];
     int near[3], far[3];  // rows of the entry and exit planes per axis (WideBvhNode::bounds)
+    // The packet's intervals: origins and reciprocal directions per axis, smallest tmin;
+    // `bounded` when every reciprocal is a normal float (else no interval test).
+    float omin[3], omax[3], imin[3], imax[3], tmin_lo;
+    bool bounded;
 
     [[gnu::always_inline]] PacketRays(const Ray<float>* rays, const PacketShape& s) {
         const int first = std::countr_zero(s.lanes);
@@ -88,8 +93,48 @@ struct alignas(32) PacketRays {
             }
             tmin[k] = in ? rays[k].tmin : infinity<float>;
         }
+        bounded = true;
+        tmin_lo = infinity<float>;
+        for (int a = 0; a < 3; ++a) {
+            omin[a] = imin[a] = infinity<float>;
+            omax[a] = imax[a] = -infinity<float>;
+            for (unsigned m = s.lanes; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                omin[a] = std::min(omin[a], o[a][k]), omax[a] = std::max(omax[a], o[a][k]);
+                imin[a] = std::min(imin[a], inv[a][k]), imax[a] = std::max(imax[a], inv[a][k]);
+                bounded &= std::isnormal(inv[a][k]);
+                tmin_lo = std::min(tmin_lo, tmin[k]);
+            }
+        }
     }
 };
+
+/// Bounds of the distances (plane - o) * inv over the packet's intervals of o and inv, as
+/// floats (rounded subtraction and multiplication are monotone in each operand, so the
+/// extremes are at the corners): the smallest (Max = false) or the largest.
+template <bool Max>
+[[gnu::always_inline]] inline float packet_corner(float plane, float o0, float o1, float i0, float i1) {
+    const float d0 = plane - o1, d1 = plane - o0;
+    const float a = d0 * i0, b = d0 * i1, c = d1 * i0, d = d1 * i1;
+    return Max ? std::max(std::max(a, b), std::max(c, d)) : std::min(std::min(a, b), std::min(c, d));
+}
+
+/// The children of n that some ray of the packet may enter (Wald, Boulos, Shirley 2007's
+/// interval test, on the packet's intervals of origin and reciprocal direction): a
+/// superset of those the lane tests accept, for tmin >= tmin_lo and tmax <= tmax_hi.
+template <int N>
+[[gnu::always_inline]] inline unsigned packet_candidates(const PacketRays& p, const WideBvhNode<N>& n, float tmax_hi) {
+    unsigned mask = 0;
+    for (int i = 0; i < N; ++i) {
+        float t0 = p.tmin_lo, t1 = tmax_hi;
+        for (int a = 0; a < 3; ++a) {
+            t0 = std::max(t0, packet_corner<false>(n.bounds[p.near[a]][i], p.omin[a], p.omax[a], p.imin[a], p.imax[a]));
+            t1 = std::min(t1, packet_corner<true>(n.bounds[p.far[a]][i], p.omin[a], p.omax[a], p.imin[a], p.imax[a]));
+        }
+        mask |= unsigned(t0 <= t1 * wide_exit_scale) << i;
+    }
+    return mask;
+}
 
 /// One child's box against every lane: the lanes that enter it within (tmin, tmax[k]), their
 /// entry distances in tn; the single-ray test's operations lane by lane (portable, SSE2).
@@ -114,6 +159,11 @@ struct PacketBoxTest {
         }
         return mask;
     }
+    /// The children some ray may enter (packet_candidates; all where the packet is unbounded).
+    template <int N>
+    [[gnu::always_inline]] unsigned candidates(const WideBvhNode<N>& n, float tmax_hi) const {
+        return p.bounded ? packet_candidates(p, n, tmax_hi) : (1u << N) - 1u;
+    }
     /// The lanes whose entry distance t[k] is still within their interval.
     [[gnu::always_inline]] unsigned within(const float* t, const float* tmax) const {
         unsigned mask = 0;
@@ -128,8 +178,9 @@ template <>
 struct PacketBoxTest<Isa::avx2> {
     __m256 o[3], inv[3], tmin;
     int near[3], far[3];
+    PacketRays p;
 
-    GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& p) {
+    GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& rays) : p(rays) {
         for (int a = 0; a < 3; ++a) {
             o[a] = _mm256_load_ps(p.o[a]);
             inv[a] = _mm256_load_ps(p.inv[a]);
@@ -151,6 +202,30 @@ struct PacketBoxTest<Isa::avx2> {
         t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
         return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
     }
+    /// packet_candidates() with the 8 children in the lanes (the same floats).
+    GLINT_KERNEL_AVX2 unsigned candidates(const WideBvhNode<8>& n, float tmax_hi) const {
+        if (!p.bounded) return 0xffu;
+        __m256 t0 = _mm256_set1_ps(p.tmin_lo), t1 = _mm256_set1_ps(tmax_hi);
+        for (int a = 0; a < 3; ++a) {
+            const __m256 o0 = _mm256_set1_ps(p.omin[a]), o1 = _mm256_set1_ps(p.omax[a]);
+            const __m256 i0 = _mm256_set1_ps(p.imin[a]), i1 = _mm256_set1_ps(p.imax[a]);
+            const __m256 ln = _mm256_load_ps(n.bounds[near[a]]), lf = _mm256_load_ps(n.bounds[far[a]]);
+            const __m256 n0 = _mm256_sub_ps(ln, o1), n1 = _mm256_sub_ps(ln, o0);
+            const __m256 f0 = _mm256_sub_ps(lf, o1), f1 = _mm256_sub_ps(lf, o0);
+            const __m256 tl = _mm256_min_ps(_mm256_min_ps(_mm256_mul_ps(n0, i0), _mm256_mul_ps(n0, i1)),
+                                            _mm256_min_ps(_mm256_mul_ps(n1, i0), _mm256_mul_ps(n1, i1)));
+            const __m256 th = _mm256_max_ps(_mm256_max_ps(_mm256_mul_ps(f0, i0), _mm256_mul_ps(f0, i1)),
+                                            _mm256_max_ps(_mm256_mul_ps(f1, i0), _mm256_mul_ps(f1, i1)));
+            t0 = _mm256_max_ps(t0, tl);
+            t1 = _mm256_min_ps(t1, th);
+        }
+        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+    }
+    template <int N>
+    unsigned candidates(const WideBvhNode<N>& n, float tmax_hi) const {
+        return p.bounded ? packet_candidates(p, n, tmax_hi) : (1u << N) - 1u;
+    }
     GLINT_KERNEL_AVX2 unsigned within(const float* t, const float* tmax) const {
         const __m256 t1 = _mm256_mul_ps(_mm256_load_ps(tmax), _mm256_set1_ps(wide_exit_scale));
         return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(t), t1, _CMP_LE_OQ)));
@@ -169,6 +244,13 @@ template <int N>
     return buf;
 }
 
+/// The largest of the packet's tmax.
+[[gnu::always_inline]] inline float packet_max(const float* tmax) {
+    float m = tmax[0];
+    for (int k = 1; k < packet_lanes; ++k) m = std::max(m, tmax[k]);
+    return m;
+}
+
 /// A child on the packet's stack: its reference, lanes, and their entry distances.
 struct alignas(32) PacketEntry {
     float t[packet_lanes];
@@ -181,9 +263,10 @@ struct alignas(32) PacketEntry {
 /// nearest last; returns how many.
 template <int N, class Test>
 [[gnu::always_inline]] inline int packet_children(const WideBvhNode<N>& n, const Test& box, unsigned lanes,
-                                                  const float* tmax, PacketEntry* stack, int sp) {
+                                                  const float* tmax, float tmax_hi, PacketEntry* stack, int sp) {
     int c = 0;
-    for (int i = 0; i < N; ++i) {
+    for (unsigned cand = box.candidates(n, tmax_hi); cand; cand &= cand - 1) {
+        const int i = std::countr_zero(cand);
         if (n.child[i] == wide_empty_ref) continue;
         PacketEntry& e = stack[sp + c];
         e.lanes = box.test(n, i, tmax, e.t) & lanes;
@@ -205,7 +288,11 @@ template <bool Any, int N, Isa I, int Stack, class Node, class Leaf, class Hook>
                                                        Ray<float>* rays, unsigned lanes, Leaf& leaf, Hook& node_hook) {
     PacketEntry stack[Stack];
     alignas(32) float tmax[packet_lanes];
-    for (int k = 0; k < packet_lanes; ++k) tmax[k] = (lanes >> k) & 1u ? rays[k].tmax : -infinity<float>;
+    float tmax_hi = -infinity<float>;  // the largest tmax of the packet
+    for (int k = 0; k < packet_lanes; ++k) {
+        tmax[k] = (lanes >> k) & 1u ? rays[k].tmax : -infinity<float>;
+        tmax_hi = std::max(tmax_hi, tmax[k]);
+    }
     WideBvhNode<N> decoded;
     unsigned found = 0, cur = lanes;
     std::uint32_t ref = 0;
@@ -213,7 +300,7 @@ template <bool Any, int N, Isa I, int Stack, class Node, class Leaf, class Hook>
     for (;;) {
         if (!wide_is_leaf(ref)) {
             node_hook(cur);
-            const int c = packet_children<N>(packet_node(nodes[ref], decoded), box, cur, tmax, stack, sp);
+            const int c = packet_children<N>(packet_node(nodes[ref], decoded), box, cur, tmax, tmax_hi, stack, sp);
             if (c > 0) {  // the nearest child next, the others on the stack
                 sp += c - 1;
                 ref = stack[sp].ref;
@@ -230,6 +317,7 @@ template <bool Any, int N, Isa I, int Stack, class Node, class Leaf, class Hook>
                 else tmax[k] = rays[k].tmax;
             }
             if (Any && lanes == 0) return found;
+            if (!Any && (found & cur)) tmax_hi = packet_max(tmax);
         }
         do {
             if (sp == 0) return found;
