@@ -200,10 +200,11 @@ private:
     std::size_t stream(const char* query, std::span<const Ray<float>> rays, std::span<Out> out, Packet&& packet) const {
         check_stream(query, rays.size(), out.size());
         std::size_t n = 0;
+        detail::PacketEntry stack[WideBvh<N, B, L>::max_stack];
         bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
             for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
                 const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
-                n += packet(kernels, rays.data() + i, out.data() + i, k);
+                n += packet(kernels, rays.data() + i, out.data() + i, k, stack);
             }
             return true;
         });
@@ -212,19 +213,23 @@ private:
     template <class Wrap, class Hook>
     std::size_t closest_stream(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits, Wrap&& wrap,
                                Hook&& hook) const {
-        return stream("closest_hit", rays, hits, [&](auto kernels, const Ray<float>* r, StoreHit<float>* h, int k)
-                          __attribute__((always_inline)) { return closest_packet(kernels, r, h, k, wrap, hook); });
+        return stream("closest_hit", rays, hits, [&](auto kernels, const Ray<float>* r, StoreHit<float>* h, int k,
+                                                      detail::PacketEntry* stack) __attribute__((always_inline)) {
+            return closest_packet(kernels, r, h, k, wrap, hook, stack);
+        });
     }
     template <class Wrap, class Hook>
     std::size_t any_stream(std::span<const Ray<float>> rays, std::span<bool> occluded, Wrap&& wrap, Hook&& hook) const {
-        return stream("any_hit", rays, occluded, [&](auto kernels, const Ray<float>* r, bool* o, int k)
-                          __attribute__((always_inline)) { return any_packet(kernels, r, o, k, wrap, hook); });
+        return stream("any_hit", rays, occluded, [&](auto kernels, const Ray<float>* r, bool* o, int k,
+                                                  detail::PacketEntry* stack) __attribute__((always_inline)) {
+            return any_packet(kernels, r, o, k, wrap, hook, stack);
+        });
     }
     /// One packet of n <= packet_lanes rays: the packet traversal where they are coherent,
     /// single rays otherwise; returns the hits.
     template <Isa I, class Wrap, class Hook>
     [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
-                                              Wrap& wrap, Hook& hook) const {
+                                              Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
         Ray<float> r[detail::packet_lanes];
         for (int k = 0; k < n; ++k) r[k] = ray_before(rays[k], hits[k]);
         const detail::PacketShape shape = detail::packet_shape(r, n);
@@ -240,9 +245,10 @@ private:
             LeafQuery<P, false> q(leaves_, r[k], world[k], h[k]);
             return wrap(q)(first, count);
         };
-        const detail::PacketBoxTest<I> box(detail::PacketRays(r, shape));
-        const unsigned hit = detail::packet_traverse<false, N, I, WideBvh<N, B, L>::max_stack>(
-            bvh_.nodes().data(), box, r, shape.lanes, leaf, hook);
+        const detail::PacketRays packet(r, shape);
+        const detail::PacketBoxTest<I> box(packet);
+        const unsigned hit =
+            detail::packet_traverse<false, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
         for (unsigned m = hit; m; m &= m - 1, ++found) {
             const int k = std::countr_zero(m);
             hits[k] = LeafQuery<P, false>(leaves_, r[k], world[k], h[k]).hit();
@@ -251,7 +257,7 @@ private:
     }
     template <Isa I, class Wrap, class Hook>
     [[gnu::always_inline]] int any_packet(IsaTag<I> kernels, const Ray<float>* rays, bool* occluded, int n, Wrap& wrap,
-                                          Hook& hook) const {
+                                          Hook& hook, detail::PacketEntry* stack) const {
         const detail::PacketShape shape = detail::packet_shape(rays, n);
         int found = 0;
         if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
@@ -266,9 +272,10 @@ private:
             LeafQuery<P, true> q(leaves_, r[k], world[k], h[k]);
             return wrap(q)(first, count);
         };
-        const detail::PacketBoxTest<I> box(detail::PacketRays(r, shape));
-        const unsigned hit = detail::packet_traverse<true, N, I, WideBvh<N, B, L>::max_stack>(
-            bvh_.nodes().data(), box, r, shape.lanes, leaf, hook);
+        const detail::PacketRays packet(r, shape);
+        const detail::PacketBoxTest<I> box(packet);
+        const unsigned hit =
+            detail::packet_traverse<true, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
         for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
         return found;
     }

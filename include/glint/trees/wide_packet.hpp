@@ -1,6 +1,7 @@
 // glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 8
-// rays share each node visit (Wald, Slusallek, Benthin, Wagner 2001, §3: coherent rays
-// traced together, a node entered when any ray of the packet enters it).
+// rays share each node visit (Wald, Slusallek, Benthin, Wagner 2001's ray packets: coherent
+// rays traced together, a node entered when any ray of the packet enters it), after an
+// interval test of the whole packet (Boulos, Wald, Shirley, Parker 2006).
 //
 // The rays sit in the 8 lanes of a vector; a node's children are tested one at a time
 // against all lanes (each child's 6 planes broadcast), which gives each child directly the
@@ -119,8 +120,8 @@ template <bool Max>
     return Max ? std::max(std::max(a, b), std::max(c, d)) : std::min(std::min(a, b), std::min(c, d));
 }
 
-/// The children of n that some ray of the packet may enter (Wald, Boulos, Shirley 2007's
-/// interval test, on the packet's intervals of origin and reciprocal direction): a
+/// The children of n that some ray of the packet may enter (Boulos 2006's interval
+/// arithmetic, on the packet's intervals of origin and reciprocal direction): a
 /// superset of those the lane tests accept, for tmin >= tmin_lo and tmax <= tmax_hi.
 template <int N>
 [[gnu::always_inline]] inline unsigned packet_candidates(const PacketRays& p, const WideBvhNode<N>& n, float tmax_hi) {
@@ -140,7 +141,7 @@ template <int N>
 /// entry distances in tn; the single-ray test's operations lane by lane (portable, SSE2).
 template <Isa I>
 struct PacketBoxTest {
-    PacketRays p;
+    const PacketRays& p;  // the caller's: outlives the test
 
     [[gnu::always_inline]] explicit PacketBoxTest(const PacketRays& rays) : p(rays) {}
     template <int N>
@@ -178,7 +179,7 @@ template <>
 struct PacketBoxTest<Isa::avx2> {
     __m256 o[3], inv[3], tmin;
     int near[3], far[3];
-    PacketRays p;
+    const PacketRays& p;  // the caller's: outlives the test
 
     GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& rays) : p(rays) {
         for (int a = 0; a < 3; ++a) {
@@ -282,11 +283,12 @@ template <int N, class Test>
 /// Closest (Any = false) or any hit of the packet's rays `rays` (lanes `lanes`, a coherent
 /// PacketShape's) through nodes (root at 0): `leaf(k, first, count)` tests ray k against a
 /// leaf, lowering rays[k].tmax to a hit (closest hit). `node_hook(lanes)` is called at every
-/// inner node with the lanes that test its children. Returns the lanes that found a hit.
-template <bool Any, int N, Isa I, int Stack, class Node, class Leaf, class Hook>
-[[gnu::always_inline]] inline unsigned packet_traverse(const Node* nodes, const PacketBoxTest<I>& box,
-                                                       Ray<float>* rays, unsigned lanes, Leaf& leaf, Hook& node_hook) {
-    PacketEntry stack[Stack];
+/// inner node with the lanes that test its children. `stack` holds the tree's stack bound
+/// (WideBvh::max_stack entries; one per stream, not per packet). Returns the lanes that
+/// found a hit.
+template <bool Any, int N, Isa I, class Node, class Leaf, class Hook>
+[[gnu::always_inline]] inline unsigned packet_traverse(const Node* nodes, const PacketBoxTest<I>& box, Ray<float>* rays,
+                                                       unsigned lanes, Leaf& leaf, Hook& node_hook, PacketEntry* stack) {
     alignas(32) float tmax[packet_lanes];
     float tmax_hi = -infinity<float>;  // the largest tmax of the packet
     for (int k = 0; k < packet_lanes; ++k) {
