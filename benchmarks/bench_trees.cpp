@@ -621,7 +621,8 @@ int user_meshes_main(const Options& opt) {
         for (const auto& r : rows)
             out << r.scene << ',' << r.query << ",bvh8,soa,moller-trumbore," << r.glint_mrays << ',' << r.build_s << ','
                 << r.node_bytes << ',' << double(r.node_bytes) / double(r.triangles) << ',' << r.embree_mrays
-                << ",1,meshbvh," << r.quality << ',' << (r.query == "shadow" ? "any_hit" : "closest_hit") << '\n';
+                << ",1,meshbvh," << r.quality << ','
+                << (r.query.ends_with("_packet") ? r.query : r.query == "shadow" ? "any_hit" : "closest_hit") << '\n';
         std::printf("# wrote %s (%zu rows)\n", opt.csv.c_str(), rows.size());
     }
     return 0;

@@ -102,6 +102,7 @@ public:
         return out;
     }
     double build_s = 0;
+    RTCScene scene() const { return scene_; }  ///< The committed scene (for packet queries).
 
 private:
     RTCDevice dev_ = nullptr;
@@ -119,7 +120,7 @@ struct UserMeshOptions {
 
 /// One CSV row of the mode (bench_trees' columns plus api, embree_quality, query).
 struct UserRow {
-    std::string scene, query, quality;
+    std::string scene, query, quality;  // query: the ray set, or the packet call (user_packets.hpp)
     double glint_mrays = 0, embree_mrays = 0, ratio = 0, build_s = 0;
     std::size_t node_bytes = 0, triangles = 0;
 };
@@ -230,6 +231,12 @@ inline void print_counts(const char* query, const WideBvhCounters& c, std::size_
                 double(c.leaves) / n, double(c.records) / n);
 }
 
+}  // namespace glint::bench
+
+#include "support/user_packets.hpp"
+
+namespace glint::bench {
+
 /// Runs every query on one mesh; returns its rows through `rows`.
 inline void user_mesh(const std::string& name, const std::vector<TriangleVertices<float>>& soup,
                       const UserMeshOptions& opt, std::vector<UserRow>& rows, bool& disagree) {
@@ -302,6 +309,7 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
     std::vector<long> occluded;
     for (const auto& r : shadow) occluded.push_back(bvh.any_hit(r));
     compare_rays(name, "shadow", shadow, soup, occluded, high.occluded_flags(shadow), false);
+    user_packets(name, bvh, high, primary, box, opt.reps, rows, disagree, soup.size(), build);
 }
 
 /// Geometric mean of `ratio` over rows of one query and quality among `names`.

@@ -183,4 +183,27 @@ std::vector<Ray<T>> make_incoherent_rays(std::span<const TriangleVertices<T>> m,
     return rays;
 }
 
+/// Shadow rays from the hit points of `primary` (in its order: coherent where it is) to one
+/// point light above the scene (z up, as make_primary_rays' camera): direction light - p,
+/// interval (1e-4, 1 - 1e-4); `hit_t(ray, t)` gives a ray's closest hit (false: a miss).
+/// At most `max` rays.
+template <class HitT>
+std::vector<Ray<float>> make_light_shadow_rays(const std::vector<Ray<float>>& primary, const AABB<float>& box,
+                                               HitT&& hit_t, std::size_t max = ~std::size_t(0)) {
+    const Vec3f light = box.center() + Vec3f(0.1f, 0.2f, 1.0f) * glm::length(box.extent());
+    std::vector<Ray<float>> out;
+    for (const Ray<float>& r : primary) {
+        float t = 0;
+        if (out.size() == max) break;
+        if (!hit_t(r, t)) continue;
+        Ray<float> s;
+        s.origin = r.origin + t * r.direction;
+        s.direction = light - s.origin;
+        s.tmin = 1e-4f;
+        s.tmax = 1.0f - 1e-4f;
+        out.push_back(s);
+    }
+    return out;
+}
+
 }  // namespace glint

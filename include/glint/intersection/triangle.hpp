@@ -204,7 +204,8 @@ public:
         T ts[W], us[W], vs[W];
         bool found = false;
         for (; first < end; first += std::uint32_t(W)) {
-            detail::batch<P>(v, first, W, rd, ts, us, vs);
+            if constexpr (Any) detail::batch_inlined<P>(v, first, W, rd, ts, us, vs);  // see batch_inlined
+            else detail::batch<P>(v, first, W, rd, ts, us, vs);
             const int best = detail::nearest_lane(ts, hit.t);
             if (best >= 0) {
                 if constexpr (Any) return true;

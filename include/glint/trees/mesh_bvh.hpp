@@ -5,6 +5,7 @@
 //   const glint::MeshBvh<> bvh(mesh, {.threads = 2});  // Möller-Trumbore, 8 wide: the fastest
 //   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
 //   if (bvh.closest_hit(ray, hit)) n = mesh.geometric_normal(hit.id);  // core/offset.hpp
+//   bvh.closest_hit(rays, hits);  // spans of rays and hits: packets of 8 where coherent (wide_packet.hpp)
 //
 // Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
 // intersector's batch kernel through the leaf callable, a LeafQuery, WideBvh::intersect takes), laid out
@@ -17,6 +18,8 @@
 // Queries are const and keep no shared mutable state: they are thread-safe.
 #pragma once
 
+#include <algorithm>
+#include <bit>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -36,6 +39,7 @@
 #include <glint/trees/bvh_builder.hpp>
 #include <glint/trees/tree.hpp>
 #include <glint/trees/wide_bvh.hpp>
+#include <glint/trees/wide_packet.hpp>
 
 namespace glint {
 
@@ -116,6 +120,29 @@ public:
         });
     }
 
+    /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it
+    /// (the same t, u, v and id); returns how many hits were updated. Consecutive rays go in
+    /// packets of 8 sharing the node visits where they are coherent (trees/wide_packet.hpp),
+    /// as single rays otherwise. Throws glint::Error naming both sizes when they differ.
+    std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const {
+        return closest_stream(rays, hits, uncounted, [](unsigned) {});
+    }
+    /// The stream closest_hit(), counting into `counters` (nodes: ray-node tests; packets:
+    /// node visits of packets).
+    std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits,
+                            WideBvhCounters& counters) const {
+        return closest_stream(rays, hits, counting(counters), packet_counting(counters));
+    }
+    /// Any hits of a stream of rays: occluded[i] = any_hit(rays[i]), in packets as above;
+    /// returns how many are occluded. Throws glint::Error naming both sizes when they differ.
+    std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded) const {
+        return any_stream(rays, occluded, uncounted, [](unsigned) {});
+    }
+    /// The stream any_hit(), counting into `counters` (as the stream closest_hit()).
+    std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded, WideBvhCounters& counters) const {
+        return any_stream(rays, occluded, counting(counters), packet_counting(counters));
+    }
+
     /// The kernels queries run (core/isa.hpp): the best this CPU supports, checked when the
     /// tree is built; set_isa() picks another (the same hits; for tests and comparisons).
     Isa isa() const { return bvh_.isa(); }
@@ -166,6 +193,105 @@ private:
                 return leaf(first, count);
             };
         };
+    }
+
+    /// The streams: one dispatch, then `packet(kernels, rays, out, n)` on packets of
+    /// packet_lanes rays (the last may be short); returns the sum of what it returns.
+    template <class Out, class Packet>
+    std::size_t stream(const char* query, std::span<const Ray<float>> rays, std::span<Out> out, Packet&& packet) const {
+        check_stream(query, rays.size(), out.size());
+        std::size_t n = 0;
+        detail::PacketEntry stack[WideBvh<N, B, L>::max_stack];
+        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+            for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
+                const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
+                n += packet(kernels, rays.data() + i, out.data() + i, k, stack);
+            }
+            return true;
+        });
+        return n;
+    }
+    template <class Wrap, class Hook>
+    std::size_t closest_stream(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits, Wrap&& wrap,
+                               Hook&& hook) const {
+        return stream("closest_hit", rays, hits, [&](auto kernels, const Ray<float>* r, StoreHit<float>* h, int k,
+                                                      detail::PacketEntry* stack) __attribute__((always_inline)) {
+            return closest_packet(kernels, r, h, k, wrap, hook, stack);
+        });
+    }
+    template <class Wrap, class Hook>
+    std::size_t any_stream(std::span<const Ray<float>> rays, std::span<bool> occluded, Wrap&& wrap, Hook&& hook) const {
+        return stream("any_hit", rays, occluded, [&](auto kernels, const Ray<float>* r, bool* o, int k,
+                                                  detail::PacketEntry* stack) __attribute__((always_inline)) {
+            return any_packet(kernels, r, o, k, wrap, hook, stack);
+        });
+    }
+    /// One packet of n <= packet_lanes rays: the packet traversal where they are coherent,
+    /// single rays otherwise; returns the hits.
+    template <Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
+                                              Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
+        Ray<float> r[detail::packet_lanes];
+        for (int k = 0; k < n; ++k) r[k] = ray_before(rays[k], hits[k]);
+        const detail::PacketShape shape = detail::packet_shape(r, n);
+        int found = 0;
+        if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
+            for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, [&] { hook(1u); });
+            return found;
+        }
+        StoreHit<float> h[detail::packet_lanes];
+        RayDataOf<P> world[detail::packet_lanes];
+        for (int k = 0; k < n; ++k) h[k] = hits[k], world[k] = leaves_.prepare(r[k]);
+        auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
+            LeafQuery<P, false> q(leaves_, r[k], world[k], h[k]);
+            return wrap(q)(first, count);
+        };
+        const detail::PacketRays packet(r, shape);
+        const detail::PacketBoxTest<I> box(packet);
+        const unsigned hit =
+            detail::packet_traverse<false, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
+        for (unsigned m = hit; m; m &= m - 1, ++found) {
+            const int k = std::countr_zero(m);
+            hits[k] = LeafQuery<P, false>(leaves_, r[k], world[k], h[k]).hit();
+        }
+        return found;
+    }
+    template <Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] int any_packet(IsaTag<I> kernels, const Ray<float>* rays, bool* occluded, int n, Wrap& wrap,
+                                          Hook& hook, detail::PacketEntry* stack) const {
+        const detail::PacketShape shape = detail::packet_shape(rays, n);
+        int found = 0;
+        if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
+            for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, [&] { hook(1u); });
+            return found;
+        }
+        Ray<float> r[detail::packet_lanes];
+        StoreHit<float> h[detail::packet_lanes];
+        RayDataOf<P> world[detail::packet_lanes];
+        for (int k = 0; k < n; ++k) r[k] = rays[k], world[k] = leaves_.prepare(r[k]);
+        auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
+            LeafQuery<P, true> q(leaves_, r[k], world[k], h[k]);
+            return wrap(q)(first, count);
+        };
+        const detail::PacketRays packet(r, shape);
+        const detail::PacketBoxTest<I> box(packet);
+        const unsigned hit =
+            detail::packet_traverse<true, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
+        for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
+        return found;
+    }
+    /// Counts a packet's node visit and its ray-node tests into `c`.
+    static auto packet_counting(WideBvhCounters& c) {
+        return [&c](unsigned lanes) {
+            ++c.packets;
+            c.nodes += std::uint64_t(std::popcount(lanes));
+        };
+    }
+
+    static void check_stream(const char* query, std::size_t rays, std::size_t out) {
+        if (rays != out)
+            throw Error(std::string("MeshBvh::") + query + ": " + std::to_string(rays) + " rays but " +
+                        std::to_string(out) + " results");
     }
 
     template <class Get>

@@ -55,6 +55,7 @@ struct WideBvhCounters {
     std::uint64_t nodes = 0, leaves = 0, records = 0;  ///< Records tested, padding lanes included.
     /// @var leaves
     /// Leaves whose records were tested.
+    std::uint64_t packets = 0;  ///< Ray streams (MeshBvh): node visits of packets and of single rays.
 };
 
 /// N-wide BVH (N = 4 or 8) over primitive boxes, child boxes stored as B says, nodes

@@ -1,0 +1,336 @@
+// glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 8
+// rays share each node visit (Wald, Slusallek, Benthin, Wagner 2001's ray packets: coherent
+// rays traced together, a node entered when any ray of the packet enters it), after an
+// interval test of the whole packet (Boulos, Wald, Shirley, Parker 2006).
+//
+// The rays sit in the 8 lanes of a vector; a node's children are tested one at a time
+// against all lanes (each child's 6 planes broadcast), which gives each child directly the
+// lanes that enter it: the child goes on the stack with that lane mask and the lanes' entry
+// distances, and is visited with only those lanes. Children are visited nearest first by the
+// entry distance of their lowest lane. A popped entry keeps only the lanes whose entry
+// distance is still within their interval (closest hit) or which have not found a hit yet
+// (any hit). Leaves are tested per lane with the caller's leaf callable `leaf(k, first,
+// count)` (ray k of the packet; closest hit lowers that ray's tmax).
+//
+// Each lane computes the very floats of the single-ray box test (wide_box_test.hpp: Ize
+// 2013's enlarged exit distance), so a lane never misses a box its single ray would enter;
+// a ray's hit is the nearest of the triangles it tests, whatever the order, so packet and
+// single ray give the same hit (up to exact ties between two triangles at one distance).
+//
+// The packet needs one near / far plane choice per axis: every ray's direction has the same
+// signs, and every interval starts at 0 or later (the unsigned box test). packet_shape()
+// says whether rays qualify; a caller traces the rest as single rays.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+#include <glint/core/isa.hpp>
+#include <glint/core/ray.hpp>
+#include <glint/trees/wide_box_test.hpp>
+#include <glint/trees/wide_node.hpp>
+
+#if GLINT_X86
+#include <immintrin.h>
+#endif
+
+namespace glint {
+
+namespace detail {
+
+/// Rays per packet (lanes of an AVX2 vector of floats).
+inline constexpr int packet_lanes = 8;
+/// Fewer valid rays than this in a packet: single rays are cheaper.
+inline constexpr int packet_min_rays = 2;
+
+/// The valid rays of a packet (wide_ray_valid) as a lane mask, and whether they can share
+/// the packet traversal (at least packet_min_rays, one sign per axis, tmin >= 0).
+struct PacketShape {
+    unsigned lanes = 0;
+    bool coherent = false;
+};
+
+[[gnu::always_inline]] inline PacketShape packet_shape(const Ray<float>* rays, int n) {
+    PacketShape s;
+    int signs = -1;
+    bool same = true;
+    for (int k = 0; k < n; ++k) {
+        const Ray<float>& r = rays[k];
+        if (!wide_ray_valid(r)) continue;
+        s.lanes |= 1u << k;
+        const int sk = int(std::signbit(r.direction.x)) | int(std::signbit(r.direction.y)) << 1 |
+                       int(std::signbit(r.direction.z)) << 2;
+        same &= (signs < 0 || sk == signs) & !(r.tmin < 0.0f);
+        signs = sk;
+    }
+    s.coherent = same && std::popcount(s.lanes) >= packet_min_rays;
+    return s;
+}
+
+/// The rays of one coherent packet, structure of arrays; lanes not in the packet hold a ray
+/// that enters nothing.
+struct alignas(32) PacketRays {
+    float o[3][packet_lanes], inv[3][packet_lanes], tmin[packet_lanes];
+    int near[3], far[3];  // rows of the entry and exit planes per axis (WideBvhNode::bounds)
+    // The packet's intervals: origins and reciprocal directions per axis, smallest tmin;
+    // `bounded` when every reciprocal is a normal float (else no interval test).
+    float omin[3], omax[3], imin[3], imax[3], tmin_lo;
+    bool bounded;
+
+    [[gnu::always_inline]] PacketRays(const Ray<float>* rays, const PacketShape& s) {
+        const int first = std::countr_zero(s.lanes);
+        for (int a = 0; a < 3; ++a) {
+            const int neg = std::signbit(rays[first].direction[a]) ? 1 : 0;
+            near[a] = 2 * a + neg;
+            far[a] = 2 * a + 1 - neg;
+        }
+        for (int k = 0; k < packet_lanes; ++k) {
+            const bool in = (s.lanes >> k) & 1u;
+            for (int a = 0; a < 3; ++a) {
+                o[a][k] = in ? rays[k].origin[a] : 0.0f;
+                inv[a][k] = in ? 1.0f / rays[k].direction[a] : 1.0f;
+            }
+            tmin[k] = in ? rays[k].tmin : infinity<float>;
+        }
+        bounded = true;
+        tmin_lo = infinity<float>;
+        for (int a = 0; a < 3; ++a) {
+            omin[a] = imin[a] = infinity<float>;
+            omax[a] = imax[a] = -infinity<float>;
+            for (unsigned m = s.lanes; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                omin[a] = std::min(omin[a], o[a][k]), omax[a] = std::max(omax[a], o[a][k]);
+                imin[a] = std::min(imin[a], inv[a][k]), imax[a] = std::max(imax[a], inv[a][k]);
+                bounded &= std::isnormal(inv[a][k]);
+                tmin_lo = std::min(tmin_lo, tmin[k]);
+            }
+        }
+    }
+};
+
+/// Bounds of the distances (plane - o) * inv over the packet's intervals of o and inv, as
+/// floats (rounded subtraction and multiplication are monotone in each operand, so the
+/// extremes are at the corners): the smallest (Max = false) or the largest.
+template <bool Max>
+[[gnu::always_inline]] inline float packet_corner(float plane, float o0, float o1, float i0, float i1) {
+    const float d0 = plane - o1, d1 = plane - o0;
+    const float a = d0 * i0, b = d0 * i1, c = d1 * i0, d = d1 * i1;
+    return Max ? std::max(std::max(a, b), std::max(c, d)) : std::min(std::min(a, b), std::min(c, d));
+}
+
+/// The children of n that some ray of the packet may enter (Boulos 2006's interval
+/// arithmetic, on the packet's intervals of origin and reciprocal direction): a
+/// superset of those the lane tests accept, for tmin >= tmin_lo and tmax <= tmax_hi.
+template <int N>
+[[gnu::always_inline]] inline unsigned packet_candidates(const PacketRays& p, const WideBvhNode<N>& n, float tmax_hi) {
+    unsigned mask = 0;
+    for (int i = 0; i < N; ++i) {
+        float t0 = p.tmin_lo, t1 = tmax_hi;
+        for (int a = 0; a < 3; ++a) {
+            t0 = std::max(t0, packet_corner<false>(n.bounds[p.near[a]][i], p.omin[a], p.omax[a], p.imin[a], p.imax[a]));
+            t1 = std::min(t1, packet_corner<true>(n.bounds[p.far[a]][i], p.omin[a], p.omax[a], p.imin[a], p.imax[a]));
+        }
+        mask |= unsigned(t0 <= t1 * wide_exit_scale) << i;
+    }
+    return mask;
+}
+
+/// One child's box against every lane: the lanes that enter it within (tmin, tmax[k]), their
+/// entry distances in tn; the single-ray test's operations lane by lane (portable, SSE2).
+template <Isa I>
+struct PacketBoxTest {
+    const PacketRays& p;  // the caller's: outlives the test
+
+    [[gnu::always_inline]] explicit PacketBoxTest(const PacketRays& rays) : p(rays) {}
+    template <int N>
+    [[gnu::always_inline]] unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
+        unsigned mask = 0;
+        for (int k = 0; k < packet_lanes; ++k) {
+            float t0 = p.tmin[k], t1 = tmax[k];
+            for (int a = 0; a < 3; ++a) {
+                const float tl = (n.bounds[p.near[a]][i] - p.o[a][k]) * p.inv[a][k];
+                const float th = (n.bounds[p.far[a]][i] - p.o[a][k]) * p.inv[a][k];
+                t0 = tl > t0 ? tl : t0;
+                t1 = th < t1 ? th : t1;
+            }
+            tn[k] = t0;
+            mask |= unsigned(t0 <= t1 * wide_exit_scale) << k;
+        }
+        return mask;
+    }
+    /// The children some ray may enter (packet_candidates; all where the packet is unbounded).
+    template <int N>
+    [[gnu::always_inline]] unsigned candidates(const WideBvhNode<N>& n, float tmax_hi) const {
+        return p.bounded ? packet_candidates(p, n, tmax_hi) : (1u << N) - 1u;
+    }
+    /// The lanes whose entry distance t[k] is still within their interval.
+    [[gnu::always_inline]] unsigned within(const float* t, const float* tmax) const {
+        unsigned mask = 0;
+        for (int k = 0; k < packet_lanes; ++k) mask |= unsigned(t[k] <= tmax[k] * wide_exit_scale) << k;
+        return mask;
+    }
+};
+
+#if GLINT_X86
+/// The same with AVX2: one child's planes broadcast against the 8 lanes.
+template <>
+struct PacketBoxTest<Isa::avx2> {
+    __m256 o[3], inv[3], tmin;
+    int near[3], far[3];
+    const PacketRays& p;  // the caller's: outlives the test
+
+    GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& rays) : p(rays) {
+        for (int a = 0; a < 3; ++a) {
+            o[a] = _mm256_load_ps(p.o[a]);
+            inv[a] = _mm256_load_ps(p.inv[a]);
+            near[a] = p.near[a];
+            far[a] = p.far[a];
+        }
+        tmin = _mm256_load_ps(p.tmin);
+    }
+    template <int N>
+    GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
+        __m256 t0 = tmin, t1 = _mm256_load_ps(tmax);
+        for (int a = 0; a < 3; ++a) {
+            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(&n.bounds[near[a]][i]), o[a]), inv[a]);
+            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(&n.bounds[far[a]][i]), o[a]), inv[a]);
+            t0 = _mm256_max_ps(tl, t0);
+            t1 = _mm256_min_ps(th, t1);
+        }
+        _mm256_store_ps(tn, t0);
+        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+    }
+    /// packet_candidates() with the 8 children in the lanes (the same floats).
+    GLINT_KERNEL_AVX2 unsigned candidates(const WideBvhNode<8>& n, float tmax_hi) const {
+        if (!p.bounded) return 0xffu;
+        __m256 t0 = _mm256_set1_ps(p.tmin_lo), t1 = _mm256_set1_ps(tmax_hi);
+        for (int a = 0; a < 3; ++a) {
+            const __m256 o0 = _mm256_set1_ps(p.omin[a]), o1 = _mm256_set1_ps(p.omax[a]);
+            const __m256 i0 = _mm256_set1_ps(p.imin[a]), i1 = _mm256_set1_ps(p.imax[a]);
+            const __m256 ln = _mm256_load_ps(n.bounds[near[a]]), lf = _mm256_load_ps(n.bounds[far[a]]);
+            const __m256 n0 = _mm256_sub_ps(ln, o1), n1 = _mm256_sub_ps(ln, o0);
+            const __m256 f0 = _mm256_sub_ps(lf, o1), f1 = _mm256_sub_ps(lf, o0);
+            const __m256 tl = _mm256_min_ps(_mm256_min_ps(_mm256_mul_ps(n0, i0), _mm256_mul_ps(n0, i1)),
+                                            _mm256_min_ps(_mm256_mul_ps(n1, i0), _mm256_mul_ps(n1, i1)));
+            const __m256 th = _mm256_max_ps(_mm256_max_ps(_mm256_mul_ps(f0, i0), _mm256_mul_ps(f0, i1)),
+                                            _mm256_max_ps(_mm256_mul_ps(f1, i0), _mm256_mul_ps(f1, i1)));
+            t0 = _mm256_max_ps(t0, tl);
+            t1 = _mm256_min_ps(t1, th);
+        }
+        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+    }
+    template <int N>
+    unsigned candidates(const WideBvhNode<N>& n, float tmax_hi) const {
+        return p.bounded ? packet_candidates(p, n, tmax_hi) : (1u << N) - 1u;
+    }
+    GLINT_KERNEL_AVX2 unsigned within(const float* t, const float* tmax) const {
+        const __m256 t1 = _mm256_mul_ps(_mm256_load_ps(tmax), _mm256_set1_ps(wide_exit_scale));
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(t), t1, _CMP_LE_OQ)));
+    }
+};
+#endif
+
+/// A node as the packet test reads it: float nodes as they are, quantized ones decoded.
+template <int N>
+[[gnu::always_inline]] inline const WideBvhNode<N>& packet_node(const WideBvhNode<N>& n, WideBvhNode<N>&) {
+    return n;
+}
+template <int N>
+[[gnu::always_inline]] inline const WideBvhNode<N>& packet_node(const WideBvhQNode<N>& q, WideBvhNode<N>& buf) {
+    buf = wide_decode(q);
+    return buf;
+}
+
+/// The largest of the packet's tmax.
+[[gnu::always_inline]] inline float packet_max(const float* tmax) {
+    float m = tmax[0];
+    for (int k = 1; k < packet_lanes; ++k) m = std::max(m, tmax[k]);
+    return m;
+}
+
+/// A child on the packet's stack: its reference, lanes, and their entry distances.
+struct alignas(32) PacketEntry {
+    float t[packet_lanes];
+    std::uint32_t ref;
+    unsigned lanes;
+    float key;  // the entry distance of the lowest lane: the visiting order
+};
+
+/// Pushes the children of node n that some lane of `lanes` enters onto stack[sp...], the
+/// nearest last; returns how many.
+template <int N, class Test>
+[[gnu::always_inline]] inline int packet_children(const WideBvhNode<N>& n, const Test& box, unsigned lanes,
+                                                  const float* tmax, float tmax_hi, PacketEntry* stack, int sp) {
+    int c = 0;
+    for (unsigned cand = box.candidates(n, tmax_hi); cand; cand &= cand - 1) {
+        const int i = std::countr_zero(cand);
+        if (n.child[i] == wide_empty_ref) continue;
+        PacketEntry& e = stack[sp + c];
+        e.lanes = box.test(n, i, tmax, e.t) & lanes;
+        if (e.lanes == 0) continue;
+        e.ref = n.child[i];
+        e.key = e.t[std::countr_zero(e.lanes)];
+        for (int j = sp + c; j > sp && stack[j - 1].key < stack[j].key; --j) std::swap(stack[j - 1], stack[j]);
+        ++c;
+    }
+    return c;
+}
+
+/// Closest (Any = false) or any hit of the packet's rays `rays` (lanes `lanes`, a coherent
+/// PacketShape's) through nodes (root at 0): `leaf(k, first, count)` tests ray k against a
+/// leaf, lowering rays[k].tmax to a hit (closest hit). `node_hook(lanes)` is called at every
+/// inner node with the lanes that test its children. `stack` holds the tree's stack bound
+/// (WideBvh::max_stack entries; one per stream, not per packet). Returns the lanes that
+/// found a hit.
+template <bool Any, int N, Isa I, class Node, class Leaf, class Hook>
+[[gnu::always_inline]] inline unsigned packet_traverse(const Node* nodes, const PacketBoxTest<I>& box, Ray<float>* rays,
+                                                       unsigned lanes, Leaf& leaf, Hook& node_hook, PacketEntry* stack) {
+    alignas(32) float tmax[packet_lanes];
+    float tmax_hi = -infinity<float>;  // the largest tmax of the packet
+    for (int k = 0; k < packet_lanes; ++k) {
+        tmax[k] = (lanes >> k) & 1u ? rays[k].tmax : -infinity<float>;
+        tmax_hi = std::max(tmax_hi, tmax[k]);
+    }
+    WideBvhNode<N> decoded;
+    unsigned found = 0, cur = lanes;
+    std::uint32_t ref = 0;
+    int sp = 0;
+    for (;;) {
+        if (!wide_is_leaf(ref)) {
+            node_hook(cur);
+            const int c = packet_children<N>(packet_node(nodes[ref], decoded), box, cur, tmax, tmax_hi, stack, sp);
+            if (c > 0) {  // the nearest child next, the others on the stack
+                sp += c - 1;
+                ref = stack[sp].ref;
+                cur = stack[sp].lanes;
+                continue;
+            }
+        } else {
+            const std::uint32_t first = wide_leaf_first(ref), count = wide_leaf_count(ref);
+            for (unsigned m = cur; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                if (!leaf(k, first, count)) continue;
+                found |= 1u << k;
+                if constexpr (Any) lanes &= ~(1u << k);
+                else tmax[k] = rays[k].tmax;
+            }
+            if (Any && lanes == 0) return found;
+            if (!Any && (found & cur)) tmax_hi = packet_max(tmax);
+        }
+        do {
+            if (sp == 0) return found;
+            --sp;
+            cur = stack[sp].lanes & lanes;
+            if constexpr (!Any) cur &= box.within(stack[sp].t, tmax);
+        } while (cur == 0);
+        ref = stack[sp].ref;
+    }
+}
+
+}  // namespace detail
+
+}  // namespace glint
