@@ -1390,7 +1390,8 @@ TEST_CASE("shading normals: a point light's direct light uses the interpolated n
     settings.max_depth = 1;
     PathTracer<BruteForce<Ivm<float>>, RandomSampler<float>, MisDirect<float>> pt(s, accel, settings);
     RandomSampler<float> sampler(3);
-    for (const auto& [u, v] : {std::pair{0.2f, 0.3f}, std::pair{0.6f, 0.1f}, std::pair{0.05f, 0.8f}}) {
+    for (const std::array<float, 2>& uv : {std::array{0.2f, 0.3f}, std::array{0.6f, 0.1f}, std::array{0.05f, 0.8f}}) {
+        const float u = uv[0], v = uv[1];  // not a structured binding: clang 14's lambdas (CAPTURE) cannot take one
         const Vec3f x = tri[0] * (1 - u - v) + tri[1] * u + tri[2] * v;
         const Vec3f ns = glm::normalize(corner[0] * (1 - u - v) + corner[1] * u + corner[2] * v);
         const Vec3f d = s.point_lights[0].position - x;
