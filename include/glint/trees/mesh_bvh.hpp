@@ -242,14 +242,7 @@ private:
         StoreHit<float> h[detail::packet_lanes];
         RayDataOf<P> world[detail::packet_lanes];
         for (int k = 0; k < n; ++k) h[k] = hits[k], world[k] = leaves_.prepare(r[k]);
-        auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
-            LeafQuery<P, false> q(leaves_, r[k], world[k], h[k]);
-            return wrap(q)(first, count);
-        };
-        const detail::PacketRays packet(r, shape);
-        const detail::PacketBoxTest<I> box(packet);
-        const unsigned hit =
-            detail::packet_traverse<false, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
+        const unsigned hit = traverse_packet<false>(kernels, r, h, world, shape, wrap, hook, stack);
         for (unsigned m = hit; m; m &= m - 1, ++found) {
             const int k = std::countr_zero(m);
             hits[k] = LeafQuery<P, false>(leaves_, r[k], world[k], h[k]).hit();
@@ -269,16 +262,24 @@ private:
         StoreHit<float> h[detail::packet_lanes];
         RayDataOf<P> world[detail::packet_lanes];
         for (int k = 0; k < n; ++k) r[k] = rays[k], world[k] = leaves_.prepare(r[k]);
+        const unsigned hit = traverse_packet<true>(kernels, r, h, world, shape, wrap, hook, stack);
+        for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
+        return found;
+    }
+    /// The packet traversal of a coherent packet (closest or any hit) over its prepared rays:
+    /// each lane's leaf test is the single ray's LeafQuery on r[k], world[k], h[k]; returns
+    /// the mask of lanes that found a hit.
+    template <bool Any, Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] unsigned traverse_packet(IsaTag<I>, Ray<float>* r, StoreHit<float>* h, const RayDataOf<P>* world,
+                                                    const detail::PacketShape& shape, Wrap& wrap, Hook& hook,
+                                                    detail::PacketEntry* stack) const {
         auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
-            LeafQuery<P, true> q(leaves_, r[k], world[k], h[k]);
+            LeafQuery<P, Any> q(leaves_, r[k], world[k], h[k]);
             return wrap(q)(first, count);
         };
         const detail::PacketRays packet(r, shape);
         const detail::PacketBoxTest<I> box(packet);
-        const unsigned hit =
-            detail::packet_traverse<true, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
-        for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
-        return found;
+        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
     }
     /// Counts a packet's node visit and its ray-node tests into `c`.
     static auto packet_counting(WideBvhCounters& c) {
