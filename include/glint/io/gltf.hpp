@@ -154,6 +154,7 @@ void gltf_add_normals(const GltfContext& c, Scene<T>& s, int accessor, std::size
     if (n.size() != vertices)
         throw Error(where + ": " + std::to_string(n.size()) + " normals for " + std::to_string(vertices) + " positions");
     const glm::dmat3 to_world = glm::transpose(glm::inverse(glm::dmat3(world)));
+    const bool mirrored = glm::determinant(glm::dmat3(world)) < 0.0;  // gltf_add_mesh swapped these corners
     s.fill_corner_normals(s.triangles.size() - tris.size());  // the triangles before, flat where they have none
     for (std::size_t t = 0; t < tris.size(); ++t) {
         std::array<Vec3<T>, 3> corner;
@@ -162,7 +163,7 @@ void gltf_add_normals(const GltfContext& c, Scene<T>& s, int accessor, std::size
             if (!(glm::length(w) > 0.0)) throw Error(where + ": normal " + std::to_string(tris[t][k]) + " has length 0");
             corner[k] = Vec3<T>(glm::normalize(w));
         }
-        if (glm::determinant(glm::dmat3(world)) < 0.0) std::swap(corner[1], corner[2]);
+        if (mirrored) std::swap(corner[1], corner[2]);
         s.corner_normals.push_back(corner);
     }
 }
