@@ -98,22 +98,19 @@ Scene<float> mixed_scene(bool areas) {
 /// The shading points the camera's rays meet through an nx x ny grid of the image, each with
 /// its BRDF (kept alive in `brdfs`).
 struct ShadingPoints {
-    std::vector<Frame<float>> frames;
     std::vector<SurfaceBrdf<float>> brdfs;
     std::vector<ShadingPoint<float>> points;
     ShadingPoints(const Scene<float>& s, const DefaultAccel& accel, int nx, int ny) {
-        frames.reserve(std::size_t(nx * ny)), brdfs.reserve(std::size_t(nx * ny));
+        brdfs.reserve(std::size_t(nx * ny));
         for (int j = 0; j < ny; ++j)
             for (int i = 0; i < nx; ++i) {
                 const Ray<float> ray = s.camera.ray((float(i) + 0.5f) / float(nx), (float(j) + 0.5f) / float(ny), 1.0f);
                 StoreHit<float> hit;
                 if (!accel.closest_hit(ray, hit)) continue;
-                const Vec3<float> ng = s.normal(hit.id);
-                const Vec3<float> n = glm::dot(ng, ray.direction) < 0.0f ? ng : -ng;
-                const SurfacePoint<float> p = surface_point(s, hit);
-                frames.push_back(Frame<float>::from_normal(n));
-                brdfs.emplace_back(s.materials[s.material_of[hit.id]], frames.back().to_local(-ray.direction));
-                points.push_back({p.x, p.err, n, n, frames.back(), &brdfs.back()});
+                ShadingPoint<float> sp = shading_point(s, hit, s.normal(hit.id), ray.direction);
+                brdfs.emplace_back(s.materials[s.material_of[hit.id]], sp.frame.to_local(-ray.direction));
+                sp.brdf = &brdfs.back();
+                points.push_back(sp);
             }
     }
 };
