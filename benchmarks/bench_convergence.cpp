@@ -68,6 +68,7 @@
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/correlated_environment.hpp>
 #include <glint/tracer/named_render.hpp>
+#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 
 
@@ -416,12 +417,10 @@ RenderResult envmap_direct(const Scene<float>& scene, const DefaultAccel& accel,
                 StoreHit<float> hit;
                 Rgb<float> L = env.escaped(ray.direction, Arrival<float>{});
                 if (queries.closest_hit(ray, hit)) {
-                    const Vec3<float> ng = scene.normal(hit.id);
-                    const Vec3<float> n = glm::dot(ng, ray.direction) < 0.0f ? ng : -ng;
-                    const SurfacePoint<float> p = surface_point(scene, hit);
-                    const Frame<float> frame = Frame<float>::from_normal(n);
+                    ShadingPoint<float> sp = shading_point(scene, hit, scene.normal(hit.id), ray.direction);
+                    const Frame<float>& frame = sp.frame;
                     const SurfaceBrdf<float> brdf(scene.materials[scene.material_of[hit.id]], frame.to_local(-ray.direction));
-                    const ShadingPoint<float> sp{p.x, p.err, n, n, frame, &brdf};
+                    sp.brdf = &brdf;
                     L = env.estimate(sp, sampler, queries);
                     const Vec3<float> wi = brdf.sample_by_albedo(sampler.get_2d());
                     const float pdf = brdf.sampling_pdf(wi);

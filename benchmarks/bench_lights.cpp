@@ -50,6 +50,7 @@
 
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
+#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 
 #include "support/direct_section.hpp"

@@ -41,6 +41,7 @@
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
+#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/tracer/smooth_normals.hpp>

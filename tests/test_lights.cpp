@@ -72,6 +72,7 @@ TEST_CASE("invalid point lights are rejected, naming the light") {
 #include <glint/sampling/sampler.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
+#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
 
 namespace {
 

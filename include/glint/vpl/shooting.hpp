@@ -154,12 +154,10 @@ private:
     T total_ = 0;
 };
 
-/// Options of the shooting phase.
+/// Options of the shooting phase (path splitting is an option of the path trees:
+/// AnimationOptions::branches, LightPathMapOptions::branches).
 struct ShootingOptions {
     int max_depth = 1024;  ///< cap on a walk's vertices (>= 1), far beyond where roulette stops walks
-    int branches = 1;      ///< continuations from the first hit (path splitting, Szécsi 2009, §7.2.1);
-                           ///< not read by shoot_scene_vpls: path trees take AnimationOptions::branches
-                           ///< or LightPathMapOptions::branches
 };
 
 /// Follows one shooting walk from `ray` carrying `power` (the first hit's incoming power),
