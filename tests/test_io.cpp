@@ -1,11 +1,14 @@
 // Tests for glint/io's scene files: a glTF 2.0 scene the test writes itself (a quad under a
 // two-level node transform, a camera, a KHR_lights_punctual point light; .gltf with a base64
 // buffer and .glb) loads with the right geometry, camera and light and renders the same as
-// the scene built in C++ within standard errors; the material mapping; bad glTF input named
-// by file and item; the scene JSON of --export-scene read back exactly.
+// the scene built in C++ within standard errors, and so does its base-colour texture; the
+// material mapping; bad glTF input named by file and item; the scene JSON of --export-scene
+// read back exactly.
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
+#define GLINT_STB_IMPLEMENTATION  // stb_image_write's functions (the test's PNG textures), compiled in this file
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -21,10 +24,12 @@
 #include <glint/io/exr.hpp>
 #include <glint/io/gltf.hpp>
 #include <glint/io/json.hpp>
+#include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
 #include <glint/io/scene_json_read.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
+#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 
 using namespace glint;
@@ -57,6 +62,7 @@ struct GltfFixture {
     std::vector<float> positions{-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
     std::vector<std::uint16_t> indices{0, 1, 2, 0, 2, 3};
     std::vector<float> normals;  // a NORMAL accessor (2) where not empty, after the indices
+    std::vector<float> uvs;      // a TEXCOORD_0 accessor where not empty, after the normals
     int mode = 4;
     std::size_t position_count = 4;  // the POSITION accessor's count
     std::string extra;               // more top-level members, after a comma
@@ -69,30 +75,44 @@ struct GltfFixture {
     std::string lights = R"([{"type": "point", "color": [1, 1, 1], "intensity": 3415}])";
 
     std::vector<unsigned char> buffer() const {
-        std::vector<unsigned char> b(positions.size() * 4 + indices.size() * 2 + normals.size() * 4);
+        std::vector<unsigned char> b(positions.size() * 4 + indices.size() * 2 + normals.size() * 4 + uvs.size() * 4);
         std::memcpy(b.data(), positions.data(), positions.size() * 4);
         std::memcpy(b.data() + positions.size() * 4, indices.data(), indices.size() * 2);
         if (!normals.empty()) std::memcpy(b.data() + positions.size() * 4 + indices.size() * 2, normals.data(), normals.size() * 4);
+        if (!uvs.empty())
+            std::memcpy(b.data() + positions.size() * 4 + indices.size() * 2 + normals.size() * 4, uvs.data(), uvs.size() * 4);
         return b;
+    }
+
+    /// The TEXCOORD_0 attribute, buffer view and accessor (index 2 or 3), where uvs is not empty.
+    std::string uv_attribute() const { return uvs.empty() ? "" : ", \"TEXCOORD_0\": " + std::to_string(normals.empty() ? 2 : 3); }
+    std::string uv_view() const {
+        const std::size_t offset = positions.size() * 4 + indices.size() * 2 + normals.size() * 4;
+        return uvs.empty() ? "" : R"(, {"buffer": 0, "byteOffset": )" + std::to_string(offset) + R"(, "byteLength": )" + std::to_string(uvs.size() * 4) + "}";
+    }
+    std::string uv_accessor() const {
+        return uvs.empty() ? "" : R"(, {"bufferView": )" + std::to_string(normals.empty() ? 2 : 3) +
+                                      R"(, "componentType": 5126, "type": "VEC2", "count": )" + std::to_string(uvs.size() / 2) + "}";
     }
 
     /// The JSON; `uri` empty: the buffer is a .glb's BIN chunk.
     std::string json(const std::string& uri) const {
-        const std::size_t pb = positions.size() * 4, ib = indices.size() * 2, nb = normals.size() * 4;
+        const std::size_t pb = positions.size() * 4, ib = indices.size() * 2, nb = normals.size() * 4 + uvs.size() * 4;
         std::ostringstream j;
         j << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 2, 3]}], "nodes": )" << nodes
           << R"(, "meshes": [{"primitives": [{"attributes": {"POSITION": )" << position_accessor
-          << (normals.empty() ? "" : R"(, "NORMAL": 2)") << R"(}, "indices": 1, "material": 0, "mode": )" << mode
+          << (normals.empty() ? "" : R"(, "NORMAL": 2)") << uv_attribute() << R"(}, "indices": 1, "material": 0, "mode": )" << mode
           << R"(}]}], "materials": [)" << material << R"(], "cameras": [{"type": "perspective", "perspective": )"
           << R"({"yfov": 0.8, "aspectRatio": 1.5, "znear": 0.01}}], "extensionsUsed": ["KHR_lights_punctual"], )"
           << R"("extensions": {"KHR_lights_punctual": {"lights": )" << lights << "}}, \"buffers\": [{\"byteLength\": " << pb + ib + nb
           << (uri.empty() ? "" : ", \"uri\": \"" + uri + "\"") << R"(}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": )"
           << pb << R"(}, {"buffer": 0, "byteOffset": )" << pb << R"(, "byteLength": )" << ib << "}"
-          << (normals.empty() ? "" : R"(, {"buffer": 0, "byteOffset": )" + std::to_string(pb + ib) + R"(, "byteLength": )" + std::to_string(nb) + "}")
+          << (normals.empty() ? "" : R"(, {"buffer": 0, "byteOffset": )" + std::to_string(pb + ib) + R"(, "byteLength": )" + std::to_string(normals.size() * 4) + "}")
+          << uv_view()
           << R"(], "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": )" << position_count
           << R"(}, {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": )" << indices.size() << "}"
           << (normals.empty() ? "" : R"(, {"bufferView": 2, "componentType": 5126, "type": "VEC3", "count": )" + std::to_string(normals.size() / 3) + "}")
-          << "]" << extra << "}";
+          << uv_accessor() << "]" << extra << "}";
         return j.str();
     }
 
@@ -156,6 +176,25 @@ double mean_difference_z(const RenderResult& a, const RenderResult& b) {
         REQUIRE(ma > 0.0);
         z = std::max(z, std::abs(ma - mb) / std::sqrt(var));
     }
+    return z;
+}
+
+/// The largest |mean_a - mean_b| / its standard error over the four quadrants of the images
+/// and the bands (independent renders; a region black in both counts 0).
+double quadrant_difference_z(const RenderResult& a, const RenderResult& b) {
+    double z = 0;
+    const int w = a.image.width, h = a.image.height;
+    for (int q = 0; q < 4; ++q)
+        for (std::size_t c = 0; c < 3; ++c) {
+            double ma = 0, mb = 0, var = 0;
+            for (int y = (q / 2) * h / 2; y < (q / 2 + 1) * h / 2; ++y)
+                for (int x = (q % 2) * w / 2; x < (q % 2 + 1) * w / 2; ++x) {
+                    ma += a.image.at(x, y)[c], mb += b.image.at(x, y)[c];
+                    var += a.variance.at(x, y)[c] + b.variance.at(x, y)[c];
+                }
+            if (var > 0.0) z = std::max(z, std::abs(ma - mb) / std::sqrt(var));
+            else REQUIRE(ma == mb);
+        }
     return z;
 }
 
@@ -259,11 +298,13 @@ TEST_CASE("gltf: metallic-roughness, emission and spot lights map as the header 
     const Scene<float> lamp = load_gltf<float>(f.write_gltf("emissive"));
     CHECK(lamp.area_lights.size() == 2);
     CHECK(lamp.area_lights[0].emission[1] == doctest::Approx(2.0));
-    f.material = R"({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0}})";
-    f.extra = R"(, "textures": [{"source": 0}], "images": [{"uri": "no_such_image.png"}])";
-    const GltfScene<float> textured = read_gltf<float>(f.write_gltf("texture"));  // the image need not exist
+    f.material = R"({"emissiveTexture": {"index": 0}, "pbrMetallicRoughness": {"metallicFactor": 0}})";
+    const std::array<std::uint8_t, 3> white{255, 255, 255};
+    REQUIRE(stbi_write_png(temp_path("white.png").c_str(), 1, 1, 3, white.data(), 3) != 0);
+    f.extra = R"(, "textures": [{"source": 0}], "images": [{"uri": "glint_test_io_white.png"}])";
+    const GltfScene<float> textured = read_gltf<float>(f.write_gltf("texture"));
     REQUIRE(textured.warnings.size() == 1);
-    CHECK(textured.warnings[0].find("material 0 (''): textures are ignored") != std::string::npos);
+    CHECK(textured.warnings[0].find("material 0 (''): emissive, metallic-roughness and normal textures are ignored") != std::string::npos);
     CHECK(textured.scene.materials.at(0).kind == MaterialKind::lambertian);
     f.lights = R"([{"type": "spot", "intensity": 683, "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}}])";
     f.nodes = R"([{"children": [1]}, {"mesh": 0}, {"camera": 0}, {"rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752],
@@ -508,4 +549,136 @@ TEST_CASE("gltf: NORMAL becomes corner normals, turned by the node transforms; b
     f.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1};
     CHECK_THROWS_WITH_AS(load_gltf<float>(f.write_gltf("few_normals")), doctest::Contains("3 normals for 4 positions"), Error);
     CHECK(load_gltf<float>(GltfFixture{}.write_gltf("no_normals")).corner_normals.empty());
+}
+
+TEST_CASE("texture: bilinear and nearest lookups, wrap modes, sRGB decoding") {
+    const std::array<std::uint8_t, 12> bytes{255, 255, 255, 188, 188, 188, 255, 64, 0, 0, 128, 255};
+    Texture<float> t = Texture<float>::from_srgb8(2, 2, 3, bytes);
+    CHECK(t.texels[0][0] == 1.0f);
+    CHECK(t.texels[1][0] == doctest::Approx(0.5029).epsilon(1e-3));  // sRGB 188 / 255 is half the light
+    CHECK(t.texels[3][1] == doctest::Approx(0.2158).epsilon(1e-3));
+    CHECK(t.texels[2][2] == 0.0f);
+    // Texel centres return the texels; midway between two centres, their mean.
+    CHECK(t.lookup({0.25f, 0.25f})[1] == doctest::Approx(1.0f));
+    CHECK(t.lookup({0.75f, 0.75f})[2] == doctest::Approx(1.0f));
+    CHECK(t.lookup({0.5f, 0.25f})[0] == doctest::Approx((1.0f + t.texels[1][0]) / 2));
+    // Repeat wraps at the edge: u = 0 lies midway between the last and the first column.
+    CHECK(t.lookup({0.0f, 0.25f})[0] == doctest::Approx((1.0f + t.texels[1][0]) / 2));
+    CHECK(t.lookup({1.25f, -0.75f})[1] == doctest::Approx(1.0f));
+    t.wrap_u = TextureWrap::clamp;
+    CHECK(t.lookup({-3.0f, 0.25f})[0] == doctest::Approx(1.0f));
+    t.wrap_u = TextureWrap::mirrored_repeat;
+    CHECK(t.lookup({-0.25f, 0.25f})[0] == doctest::Approx(1.0f));  // mirrored: -0.25 reads 0.25
+    CHECK(t.lookup({1.25f, 0.25f})[0] == doctest::Approx(t.texels[1][0]));  // and 1.25 reads 0.75
+    t.nearest = true;
+    CHECK(t.lookup({0.49f, 0.51f}) == t.texels[2]);
+    CHECK(t.lookup({1e30f, -1e30f}).is_finite());  // far coordinates stay defined
+    CHECK_THROWS_AS(Texture<float>::from_srgb8(2, 2, 3, std::span<const std::uint8_t>(bytes).first(11)), Error);
+}
+
+namespace {
+
+/// The fixture's quad with texture coordinates (0, 0) .. (1, 1) over its corners, a 2 x 2
+/// PNG base-colour texture (nearest filtering) of the given texels (rows top first), and a
+/// camera 4 units above the floor looking down, which sees each texel in one image quadrant.
+GltfFixture textured_fixture(const std::string& name, const std::array<std::uint8_t, 12>& texels) {
+    const std::string png = temp_path(name + ".png");
+    REQUIRE(stbi_write_png(png.c_str(), 2, 2, 3, texels.data(), 6) != 0);
+    GltfFixture f;
+    f.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+    f.material = R"({"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1], "baseColorTexture": {"index": 0}, "metallicFactor": 0}})";
+    f.extra = R"(, "textures": [{"source": 0, "sampler": 0}], "samplers": [{"magFilter": 9728}], "images": [{"uri": ")" +
+              std::filesystem::path(png).filename().string() + "\"}]";
+    f.nodes = R"([{"translation": [0, -1, 0], "children": [1]},
+        {"mesh": 0, "rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752], "scale": [2, 2, 2]},
+        {"camera": 0, "translation": [0, 3, 0], "rotation": [-0.70710678118654752, 0, 0, 0.70710678118654752]},
+        {"translation": [0, 1, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}])";
+    return f;
+}
+
+/// The textured fixture built in C++ without a texture: four quads, each of one texel's kd
+/// (the base colour factor times the texel, decoded from sRGB here). Texel (i, j) covers
+/// u in [i/2, (i+1)/2), v in [j/2, (j+1)/2): world x in [2i - 2, 2i], z in [-2j, 2 - 2j].
+Scene<float> textured_fixture_scene(const std::array<std::uint8_t, 12>& texels) {
+    Scene<float> s;
+    const auto srgb = [](std::uint8_t c) { return float(c <= 10 ? c / 255.0 / 12.92 : std::pow((c / 255.0 + 0.055) / 1.055, 2.4)); };
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+            const std::uint8_t* t = texels.data() + 3 * (2 * j + i);
+            const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.8f * srgb(t[0]), 0.6f * srgb(t[1]), 0.4f * srgb(t[2]))));
+            const float x0 = float(2 * i - 2), x1 = float(2 * i), z0 = float(-2 * j), z1 = float(2 - 2 * j);
+            s.add_quad({x0, -1, z1}, {x1, -1, z1}, {x1, -1, z0}, {x0, -1, z0}, m);
+        }
+    s.point_lights.push_back(PointLight<float>::isotropic({0, 1, 0}, Rgb<float>(5.0f)));
+    s.camera = Camera<float>{{0, 3, 0}, {0, 2, 0}, {0, 0, -1}, 0.8f};
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("gltf: a base-colour texture renders as the same quad cut into one material per texel") {
+    const std::array<std::uint8_t, 12> texels{255, 255, 255, 188, 188, 188, 255, 64, 0, 0, 128, 255};
+    const GltfScene<float> g = read_gltf<float>(textured_fixture("textured", texels).write_gltf("textured"));
+    CHECK(g.warnings.empty());
+    REQUIRE(g.scene.textures.size() == 1);
+    CHECK(g.scene.textures[0].nearest);
+    CHECK(g.scene.materials.at(0).kd_texture == 0);
+    REQUIRE(g.scene.corner_uvs.size() == 2);
+    const RenderResult a = render(g.scene, 1), b = render(textured_fixture_scene(texels), 2);
+    const double z = quadrant_difference_z(a, b);
+    MESSAGE("textured glTF against four quads in C++: " << z << " standard errors apart (largest over quadrants and bands)");
+    CHECK(z < 4.0);
+    // The comparison can fail: the texture mirrored left to right is told apart.
+    const std::array<std::uint8_t, 12> mirrored{188, 188, 188, 255, 255, 255, 0, 128, 255, 255, 64, 0};
+    const double swapped = quadrant_difference_z(a, render(textured_fixture_scene(mirrored), 2));
+    MESSAGE("against the texture mirrored: " << swapped << " standard errors apart");
+    CHECK(swapped > 4.0);
+    // The path tracer's integrators that keep materials by index refuse textured scenes.
+    CHECK_THROWS_WITH_AS(g.scene.require_untextured("test"), doctest::Contains("textures are applied by the path tracer only"), Error);
+}
+
+TEST_CASE("gltf: texture errors name the file and the item") {
+    const std::array<std::uint8_t, 12> texels{};
+    GltfFixture f = textured_fixture("bad_texture", texels);
+    f.extra = R"(, "textures": [{"source": 0}], "images": [{"uri": "no_such_image.png"}])";
+    CHECK_THROWS_WITH_AS(load_gltf<float>(f.write_gltf("missing_image")), doctest::Contains("glint_test_io_missing_image.gltf"), Error);
+    f = textured_fixture("bad_texture", texels);
+    f.uvs.clear();
+    CHECK_THROWS_WITH_AS(load_gltf<float>(f.write_gltf("no_uvs")), doctest::Contains("mesh 0, primitive 0: its material has a baseColorTexture but the primitive has no TEXCOORD_0"), Error);
+    f = textured_fixture("bad_texture", texels);
+    f.uvs[3] = std::numeric_limits<float>::infinity();
+    CHECK_THROWS_WITH_AS(load_gltf<float>(f.write_gltf("inf_uv")), doctest::Contains("TEXCOORD_0 accessor 2: coordinate 1 is not finite"), Error);
+    f = textured_fixture("bad_texture", texels);
+    f.material = R"({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}, "metallicFactor": 0}})";
+    const GltfScene<float> other = read_gltf<float>(f.write_gltf("texcoord1"));
+    REQUIRE(other.warnings.size() == 1);
+    CHECK(other.warnings[0].find("reads TEXCOORD_1") != std::string::npos);
+    CHECK(other.scene.materials.at(0).kd_texture == -1);
+}
+
+TEST_CASE("scene json: textures, texture coordinates and kd_texture are written and read back exactly") {
+    const std::array<std::uint8_t, 12> texels{255, 255, 255, 188, 188, 188, 255, 64, 0, 0, 128, 255};
+    Scene<float> s = load_gltf<float>(textured_fixture("json_texture", texels).write_gltf("json_texture"));
+    s.textures[0].wrap_v = TextureWrap::mirrored_repeat;
+    std::ostringstream text;
+    write_scene_json(text, s, SceneJsonView{});
+    const Scene<float> r = parse_scene_json<float>(text.str(), "textured.json").scene;
+    REQUIRE(r.textures.size() == 1);
+    CHECK(r.textures[0].texels == s.textures[0].texels);
+    CHECK((r.textures[0].width == 2 && r.textures[0].height == 2 && r.textures[0].nearest));
+    CHECK((r.textures[0].wrap_u == TextureWrap::repeat && r.textures[0].wrap_v == TextureWrap::mirrored_repeat));
+    CHECK(r.textures[0].source == s.textures[0].source);
+    CHECK(r.corner_uvs == s.corner_uvs);
+    CHECK(r.materials.at(0).kd_texture == 0);
+    const RenderResult a = render(s, 5), b = render(r, 5);
+    CHECK(a.image.pixels == b.image.pixels);  // the same scene, the same seed: the same image
+    const auto edited = [&](const std::string& from, const std::string& to) {
+        std::string t = text.str();
+        REQUIRE(t.find(from) != std::string::npos);
+        return t.replace(t.find(from), from.size(), to);
+    };
+    CHECK_THROWS_WITH_AS(parse_scene_json<float>(edited("\"kd_texture\": 0", "\"kd_texture\": 1"), "bad.json"),
+                         doctest::Contains("kd_texture = 1.000000 is not an integer in [-1, 0]"), Error);
+    const std::string bad = edited("\"texels\": [1", "\"texels\": [2");
+    CHECK_THROWS_WITH_AS(parse_scene_json<float>(bad, "bad.json"), doctest::Contains("texture 0: texel 0 is outside [0, 1]"), Error);
 }

@@ -200,6 +200,8 @@ def blender_build(bpy, scene_json):
     sc = bpy.context.scene
     for o in list(bpy.data.objects):  # the factory scene's cube, light and camera
         bpy.data.objects.remove(o)
+    if any(m.get('kd_texture', -1) >= 0 for m in scene_json['materials']):
+        sys.exit('peer_cycles: the scene has textured materials, which this exporter does not hand to Cycles')
     tris = np.array(scene_json['triangles'], float).reshape(-1, 3, 3)
     mesh = bpy.data.meshes.new('glint')
     mesh.from_pydata(tris.reshape(-1, 3).tolist(), [], [[3 * i, 3 * i + 1, 3 * i + 2] for i in range(len(tris))])

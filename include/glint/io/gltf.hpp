@@ -12,8 +12,10 @@
 //    mirrors, so its triangles' vertex order is swapped to keep the front face (§3.7.2.1);
 //  - meshes: primitives of mode TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN (POSITION: VEC3
 //    float; indices: unsigned byte, short or int, or none; NORMAL: VEC3 float, the scene's
-//    corner normals, flat where a primitive has none); TEXCOORD is not read; emissive triangles become area lights, one
-//    per triangle, emitting from their front face (doubleSided is ignored);
+//    corner normals, flat where a primitive has none; TEXCOORD_0: VEC2 float or normalized
+//    unsigned byte or short, the scene's corner texture coordinates); emissive triangles
+//    become area lights, one per triangle, emitting from their front face (doubleSided is
+//    ignored);
 //  - materials (base = baseColorFactor's RGB, alpha ignored; m = metallic, r = roughness,
 //    alpha = r^2 as glTF 2.0, Appendix B, defines it; F0 = 0.04 for dielectrics, ibid.):
 //      metal (m >= 0.5), r < mirror_roughness: mirror, ks = base;
@@ -24,7 +26,9 @@
 //    the glossy lobe's Phong exponent n = 2 / alpha^2 - 2 (the Phong-Beckmann correspondence
 //    of Walter et al. 2007, §5.2), clamped to [1, 10^4]; emission = emissiveFactor times
 //    KHR_materials_emissive_strength's factor times emission_scale (radiance, as Blender's
-//    exporter writes an emission strength); textures are ignored with a warning;
+//    exporter writes an emission strength); baseColorTexture (its image decoded by tinygltf,
+//    sRGB, and its sampler's filter and wrap modes: tracer/texture.hpp) multiplies kd, not ks
+//    (a mirror ignores it, with a warning); the other textures are ignored with a warning;
 //  - the first perspective camera met in the node walk: eye at the node's origin, looking
 //    down its -Z with +Y up (§3.10), fov_y = yfov; aspectRatio is returned (GltfScene::aspect);
 //  - KHR_lights_punctual point and spot lights at their node, spots along its -Z; intensity
@@ -37,7 +41,8 @@
 // Every error is a glint::Error naming the file and the item: a missing or unparsable file,
 // a node cycle, a non-finite transform, a primitive of points or lines, an accessor of the
 // wrong type, out of its buffer, sparse, with an index past the vertices or a non-finite
-// position, an emissive triangle of zero area.
+// position, an emissive triangle of zero area, an image that cannot be read, a textured
+// primitive without TEXCOORD_0.
 #pragma once
 
 #include <algorithm>
@@ -89,7 +94,12 @@ struct GltfContext {
     const GltfOptions& options;
     std::vector<std::string>& warnings;
     std::vector<std::int64_t> materials;  // glTF material -> glint material (-1: not yet added)
+    std::vector<std::int64_t> textures;   // glTF texture -> glint texture (-1: not yet added)
 };
+
+inline std::string gltf_material_where(const GltfContext& c, int index) {
+    return c.file + ": material " + std::to_string(index) + " ('" + (index >= 0 ? c.model.materials[std::size_t(index)].name : "") + "')";
+}
 
 /// A number from an extension object's field, or `fallback`.
 inline double gltf_extension_number(const tinygltf::ExtensionMap& ext, const char* name, const char* field, double fallback) {
@@ -103,7 +113,7 @@ inline double gltf_extension_number(const tinygltf::ExtensionMap& ext, const cha
 template <Scalar T>
 Material<T> gltf_material(const GltfContext& c, int index) {
     const tinygltf::Material g = index >= 0 ? c.model.materials[std::size_t(index)] : tinygltf::Material{};
-    const std::string where = c.file + ": material " + std::to_string(index) + " ('" + g.name + "')";
+    const std::string where = gltf_material_where(c, index);
     const auto& pbr = g.pbrMetallicRoughness;
     auto rgb = [&](const std::vector<double>& v, double fallback, const char* what) {
         Rgb<T> out{T(fallback)};
@@ -115,8 +125,8 @@ Material<T> gltf_material(const GltfContext& c, int index) {
     const double strength = gltf_extension_number(g.extensions, "KHR_materials_emissive_strength", "emissiveStrength", 1.0);
     const Rgb<T> emission = rgb(g.emissiveFactor, 0.0, "emissiveFactor") * T(strength * c.options.emission_scale);
     const double m = std::clamp(pbr.metallicFactor, 0.0, 1.0), r = std::clamp(pbr.roughnessFactor, 0.0, 1.0);
-    if (pbr.baseColorTexture.index >= 0 || g.emissiveTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0)
-        c.warnings.push_back(where + ": textures are ignored (the factors are used)");
+    if (g.emissiveTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0 || g.normalTexture.index >= 0)
+        c.warnings.push_back(where + ": emissive, metallic-roughness and normal textures are ignored (their factors are used)");
     const double alpha = std::max(r * r, 1e-4);
     const T n = T(std::clamp(2.0 / (alpha * alpha) - 2.0, 1.0, 1e4));
     Material<T> out;
@@ -130,14 +140,64 @@ Material<T> gltf_material(const GltfContext& c, int index) {
     return out;
 }
 
+/// The glint texture of glTF material `index`'s baseColorTexture (-1: none), added to s once
+/// per glTF texture; it multiplies kd, so a material without a diffuse part ignores it.
+template <Scalar T>
+std::int32_t gltf_base_texture(GltfContext& c, Scene<T>& s, int index, const Material<T>& m) {
+    if (index < 0) return -1;
+    const tinygltf::TextureInfo& info = c.model.materials[std::size_t(index)].pbrMetallicRoughness.baseColorTexture;
+    if (info.index < 0) return -1;
+    const std::string where = gltf_material_where(c, index);
+    if (info.texCoord != 0 || !(m.kd.max() > T(0))) {
+        c.warnings.push_back(where + ": its baseColorTexture is ignored (" +
+                             (info.texCoord != 0 ? "it reads TEXCOORD_" + std::to_string(info.texCoord) + "; glint reads TEXCOORD_0 only)"
+                                                 : "it multiplies the diffuse reflectance, which this material has not)"));
+        return -1;
+    }
+    if (c.textures.empty()) c.textures.assign(c.model.textures.size(), -1);
+    if (std::size_t(info.index) >= c.textures.size()) throw Error(where + ": texture " + std::to_string(info.index) + " does not exist");
+    std::int64_t& slot = c.textures[std::size_t(info.index)];
+    if (slot < 0) {
+        s.textures.push_back(gltf_texture<T>(c.model, info.index, where));
+        slot = std::int64_t(s.textures.size() - 1);
+    }
+    return std::int32_t(slot);
+}
+
 template <Scalar T>
 std::uint32_t gltf_material_index(GltfContext& c, Scene<T>& s, int index, const std::string& where) {
     if (index < -1 || index >= int(c.model.materials.size()))
         throw Error(where + ": material " + std::to_string(index) + " does not exist");
     const std::size_t slot = std::size_t(index + 1);  // slot 0: the default material
     if (c.materials.empty()) c.materials.assign(c.model.materials.size() + 1, -1);
-    if (c.materials[slot] < 0) c.materials[slot] = s.add_material(gltf_material<T>(c, index));
+    if (c.materials[slot] < 0) {
+        Material<T> m = gltf_material<T>(c, index);
+        m.kd_texture = gltf_base_texture(c, s, index, m);
+        c.materials[slot] = s.add_material(m);
+    }
     return std::uint32_t(c.materials[slot]);
+}
+
+/// The texture coordinates of a primitive's triangles (the last `tris.size()` of s) from its
+/// TEXCOORD_0 accessor (-1: none, an error where its material is textured); a scene whose
+/// primitives differ in having them gives the others (0, 0).
+template <Scalar T>
+void gltf_add_uvs(const GltfContext& c, Scene<T>& s, int accessor, std::size_t vertices, const std::vector<std::array<std::uint32_t, 3>>& tris,
+                  bool mirrored, bool textured, const std::string& where) {
+    if (accessor < 0) {
+        if (textured) throw Error(where + ": its material has a baseColorTexture but the primitive has no TEXCOORD_0");
+        if (!s.corner_uvs.empty()) s.fill_corner_uvs();
+        return;
+    }
+    const std::vector<glm::dvec2> uv = gltf_vec2s(c.model, accessor, where);
+    if (uv.size() != vertices)
+        throw Error(where + ": " + std::to_string(uv.size()) + " texture coordinates for " + std::to_string(vertices) + " positions");
+    s.fill_corner_uvs(s.triangles.size() - tris.size());
+    for (const auto& t : tris) {
+        std::array<Vec2<T>, 3> corner{Vec2<T>(uv[t[0]]), Vec2<T>(uv[t[1]]), Vec2<T>(uv[t[2]])};
+        if (mirrored) std::swap(corner[1], corner[2]);
+        s.corner_uvs.push_back(corner);
+    }
 }
 
 /// The corner normals of a primitive's triangles (the last `tris.size()` of s) from its
@@ -188,8 +248,10 @@ void gltf_add_mesh(GltfContext& c, Scene<T>& s, int mesh, const glm::dmat4& worl
                 throw Error(where + ": emissive triangle " + std::to_string(t) + " has zero area");
             s.add_polygon(tri, m);
         }
-        const auto normal = prims[p].attributes.find("NORMAL");
+        const auto normal = prims[p].attributes.find("NORMAL"), uv = prims[p].attributes.find("TEXCOORD_0");
         gltf_add_normals(c, s, normal == prims[p].attributes.end() ? -1 : normal->second, v.size(), tris, world, where);
+        gltf_add_uvs(c, s, uv == prims[p].attributes.end() ? -1 : uv->second, v.size(), tris, mirrored,
+                     s.materials[m].kd_texture >= 0, where);
     }
 }
 
@@ -287,7 +349,7 @@ GltfScene<T> read_gltf(const std::string& path, const GltfOptions& options = {})
     const tinygltf::Model model = detail::gltf_read_model(path);
     GltfScene<T> out;
     out.scene.name = path;
-    detail::GltfContext c{model, path, options, out.warnings, {}};
+    detail::GltfContext c{model, path, options, out.warnings, {}, {}};
     std::vector<int> stack;
     for (int root : detail::gltf_roots(model, path)) detail::gltf_visit(c, out, root, glm::dmat4(1.0), stack);
     if (out.scene.triangles.empty()) throw Error("load_gltf(" + path + "): the scene has no triangles");

@@ -1,8 +1,9 @@
 // glint/io/gltf_accessors.hpp: the parts of a glTF 2.0 file that io/gltf.hpp reads before it
 // builds a scene: the model through tinygltf, a node's local matrix, and a primitive's
-// accessors (positions, normals, indices, triangles of each primitive mode), each checked to
-// lie inside its buffer and to hold what glTF 2.0 says it holds. Errors name the file, the
-// mesh, primitive and accessor, and the element.
+// accessors (positions, normals, texture coordinates, indices, triangles of each primitive
+// mode), each checked to lie inside its buffer and to hold what glTF 2.0 says it holds, and a
+// texture's decoded image. Errors name the file, the mesh, primitive and accessor, and the
+// element.
 #pragma once
 
 #include <array>
@@ -19,15 +20,13 @@
 
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
+#include <glint/tracer/texture.hpp>
 
 namespace glint::detail {
 
 inline tinygltf::Model gltf_read_model(const std::string& path) {
     if (!std::ifstream(path, std::ios::binary)) throw Error("load_gltf(" + path + "): cannot read the file");
-    tinygltf::TinyGLTF loader;
-    // Textures are not used: their images are neither decoded nor required to exist.
-    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
-                             void*) { return true; }, nullptr);
+    tinygltf::TinyGLTF loader;  // decodes the images (PNG, JPEG) by its own stb_image
     tinygltf::Model model;
     std::string err, warn;
     const bool glb = path.size() >= 4 && path.compare(path.size() - 4, 4, ".glb") == 0;
@@ -68,7 +67,8 @@ inline GltfElements gltf_elements(const tinygltf::Model& model, int index, int t
     const tinygltf::Accessor& a = model.accessors[std::size_t(index)];
     if (a.sparse.isSparse) throw Error(at + ": sparse accessors are not supported");
     if (a.type != type)
-        throw Error(at + ": expected type " + (type == TINYGLTF_TYPE_VEC3 ? "VEC3" : "SCALAR") + ", got type code " + std::to_string(a.type));
+        throw Error(at + ": expected type " + (type == TINYGLTF_TYPE_VEC3 ? "VEC3" : type == TINYGLTF_TYPE_VEC2 ? "VEC2" : "SCALAR") +
+                    ", got type code " + std::to_string(a.type));
     if (a.bufferView < 0 || std::size_t(a.bufferView) >= model.bufferViews.size()) throw Error(at + ": no buffer view");
     const tinygltf::BufferView& v = model.bufferViews[std::size_t(a.bufferView)];
     if (v.buffer < 0 || std::size_t(v.buffer) >= model.buffers.size()) throw Error(at + ": its buffer view has no buffer");
@@ -97,6 +97,65 @@ inline std::vector<glm::dvec3> gltf_vec3s(const tinygltf::Model& model, int inde
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
             throw Error(at + ": " + (what == "NORMAL" ? "normal " : "position ") + std::to_string(i) + " is not finite");
         out[i] = glm::dvec3(p[0], p[1], p[2]);
+    }
+    return out;
+}
+
+/// A primitive's TEXCOORD_0 attribute: finite VEC2s of floats, or of normalized unsigned
+/// bytes or shorts (glTF 2.0, §3.7.2.1).
+inline std::vector<glm::dvec2> gltf_vec2s(const tinygltf::Model& model, int index, const std::string& where) {
+    const GltfElements e = gltf_elements(model, index, TINYGLTF_TYPE_VEC2, where + ", TEXCOORD_0");
+    const std::string at = where + ", TEXCOORD_0 accessor " + std::to_string(index);
+    std::vector<glm::dvec2> out(e.count);
+    for (std::size_t i = 0; i < e.count; ++i) {
+        const unsigned char* p = e.data + i * e.stride;
+        if (e.component == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+            float f[2];
+            std::memcpy(f, p, sizeof(f));
+            if (!std::isfinite(f[0]) || !std::isfinite(f[1])) throw Error(at + ": coordinate " + std::to_string(i) + " is not finite");
+            out[i] = glm::dvec2(f[0], f[1]);
+        } else if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+            out[i] = glm::dvec2(p[0], p[1]) / 255.0;
+        } else if (e.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+            std::uint16_t u[2];
+            std::memcpy(u, p, sizeof(u));
+            out[i] = glm::dvec2(u[0], u[1]) / 65535.0;
+        } else {
+            throw Error(at + ": its elements must be floats, or normalized unsigned bytes or shorts");
+        }
+    }
+    return out;
+}
+
+/// glTF texture `index` (its image decoded by tinygltf, 8 or 16 bits per channel, taken as
+/// sRGB as base colour is, glTF 2.0 §3.9.2; its sampler's filter and wrap modes) as a glint
+/// texture; `where` names the material.
+template <Scalar T>
+Texture<T> gltf_texture(const tinygltf::Model& model, int index, const std::string& where) {
+    const std::string at = where + ": texture " + std::to_string(index);
+    if (index < 0 || std::size_t(index) >= model.textures.size()) throw Error(at + " does not exist");
+    const tinygltf::Texture& t = model.textures[std::size_t(index)];
+    if (t.source < 0 || std::size_t(t.source) >= model.images.size()) throw Error(at + ": image " + std::to_string(t.source) + " does not exist");
+    const tinygltf::Image& im = model.images[std::size_t(t.source)];
+    const std::string name = at + " (image " + std::to_string(t.source) + " '" + (im.uri.size() < 200 ? im.uri : im.name) + "')";
+    if ((im.bits != 8 && im.bits != 16) || im.component < 1 || im.component > 4 || im.width <= 0 || im.height <= 0 ||
+        im.image.size() != std::size_t(im.width) * std::size_t(im.height) * std::size_t(im.component) * std::size_t(im.bits / 8))
+        throw Error(name + ": not a decoded 8- or 16-bit image of 1 to 4 channels");
+    std::vector<std::uint8_t> bytes(std::size_t(im.width) * std::size_t(im.height) * std::size_t(im.component));
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+        if (im.bits == 8) bytes[i] = im.image[i];
+        else bytes[i] = std::uint8_t((unsigned(im.image[2 * i]) | unsigned(im.image[2 * i + 1]) << 8) / 257u);  // little endian
+    }
+    Texture<T> out = Texture<T>::from_srgb8(im.width, im.height, im.component, bytes);
+    out.source = im.uri.size() < 200 ? im.uri : "image " + std::to_string(t.source);
+    if (t.sampler >= 0 && std::size_t(t.sampler) < model.samplers.size()) {
+        const tinygltf::Sampler& s = model.samplers[std::size_t(t.sampler)];
+        out.nearest = s.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+        const auto wrap = [](int mode) {
+            return mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE ? TextureWrap::clamp
+                 : mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? TextureWrap::mirrored_repeat : TextureWrap::repeat;
+        };
+        out.wrap_u = wrap(s.wrapS), out.wrap_v = wrap(s.wrapT);
     }
     return out;
 }

@@ -3,9 +3,12 @@
 //
 // Written: the triangles (three vertices each, in the tracer's order, whose vertex order
 // gives the geometric normal and so an emitter's front face), their corner (shading) normals
-// where the scene has them (corner_normals, nine numbers per triangle like "triangles"), the
+// where the scene has them (corner_normals, nine numbers per triangle like "triangles"), their
+// texture coordinates where it has them (corner_uvs, six numbers per triangle), the
 // material of each triangle (material_of) and its area light (light_of, -1 for none),
-// the materials (kind, kd, ks, Phong exponent, emission, ior: the model of
+// the textures (width, height, filter, wrap, source, and every linear texel, row after row:
+// a texture reads back exactly without its image file), the materials (kind, kd, ks, Phong
+// exponent, emission, ior, and kd_texture where kd has one: the model of
 // glint/tracer/scene.hpp), the area lights (polygon, emission, unit normal, area), the point
 // lights (kind isotropic | spot | cosine, position, intensity, axis, cos_outer, cos_inner:
 // glint/lights/light.hpp), the pinhole camera (eye, target, up, full vertical field of view
@@ -132,6 +135,7 @@ void json_materials(std::ostream& out, const Scene<T>& s) {
         json_field(out, "exponent", m.exponent);
         json_field(out, "emission", m.emission);
         json_field(out, "ior", m.ior);
+        if (m.kd_texture >= 0) out << ", \"kd_texture\": " << m.kd_texture;
     });
 }
 
@@ -166,24 +170,45 @@ void json_integers(std::ostream& out, const std::vector<Int>& v) {
     out << ']';
 }
 
-/// Member `name`: one row of nine numbers per triangle (three points or three vectors).
-template <Scalar T>
-void json_corner_rows(std::ostream& out, const char* name, const std::vector<std::array<Vec3<T>, 3>>& rows) {
+/// Member `name`: one row per triangle of its three corners' vectors (points, normals: nine
+/// numbers; texture coordinates: six).
+template <class V>
+void json_corner_rows(std::ostream& out, const char* name, const std::vector<std::array<V, 3>>& rows) {
+    constexpr int n = V::length();
     out << "  \"" << name << "\": [\n";
     for (std::size_t i = 0; i < rows.size(); ++i) {
-        const auto& t = rows[i];
-        const T a[9] = {t[0].x, t[0].y, t[0].z, t[1].x, t[1].y, t[1].z, t[2].x, t[2].y, t[2].z};
+        typename V::value_type a[3 * n];
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < n; ++c) a[n * k + c] = rows[i][std::size_t(k)][c];
         out << "    ";
-        json_numbers(out, a, 9, name);
+        json_numbers(out, a, 3 * n, name);
         out << (i + 1 < rows.size() ? ",\n" : "\n");
     }
     out << "  ],\n";
+}
+
+inline const char* texture_wrap_name(TextureWrap w) {
+    return w == TextureWrap::clamp ? "clamp" : w == TextureWrap::mirrored_repeat ? "mirrored_repeat" : "repeat";
+}
+
+template <Scalar T>
+void json_textures(std::ostream& out, const Scene<T>& s) {
+    json_objects(out, "textures", s.textures, [&](const Texture<T>& t) {
+        out << "\"width\": " << t.width << ", \"height\": " << t.height << ", \"filter\": \"" << (t.nearest ? "nearest" : "linear")
+            << "\", \"wrap\": [\"" << texture_wrap_name(t.wrap_u) << "\", \"" << texture_wrap_name(t.wrap_v) << "\"], \"source\": ";
+        json_string(out, t.source);
+        std::vector<T> texels;
+        for (const Rgb<T>& c : t.texels) texels.insert(texels.end(), {c[0], c[1], c[2]});
+        out << ", \"texels\": ";
+        json_numbers(out, texels.data(), texels.size(), "texels");
+    });
 }
 
 template <Scalar T>
 void json_triangles(std::ostream& out, const Scene<T>& s) {
     json_corner_rows(out, "triangles", s.triangles);
     if (!s.corner_normals.empty()) json_corner_rows(out, "corner_normals", s.corner_normals);
+    if (!s.corner_uvs.empty()) json_corner_rows(out, "corner_uvs", s.corner_uvs);
     out << "  \"material_of\": ";
     json_integers(out, s.material_of);
     out << ",\n  \"light_of\": ";
@@ -213,6 +238,7 @@ void write_scene_json(std::ostream& out, const Scene<T>& s, const SceneJsonView&
     detail::json_field(out, "up", s.camera.up);
     detail::json_field(out, "fov_y", s.camera.fov_y);
     out << "},\n";
+    if (!s.textures.empty()) detail::json_textures(out, s);
     detail::json_materials(out, s);
     detail::json_lights(out, s);
     detail::json_triangles(out, s);

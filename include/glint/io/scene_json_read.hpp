@@ -1,7 +1,7 @@
 // glint/io/scene_json_read.hpp: reads back the JSON that io/scene_json.hpp writes (glint-render
 // --export-scene), so that a built scene is a file: the camera, the materials, the area and
-// point lights, the triangles with their materials and area lights, the image size and the
-// path-length cap. A float scene reads back exactly (9 significant digits round-trip every
+// point lights, the triangles with their materials and area lights, corner normals, texture
+// coordinates and textures where the file has them, the image size and the path-length cap. A float scene reads back exactly (9 significant digits round-trip every
 // float); a double scene to 9 digits.
 //
 // A hand-written scene may also name meshes by path: "meshes": [{"path": "bunny.obj",
@@ -102,7 +102,39 @@ struct SceneJsonReader {
 };
 
 template <Scalar T>
+void read_json_textures(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& s) {
+    const JsonValue* textures = doc.find("textures");
+    if (!textures) return;
+    if (textures->kind != JsonValue::Kind::array) r.fail(*textures, "textures must be an array");
+    for (const JsonValue& t : textures->items) {
+        Texture<T> tex;
+        tex.width = int(r.integer(r.member(t, "width", JsonValue::Kind::number), "width", 1, 1 << 16));
+        tex.height = int(r.integer(r.member(t, "height", JsonValue::Kind::number), "height", 1, 1 << 16));
+        tex.nearest = r.name(t, "filter", {"linear", "nearest"}) == "nearest";
+        const JsonValue& wrap = r.member(t, "wrap", JsonValue::Kind::array);
+        if (wrap.items.size() != 2) r.fail(wrap, "wrap needs two modes (u, v)");
+        for (std::size_t k = 0; k < 2; ++k) {
+            const std::string& w = wrap.items[k].string;
+            if (wrap.items[k].kind != JsonValue::Kind::string || (w != "repeat" && w != "mirrored_repeat" && w != "clamp"))
+                r.fail(wrap.items[k], "a wrap mode is not one of repeat, mirrored_repeat, clamp");
+            (k ? tex.wrap_v : tex.wrap_u) = w == "clamp" ? TextureWrap::clamp : w == "repeat" ? TextureWrap::repeat : TextureWrap::mirrored_repeat;
+        }
+        if (const JsonValue* source = t.find("source"); source && source->kind == JsonValue::Kind::string) tex.source = source->string;
+        std::vector<T> texels(std::size_t(tex.width) * std::size_t(tex.height) * 3);
+        r.numbers(r.member(t, "texels", JsonValue::Kind::array), texels.data(), texels.size(), "texels");
+        for (std::size_t i = 0; i < texels.size(); i += 3) tex.texels.emplace_back(texels[i], texels[i + 1], texels[i + 2]);
+        try {
+            tex.validate("texture " + std::to_string(s.textures.size()));
+        } catch (const Error& e) {
+            r.fail(t, e.what());
+        }
+        s.textures.push_back(std::move(tex));
+    }
+}
+
+template <Scalar T>
 void read_json_materials(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& s) {
+    read_json_textures(r, doc, s);
     for (const JsonValue& m : r.member(doc, "materials", JsonValue::Kind::array).items) {
         const std::string kind = r.name(m, "kind", {"lambertian", "glossy", "mirror", "dielectric"});
         Material<T> mat;
@@ -116,6 +148,8 @@ void read_json_materials(const SceneJsonReader& r, const JsonValue& doc, Scene<T
         mat.emission = r.rgb<T>(m, "emission");
         mat.ior = T(r.field(m, "ior"));
         if (mat.kd.min() < T(0) || mat.ks.min() < T(0) || mat.emission.min() < T(0)) r.fail(m, "a material has a negative colour");
+        if (const JsonValue* k = m.find("kd_texture"))
+            mat.kd_texture = std::int32_t(r.integer(*k, "kd_texture", -1, (long long)s.textures.size() - 1));
         s.add_material(mat);
     }
 }
@@ -166,6 +200,26 @@ void rebuild_light_of(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& 
     }
 }
 
+/// The optional member `key`: one row per triangle of its corners' vectors (V: Vec3 for
+/// normals, nine numbers a row; Vec2 for texture coordinates, six), appended to `out`.
+template <class V>
+void read_json_corner_rows(const SceneJsonReader& r, const JsonValue& doc, const char* key, std::size_t triangles,
+                           std::vector<std::array<V, 3>>& out) {
+    constexpr int n = V::length();
+    const JsonValue* rows = doc.find(key);
+    if (!rows) return;
+    if (rows->kind != JsonValue::Kind::array || rows->items.size() != triangles)
+        r.fail(*rows, std::string(key) + " needs one entry (" + (n == 3 ? "nine" : "six") + " numbers) per triangle");
+    for (const JsonValue& row : rows->items) {
+        typename V::value_type a[3 * n];
+        r.numbers(row, a, 3 * n, key);
+        std::array<V, 3> corners;
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < n; ++c) corners[std::size_t(k)][c] = a[n * k + c];
+        out.push_back(corners);
+    }
+}
+
 template <Scalar T>
 void read_json_triangles(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& s) {
     if (!doc.find("triangles") && doc.find("meshes")) return;
@@ -179,15 +233,8 @@ void read_json_triangles(const SceneJsonReader& r, const JsonValue& doc, Scene<T
         s.triangles.push_back({Vec3<T>(a[0], a[1], a[2]), Vec3<T>(a[3], a[4], a[5]), Vec3<T>(a[6], a[7], a[8])});
         s.material_of.push_back(std::uint32_t(r.integer(mats[i], "material_of", 0, (long long)s.materials.size() - 1)));
     }
-    if (const JsonValue* normals = doc.find("corner_normals")) {
-        if (normals->kind != JsonValue::Kind::array || normals->items.size() != tris.size())
-            r.fail(*normals, "corner_normals needs one entry (nine numbers) per triangle");
-        for (const JsonValue& n : normals->items) {
-            T a[9];
-            r.numbers(n, a, 9, "corner_normals");
-            s.corner_normals.push_back({Vec3<T>(a[0], a[1], a[2]), Vec3<T>(a[3], a[4], a[5]), Vec3<T>(a[6], a[7], a[8])});
-        }
-    }
+    read_json_corner_rows(r, doc, "corner_normals", tris.size(), s.corner_normals);
+    read_json_corner_rows(r, doc, "corner_uvs", tris.size(), s.corner_uvs);
     s.light_of.assign(tris.size(), -1);
     const JsonValue* lights = doc.find("light_of");
     if (!lights) return rebuild_light_of(r, doc, s);
@@ -220,6 +267,7 @@ void read_json_meshes(const SceneJsonReader& r, const JsonValue& doc, Scene<T>& 
         }
         for (const auto& c : obj.normals) s.corner_normals.push_back({Vec3<T>(c[0]), Vec3<T>(c[1]), Vec3<T>(c[2])});
         if (normals) s.fill_corner_normals();  // this mesh's, flat where it has none
+        if (!s.corner_uvs.empty()) s.fill_corner_uvs();  // the OBJ's texture coordinates are not read
     }
 }
 

@@ -133,7 +133,7 @@ bool lie_camera_point(const Scene<T>& scene, const A& accel, const Ray<T>& ray, 
                       ShadingPoint<T>& sp) {
     StoreHit<T> hit;
     if (!accel.closest_hit(ray, hit)) return false;
-    const Material<T>& m = scene.materials[scene.material_of[hit.id]];
+    const Material<T> m = scene.material_at(hit.id, hit.u, hit.v);
     if (m.specular()) return false;
     sp = shading_point(scene, hit, scene.normal(hit.id), ray.direction);
     brdf.emplace(m, sp.frame.to_local(-ray.direction));

@@ -115,6 +115,7 @@ public:
                         const PhotonMapSettings& st)
         : scene_(s), accel_(accel), direct_(direct), maps_(maps), st_(st), estimate_(st.estimate()) {
         st.validate();
+        s.require_untextured("glint::PhotonMapIntegrator");
     }
 
     /// A fresh, empty kNN scratch for one rendering thread.

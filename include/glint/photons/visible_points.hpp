@@ -141,7 +141,9 @@ public:
     /// The camera pass over s through `accel` with direct-lighting policy `direct`, following
     /// up to max_specular specular vertices; all three are kept by reference and must outlive it.
     VisiblePointIntegrator(const Scene<T>& s, const A& accel, const D& direct, int max_specular)
-        : scene_(s), accel_(accel), direct_(direct), max_specular_(max_specular) {}
+        : scene_(s), accel_(accel), direct_(direct), max_specular_(max_specular) {
+        s.require_untextured("glint::VisiblePointIntegrator");
+    }
 
     /// One pixel sample: emission met plus direct light at the visible point, which is left in
     /// `state`; with the rays traced.

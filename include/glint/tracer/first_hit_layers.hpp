@@ -74,7 +74,7 @@ public:
         state.normal += n;
         state.depth += hit.t * glm::length(ray.direction);
         ++state.hits;
-        const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
+        const Material<T> m = scene_.material_at(hit.id, hit.u, hit.v);
         for (std::size_t c = 0; c < 3; ++c) out.L[c] = std::min(m.kd[c] + m.ks[c], T(1));
         return out;
     }

@@ -68,7 +68,7 @@ void light_walk(const Scene<T>& s, const A& accel, const R& roulette, Ray<T> ray
     for (int depth = first_depth; depth < max_depth; ++depth) {
         StoreHit<T> hit;
         if (!accel.closest_hit(ray, hit)) return;
-        const Material<T>& m = s.materials[s.material_of[hit.id]];
+        const Material<T> m = s.material_at(hit.id, hit.u, hit.v);
         const Vec3<T> ng = s.normal(hit.id);
         const Vec3<T> n = glm::dot(ng, ray.direction) < T(0) ? ng : -ng;
         const Vec3<T> x = ray.at(hit.t);

@@ -139,7 +139,7 @@ private:
         Queries queries(accel_);
         StoreHit<T> hit;
         if (!queries.closest_hit(ray, hit)) return;
-        const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
+        const Material<T> m = scene_.material_at(hit.id, hit.u, hit.v);
         if (m.specular()) return;
         ShadingPoint<T> sp = shading_point(scene_, hit, scene_.normal(hit.id), ray.direction);
         const Frame<T>& frame = sp.frame;
@@ -170,7 +170,7 @@ private:
                 if (features_.environment) out.L += F * env_.escaped(ray.direction, from);
                 break;
             }
-            const Material<T>& m = scene_.materials[scene_.material_of[hit.id]];
+            const Material<T> m = scene_.material_at(hit.id, hit.u, hit.v);
             const Vec3<T> g = scene_.normal(hit.id);
             const bool front = glm::dot(g, ray.direction) < T(0);
             const ShadingPoint<T> sp = shading_point(scene_, hit, g, ray.direction);

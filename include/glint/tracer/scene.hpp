@@ -9,7 +9,8 @@
 //               the two-lobe BRDF of Szécsi 2009's BRDF-selection experiments (§2.1, Fig. 2.1);
 //   mirror      ideal reflection with reflectance ks;
 //   dielectric  ideal refraction and reflection with Fresnel weights (index ior).
-// Any material may emit (emission = radiance leaving the front face).
+// Any material may emit (emission = radiance leaving the front face). A material's kd may be
+// multiplied by a texture (tracer/texture.hpp) at the hit's texture coordinates: material_at().
 #pragma once
 
 #include <algorithm>
@@ -30,6 +31,7 @@
 #include <glint/intersection/triangle.hpp>
 #include <glint/lights/light.hpp>
 #include <glint/tracer/environment.hpp>
+#include <glint/tracer/texture.hpp>
 
 namespace glint {
 
@@ -44,6 +46,8 @@ struct Material {
     T exponent = T(20);     ///< Glossy lobe exponent; larger is sharper.
     Rgb<T> emission{T(0)};  ///< Emitted radiance per band; zero for a non-emitter.
     T ior = T(1.5);         ///< Index of refraction of a dielectric (relative to outside).
+    /// Index into Scene::textures of the texture kd is multiplied by (the base colour), or -1.
+    std::int32_t kd_texture = -1;
 
     /// Whether the material emits (any band of `emission` above zero).
     bool emissive() const { return emission.max() > T(0); }
@@ -103,6 +107,10 @@ public:
     /// its vertices; empty where the scene has none (then it is shaded with the geometric
     /// normal). See shading_normal().
     std::vector<std::array<Vec3<T>, 3>> corner_normals;
+    /// Per triangle, the texture coordinates of its three corners, in the order of its
+    /// vertices; empty where the scene has none. See texcoord().
+    std::vector<std::array<Vec2<T>, 3>> corner_uvs;
+    std::vector<Texture<T>> textures;  ///< Images the materials' kd_texture refer to.
     std::vector<std::uint32_t> material_of;  ///< Per triangle: index into `materials`.
     std::vector<Material<T>> materials;  ///< Materials the triangles refer to.
     std::vector<AreaLight<T>> area_lights;  ///< Emitting polygons, each made of scene triangles.
@@ -163,6 +171,29 @@ public:
                 if (!(std::abs(glm::length(c) - T(1)) < T(1e-3)))
                     throw Error("scene '" + name + "': triangle " + std::to_string(i) + " has a corner normal of length " +
                                 std::to_string(glm::length(c)) + " (unit normals are needed)");
+        validate_textures();
+    }
+
+    /// Checks the texture coordinates, the textures and the materials' references to them.
+    void validate_textures() const {
+        const std::string where = "scene '" + name + "': ";
+        if (!corner_uvs.empty() && corner_uvs.size() != triangles.size())
+            throw Error(where + std::to_string(corner_uvs.size()) + " triangles' texture coordinates for " +
+                        std::to_string(triangles.size()) + " triangles");
+        for (std::size_t i = 0; i < corner_uvs.size(); ++i)
+            for (const Vec2<T>& c : corner_uvs[i])
+                if (!(std::isfinite(c.x) && std::isfinite(c.y)))
+                    throw Error(where + "triangle " + std::to_string(i) + " has a texture coordinate that is not finite");
+        for (std::size_t t = 0; t < textures.size(); ++t)
+            textures[t].validate(where + "texture " + std::to_string(t) + " ('" + textures[t].source + "')");
+        for (std::size_t m = 0; m < materials.size(); ++m) {
+            const std::int32_t k = materials[m].kd_texture;
+            if (k < -1 || k >= std::int32_t(textures.size()))
+                throw Error(where + "material " + std::to_string(m) + " refers to texture " + std::to_string(k) + " of " +
+                            std::to_string(textures.size()));
+            if (k >= 0 && corner_uvs.empty())
+                throw Error(where + "material " + std::to_string(m) + " has a texture but no triangle has texture coordinates");
+        }
     }
 
     /// Which capabilities the scene uses (scans materials and lights; linear cost).
@@ -174,7 +205,7 @@ public:
         auto grey = [](const Rgb<T>& s) { return s[0] == s[1] && s[1] == s[2]; };
         for (const auto& m : materials) {
             f.specular |= m.specular();
-            f.grey &= grey(m.kd) && grey(m.ks);
+            f.grey &= grey(m.kd) && grey(m.ks) && (m.kd_texture < 0 || textures[std::size_t(m.kd_texture)].grey());
         }
         return f;
     }
@@ -193,6 +224,37 @@ public:
             const Vec3<T> g = normal(corner_normals.size());
             corner_normals.push_back({g, g, g});
         }
+    }
+
+    /// Gives the triangles that have no texture coordinates yet, up to triangle `end`, the
+    /// coordinates (0, 0) at every corner (as fill_corner_normals does for normals).
+    void fill_corner_uvs(std::size_t end = std::size_t(-1)) {
+        corner_uvs.resize(std::max(corner_uvs.size(), std::min(end, triangles.size())));
+    }
+
+    /// The texture coordinates at barycentrics (u, v) of triangle i, interpolated from its
+    /// corners; (0, 0) where the scene has none.
+    Vec2<T> texcoord(std::size_t i, T u, T v) const {
+        if (corner_uvs.empty()) return Vec2<T>(T(0));
+        const auto& c = corner_uvs[i];
+        return c[0] * (T(1) - u - v) + c[1] * u + c[2] * v;
+    }
+
+    /// The material of triangle i at barycentrics (u, v): materials[material_of[i]], its kd
+    /// multiplied by its texture (Material::kd_texture) at the point's texture coordinates.
+    [[gnu::always_inline]] Material<T> material_at(std::size_t i, T u, T v) const {
+        Material<T> m = materials[material_of[i]];
+        if (m.kd_texture >= 0) m.kd *= textures[std::size_t(m.kd_texture)].lookup(texcoord(i, u, v));
+        return m;
+    }
+
+    /// Throws glint::Error naming `who` if some material has a texture: for the integrators
+    /// that keep a material by its index (photon maps, VPLs), which would shade untextured.
+    void require_untextured(const std::string& who) const {
+        for (std::size_t m = 0; m < materials.size(); ++m)
+            if (materials[m].kd_texture >= 0)
+                throw Error(who + ": scene '" + name + "' has a textured material (" + std::to_string(m) +
+                            "); textures are applied by the path tracer only");
     }
 
     /// The shading normal at barycentrics (u, v) of triangle i (the point (1 - u - v) v0 +
@@ -220,7 +282,7 @@ public:
             const T a = glm::length(glm::cross(t[1] - t[0], t[2] - t[0])) * T(0.5);
             const Material<T>& m = materials[material_of[i]];
             area += a;
-            mean_albedo += (m.kd + m.ks) * a;
+            mean_albedo += (m.kd * (m.kd_texture < 0 ? Rgb<T>(T(1)) : textures[std::size_t(m.kd_texture)].mean()) + m.ks) * a;
         }
         if (area > T(0)) mean_albedo /= area;
         mean_albedo = min(mean_albedo, Rgb<T>(T(0.999)));

@@ -59,6 +59,7 @@ public:
         : scene_(s), accel_(accel), lights_(s), vpls_(vpls, st), visibility_(visibility), st_(st),
           d2min_(T(st.min_distance * st.min_distance)) {
         st.validate();
+        s.require_untextured("glint::VplIntegrator");
     }
 
     /// A copy of the visibility policy for one rendering thread.
@@ -171,7 +172,9 @@ public:
     /// Points of `s` found through `accel`, following at most max_specular mirror or dielectric
     /// vertices; both must outlive the integrator.
     PixelPointIntegrator(const Scene<T>& s, const A& accel, int max_specular)
-        : scene_(s), accel_(accel), max_specular_(max_specular) {}
+        : scene_(s), accel_(accel), max_specular_(max_specular) {
+        s.require_untextured("glint::PixelPointIntegrator");
+    }
 
     /// Stores the point `ray` sees in `state` and returns the emission seen on the way.
     template <class S>
