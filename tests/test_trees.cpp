@@ -28,13 +28,16 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <map>
 #include <random>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -969,6 +972,36 @@ TEST_CASE("wide BVH: the tree does not depend on the thread count") {
         CHECK(std::memcmp(other->nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
     }
     CHECK(one.stats().nodes > 100);
+}
+
+TEST_CASE("wide BVH: a host's executor runs the build's parallel splits; the tree is the one-thread tree") {
+    const Mesh<float> m = make_torus_knot<float>(400, 32);
+    const auto boxes = triangle_boxes(m);
+    std::atomic<int> calls{0}, tasks{0};
+    // Tasks one after another, last first; and each task on a std::thread of the host's.
+    const Executor serial = [&](int n, const std::function<void(int)>& task) {
+        ++calls;
+        for (int i = n - 1; i >= 0; --i) ++tasks, task(i);
+    };
+    const Executor threaded = [&](int n, const std::function<void(int)>& task) {
+        ++calls;
+        std::vector<std::thread> pool;
+        for (int i = 0; i < n; ++i) pool.emplace_back([&, i] { ++tasks, task(i); });
+        for (auto& t : pool) t.join();
+    };
+    for (const bool spatial : {false, true}) {
+        const WideBvh<8> one(boxes, {.threads = 1, .spatial_splits = spatial});
+        for (const Executor* e : {&serial, &threaded}) {
+            calls = 0, tasks = 0;
+            const WideBvh<8> t(boxes, {.threads = 1, .executor = *e, .spatial_splits = spatial});
+            INFO("spatial splits " << spatial << ", executor " << (e == &serial ? "serial" : "threaded") << ": " << calls << " calls");
+            CHECK(calls > 2);  // the knot's large nodes went through it
+            CHECK(tasks == 2 * calls);
+            REQUIRE(t.nodes().size() == one.nodes().size());
+            CHECK(t.prims() == one.prims());
+            CHECK(std::memcmp(t.nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
+        }
+    }
 }
 
 template <int N>

@@ -24,6 +24,7 @@
 
 #include <glint/core/aabb.hpp>
 #include <glint/core/error.hpp>
+#include <glint/core/parallel.hpp>
 #include <glint/core/math.hpp>
 
 namespace glint {
@@ -41,6 +42,12 @@ struct BvhBuildOptions {
     std::uint32_t max_leaf = 16;     ///< At most this many primitives per leaf (1 ... 16).
     std::uint32_t bins = 16;         ///< Centre bins per axis (2 ... 64).
     unsigned threads = 1;            ///< Build threads; 0: std::thread::hardware_concurrency().
+    /// A host's executor (core/parallel.hpp) for the build's parallel part: a large node's two
+    /// children run as executor(2, task) instead of one on a std::thread of glint's, and
+    /// `threads` is not read. Tasks call the executor again (the recursion), so it must allow
+    /// nested calls (TBB's parallel_for and work-stealing pools do; a fixed pool whose worker
+    /// blocks on a task queued behind it deadlocks). The tree does not depend on it.
+    Executor executor{};
     WideNodeOrder node_order = WideNodeOrder::depth_first;  ///< The wide nodes' order in memory.
     float wide_node_cost = 1.0f;     ///< C_N, per wide node, in the wide collapse (wide_collapse.hpp); finite, >= 0.
     /// Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node

@@ -15,9 +15,8 @@
 // alpha times the root's area, the node's box is also binned by position, each reference
 // chopped into the bins it spans and clipped exactly to them (clip_triangle: the triangle
 // polygon against the bin's planes), and a plane that cuts references in two wins when its
-// SAH cost is lower; a reference then sits on both sides, each piece bounded by its part
-// of the primitive. The references grow to at most spatial_budget times the primitives.
-// Node slots: binary_bvh.hpp.
+// SAH cost is lower; a reference then sits on both sides, each piece bounded by its part of
+// the primitive, references at most spatial_budget times the primitives. Slots: binary_bvh.hpp.
 #pragma once
 
 #include <algorithm>
@@ -152,14 +151,15 @@ private:
     struct Range {
         std::uint32_t slot, b, e, cap;
     };
-    /// Runs the two children, the left one on a thread of its own when the subtree is
-    /// large and a thread is free (the tree does not depend on which runs where). A thread
-    /// gives its token back as soon as its subtree is done, and so does the waiting parent
-    /// until the join, so that the side still at work can split its own large subtrees off
-    /// again (uneven splits).
+    /// Runs the two children; a large subtree's through the host's executor if given, else
+    /// the left on a thread of its own if one is free (the tree does not depend on which
+    /// runs where). A thread, and the waiting parent until the join, give the token back
+    /// once done, so that the side still at work can split off again (uneven splits).
     void recurse(const Range& l, const AABB<float>& lb, const Range& r, const AABB<float>& rb) {
         constexpr std::uint32_t parallel_min = 4096;
         const bool large = (l.e - l.b) + (r.e - r.b) >= parallel_min;
+        if (large && opt_.executor)  // the host's threads run both (BvhBuildOptions::executor)
+            return opt_.executor(2, [&](int i) { i == 0 ? node(l.slot, l.b, l.e, l.cap, lb) : node(r.slot, r.b, r.e, r.cap, rb); });
         if (large && tokens_.fetch_sub(1) > 0) {
             std::thread left([&] {
                 node(l.slot, l.b, l.e, l.cap, lb);
