@@ -1,7 +1,9 @@
 // glint.render: the path tracer (tracer/named_render.hpp's render_named, the policies by the
 // names glint-render takes) on a built-in scene (tracer/scenes.hpp), a glTF 2.0 file
 // (io/gltf.hpp) or a scene JSON that glint-render --export-scene wrote (io/scene_json_read.hpp),
-// with glint's default accelerator; the image and the variance of its mean as float32 arrays.
+// with glint's default accelerator; the image and the variance of its mean as float32 arrays,
+// and on request the render's statistics and the first-hit layers a denoiser takes
+// (tracer/first_hit_layers.hpp) in a dict.
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -13,6 +15,7 @@
 #include <glint/io/obj_scene.hpp>
 #include <glint/io/scene_json_read.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
+#include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/scenes.hpp>
 
@@ -90,13 +93,32 @@ NamedRender<float> settings(int width, int height, int spp, std::uint64_t seed, 
     return o;
 }
 
+/// What render() returns besides the image and its variance, when asked.
+struct Extras {
+    bool stats = false, aov = false;
+};
+
+py::array_t<float> to_array(const Image<float>& img) {
+    py::array_t<float> out({py::ssize_t(img.height), py::ssize_t(img.width)});
+    std::copy(img.pixels.begin(), img.pixels.end(), out.mutable_data());
+    return out;
+}
+
+py::dict extras_dict(const RenderResult& r, const std::optional<FirstHitImages>& layers) {
+    py::dict d;
+    d["seconds"] = r.seconds, d["rays"] = r.rays, d["paths"] = r.paths, d["capped_walks"] = r.capped_walks;
+    if (layers) d["albedo"] = to_array(layers->albedo), d["normal"] = to_array(layers->normal), d["depth"] = to_array(layers->depth);
+    return d;
+}
+
 py::tuple render(const std::string& scene_name, int width, int height, int spp, std::uint64_t seed, int threads,
                  int max_depth, const std::string& roulette, const std::string& direct, const std::string& sampler,
-                 const CameraArgs& cam, const std::optional<std::string>& insert) {
+                 const CameraArgs& cam, const std::optional<std::string>& insert, Extras extras) {
     const NamedRender<float> o = settings(width, height, spp, seed, threads, max_depth, roulette, direct, sampler);
     if (insert && !scene_name.starts_with("cornell"))
         throw Error("render: insert_mesh puts a mesh on the Cornell box's floor; scene '" + scene_name + "' is not one");
     RenderResult r;
+    std::optional<FirstHitImages> layers;
     {
         py::gil_scoped_release release;
         Scene<float> scene = load_scene(scene_name);
@@ -106,8 +128,10 @@ py::tuple render(const std::string& scene_name, int width, int height, int spp, 
                                Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)), cornell_mesh_placement<float>());
         const DefaultAccel accel(std::span<const TriangleVertices<float>>(scene.triangles));
         r = render_named(scene, accel, o);
+        if (extras.aov) layers = render_first_hit_named(scene, accel, o);
     }
-    return py::make_tuple(to_array(r.image), to_array(r.variance));
+    if (!extras.stats && !extras.aov) return py::make_tuple(to_array(r.image), to_array(r.variance));
+    return py::make_tuple(to_array(r.image), to_array(r.variance), extras_dict(r, layers));
 }
 
 }  // namespace
@@ -117,21 +141,24 @@ void bind_render(py::module_& m) {
         "render",
         [](const std::string& scene, int width, int height, int spp, std::uint64_t seed, int threads, int max_depth,
            const std::string& roulette, const std::string& direct, const std::string& sampler, OptVec eye, OptVec look_at,
-           OptVec up, std::optional<float> fov, std::optional<std::string> insert_mesh) {
+           OptVec up, std::optional<float> fov, std::optional<std::string> insert_mesh, bool stats, bool aov) {
             return render(scene, width, height, spp, seed, threads, max_depth, roulette, direct, sampler,
-                          CameraArgs{eye, look_at, up, fov}, insert_mesh);
+                          CameraArgs{eye, look_at, up, fov}, insert_mesh, Extras{stats, aov});
         },
         py::arg("scene") = "cornell", py::arg("width") = 256, py::arg("height") = 256, py::arg("spp") = 16,
         py::arg("seed") = 0, py::arg("threads") = 0, py::arg("max_depth") = 1024, py::arg("roulette") = "throughput",
         py::arg("direct") = "mis", py::arg("sampler") = "halton", py::arg("eye") = py::none(),
         py::arg("look_at") = py::none(), py::arg("up") = py::none(), py::arg("fov") = py::none(),
-        py::arg("insert_mesh") = py::none(),
+        py::arg("insert_mesh") = py::none(), py::arg("stats") = false, py::arg("aov") = false,
         "Path-traces `scene` (a built-in name such as 'cornell', a .gltf/.glb file, an .obj (+.mtl) file, or\n"
         "a .json file that glint-render --export-scene wrote) at width x height with spp samples per pixel; returns\n"
         "(image, variance), float32 arrays (height, width, 3): the mean radiance per pixel and the variance\n"
         "of that mean. roulette, direct and sampler take glint-render's names; eye, look_at, up (3 numbers)\n"
         "and fov (degrees) replace the scene's camera; insert_mesh puts an OBJ on the Cornell box's floor.\n"
-        "threads: 0 for every core. Every argument is checked before any file is read (glint.Error).");
+        "threads: 0 for every core. stats or aov: a third element, a dict with the render's 'seconds',\n"
+        "'rays', 'paths' and 'capped_walks', and with aov the first-hit layers a denoiser takes: 'albedo'\n"
+        "(height, width, 3), 'normal' (height, width, 3) and 'depth' (height, width), averaged over the\n"
+        "same camera rays. Every argument is checked before any file is read (glint.Error).");
 }
 
 }  // namespace glint::python

@@ -17,6 +17,26 @@ def test_cornell_image():
     np.testing.assert_array_equal(img, again)
 
 
+def test_stats_and_first_hit_layers():
+    img, var, info = glint.render("cornell", width=40, height=30, spp=4, seed=1, threads=1, aov=True)
+    plain, _ = glint.render("cornell", width=40, height=30, spp=4, seed=1, threads=1)
+    np.testing.assert_array_equal(img, plain)  # the layers leave the beauty pass alone
+    assert info["paths"] == 40 * 30 * 4 and info["rays"] > info["paths"] and info["seconds"] > 0
+    assert info["albedo"].shape == info["normal"].shape == (30, 40, 3) and info["depth"].shape == (30, 40)
+    # Pixels on the red wall: one material. Its albedo the same in every pixel and red; its
+    # normal (a pixel's mean over its hits; the wall's two triangles differ by 0.3 degrees)
+    # of unit length to 1e-4, pointing right (+x, into the box); a finite depth.
+    wall = (slice(10, 20), slice(6, 10))
+    albedo = info["albedo"][wall].reshape(-1, 3)
+    assert np.ptp(albedo, axis=0).max() < 1e-6 and albedo[0, 0] > 2 * albedo[0, 1]
+    normal = info["normal"][wall].reshape(-1, 3)
+    np.testing.assert_allclose(np.linalg.norm(normal, axis=1), 1, atol=1e-4)
+    assert normal[:, 0].min() > 0.99
+    assert np.all(np.isfinite(info["depth"][wall])) and info["depth"][wall].min() > 0
+    _, _, stats = glint.render("cornell", width=8, height=8, spp=1, stats=True)
+    assert set(stats) == {"seconds", "rays", "paths", "capped_walks"}
+
+
 def test_spp_lowers_the_variance():
     _, var4 = glint.render("cornell", width=16, height=16, spp=4)
     _, var64 = glint.render("cornell", width=16, height=16, spp=64)
