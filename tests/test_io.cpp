@@ -24,6 +24,7 @@
 #include <glint/io/exr.hpp>
 #include <glint/io/gltf.hpp>
 #include <glint/io/json.hpp>
+#include <glint/io/obj_scene.hpp>
 #include <glint/io/png.hpp>
 #include <glint/io/scene_json.hpp>
 #include <glint/io/scene_json_read.hpp>
@@ -553,7 +554,7 @@ TEST_CASE("gltf: NORMAL becomes corner normals, turned by the node transforms; b
 
 TEST_CASE("texture: bilinear and nearest lookups, wrap modes, sRGB decoding") {
     const std::array<std::uint8_t, 12> bytes{255, 255, 255, 188, 188, 188, 255, 64, 0, 0, 128, 255};
-    Texture<float> t = Texture<float>::from_srgb8(2, 2, 3, bytes);
+    Texture<float> t = Texture<float>::from_srgb(2, 2, 3, 8, bytes);
     CHECK(t.texels[0][0] == 1.0f);
     CHECK(t.texels[1][0] == doctest::Approx(0.5029).epsilon(1e-3));  // sRGB 188 / 255 is half the light
     CHECK(t.texels[3][1] == doctest::Approx(0.2158).epsilon(1e-3));
@@ -573,7 +574,7 @@ TEST_CASE("texture: bilinear and nearest lookups, wrap modes, sRGB decoding") {
     t.nearest = true;
     CHECK(t.lookup({0.49f, 0.51f}) == t.texels[2]);
     CHECK(t.lookup({1e30f, -1e30f}).is_finite());  // far coordinates stay defined
-    CHECK_THROWS_AS(Texture<float>::from_srgb8(2, 2, 3, std::span<const std::uint8_t>(bytes).first(11)), Error);
+    CHECK_THROWS_AS(Texture<float>::from_srgb(2, 2, 3, 8, std::span<const std::uint8_t>(bytes).first(11)), Error);
 }
 
 namespace {
@@ -681,4 +682,32 @@ TEST_CASE("scene json: textures, texture coordinates and kd_texture are written 
                          doctest::Contains("kd_texture = 1.000000 is not an integer in [-1, 0]"), Error);
     const std::string bad = edited("\"texels\": [1", "\"texels\": [2");
     CHECK_THROWS_WITH_AS(parse_scene_json<float>(bad, "bad.json"), doctest::Contains("texture 0: texel 0 is outside [0, 1]"), Error);
+}
+
+TEST_CASE("obj: vt and map_Kd texture the floor as the glTF does, within standard errors") {
+    const std::array<std::uint8_t, 12> texels{255, 255, 255, 188, 188, 188, 255, 64, 0, 0, 128, 255};
+    REQUIRE(stbi_write_png(temp_path("obj_tex.png").c_str(), 2, 2, 3, texels.data(), 6) != 0);
+    std::ofstream(temp_path("floor.mtl")) << "newmtl floor\nKd 0.8 0.6 0.4\nmap_Kd glint_test_io_obj_tex.png\n";
+    const std::string obj = "mtllib glint_test_io_floor.mtl\nv -2 -1 2\nv 2 -1 2\nv 2 -1 -2\nv -2 -1 -2\n"
+                            "vt 0 1\nvt 1 1\nvt 1 0\nvt 0 0\nusemtl floor\n";  // OBJ's v up from the image's bottom
+    std::ofstream(temp_path("floor.obj")) << obj << "f 1/1 2/2 3/3 4/4\n";
+    Scene<float> s = obj_scene(load_obj(temp_path("floor.obj")), "floor");
+    REQUIRE(s.textures.size() == 1);
+    REQUIRE(s.corner_uvs.size() == 2);
+    const Scene<float> want = textured_fixture_scene(texels);
+    CHECK(!s.textures[0].nearest);  // MTL names no filter: bilinear, glint's default
+    s.textures[0].nearest = true;   // as the glTF fixture's sampler asks
+    s.environment.reset();  // obj_scene's sky and framing camera, replaced by the fixture's light and view
+    s.point_lights = want.point_lights;
+    s.camera = want.camera;
+    const double z = quadrant_difference_z(render(s, 1), render(want, 2));
+    MESSAGE("textured OBJ against four quads in C++: " << z << " standard errors apart");
+    CHECK(z < 4.0);
+    // Errors name the file and line: a vt index past the vt lines, map_Kd without any vt, a missing image.
+    std::ofstream(temp_path("bad_vt.obj")) << obj << "f 1/1 2/2 3/9\n";
+    CHECK_THROWS_WITH_AS(load_obj(temp_path("bad_vt.obj")), doctest::Contains("glint_test_io_bad_vt.obj:11: the face names texture coordinate 9 but there are 4 vt lines"), Error);
+    std::ofstream(temp_path("no_vt.obj")) << obj << "f 1 2 3\n";
+    CHECK_THROWS_WITH_AS(obj_scene(load_obj(temp_path("no_vt.obj")), "no_vt"), doctest::Contains("material 'floor' has map_Kd"), Error);
+    std::ofstream(temp_path("floor.mtl")) << "newmtl floor\nKd 0.8 0.6 0.4\nmap_Kd no_such_texture.png\n";
+    CHECK_THROWS_WITH_AS(obj_scene(load_obj(temp_path("floor.obj")), "floor"), doctest::Contains("no_such_texture.png"), Error);
 }

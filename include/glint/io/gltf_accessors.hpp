@@ -138,15 +138,12 @@ Texture<T> gltf_texture(const tinygltf::Model& model, int index, const std::stri
     if (t.source < 0 || std::size_t(t.source) >= model.images.size()) throw Error(at + ": image " + std::to_string(t.source) + " does not exist");
     const tinygltf::Image& im = model.images[std::size_t(t.source)];
     const std::string name = at + " (image " + std::to_string(t.source) + " '" + (im.uri.size() < 200 ? im.uri : im.name) + "')";
-    if ((im.bits != 8 && im.bits != 16) || im.component < 1 || im.component > 4 || im.width <= 0 || im.height <= 0 ||
-        im.image.size() != std::size_t(im.width) * std::size_t(im.height) * std::size_t(im.component) * std::size_t(im.bits / 8))
-        throw Error(name + ": not a decoded 8- or 16-bit image of 1 to 4 channels");
-    std::vector<std::uint8_t> bytes(std::size_t(im.width) * std::size_t(im.height) * std::size_t(im.component));
-    for (std::size_t i = 0; i < bytes.size(); ++i) {
-        if (im.bits == 8) bytes[i] = im.image[i];
-        else bytes[i] = std::uint8_t((unsigned(im.image[2 * i]) | unsigned(im.image[2 * i + 1]) << 8) / 257u);  // little endian
+    Texture<T> out;
+    try {
+        out = Texture<T>::from_srgb(im.width, im.height, im.component, im.bits, im.image);
+    } catch (const Error& e) {
+        throw Error(name + ": " + e.what());
     }
-    Texture<T> out = Texture<T>::from_srgb8(im.width, im.height, im.component, bytes);
     out.source = im.uri.size() < 200 ? im.uri : "image " + std::to_string(t.source);
     if (t.sampler >= 0 && std::size_t(t.sampler) < model.samplers.size()) {
         const tinygltf::Sampler& s = model.samplers[std::size_t(t.sampler)];

@@ -3,9 +3,10 @@
 // Needs tinyobjloader 2 (Debian libtinyobjloader-dev): link tinyobjloader::tinyobjloader.
 // Polygons are triangulated as fans; every face gets the index of its material (faces
 // without one get a default grey Lambertian material). From the MTL: Kd, Ks, Ns, Ke
-// (emission), Ni (index of refraction) and illum. Vertex normals (`vn`, named by faces as
-// v//vn or v/vt/vn) become per-corner shading normals (ObjMesh::normals); texture
-// coordinates are not read.
+// (emission), Ni (index of refraction), illum and map_Kd (the diffuse texture's file, which
+// io/obj_scene.hpp loads). Vertex normals (`vn`, named by faces as v//vn or v/vt/vn) become
+// per-corner shading normals (ObjMesh::normals), texture coordinates (`vt`, v/vt or v/vt/vn)
+// per-corner coordinates (ObjMesh::uvs).
 //
 // Validation (tinyobjloader reads what it cannot parse as 0 and stores a face's vertex count
 // in an unsigned char, so glint scans the text itself before handing it over):
@@ -18,7 +19,8 @@
 //  - an emissive face (a triangle of its fan) of zero area is an error; other triangles of
 //    zero area are kept (no ray ever hits them) with one warning naming their count and the
 //    first one's line;
-//  - a face's vertex normal must exist and have a finite, non-zero length (it is normalized);
+//  - a face's vertex normal must exist and have a finite, non-zero length (it is normalized),
+//    its texture coordinate must exist and be finite;
 //  - a missing MTL file, or a material name no MTL defines, is a warning (ObjMesh::warnings):
 //    its faces get the default material.
 // Every error is a glint::Error naming the file, the line and the value.
@@ -44,6 +46,7 @@
 #include <glint/core/math.hpp>
 #include <glint/core/spectrum.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/io/obj_scan.hpp>
 
 namespace glint {
 
@@ -61,6 +64,9 @@ struct ObjMaterial {
     float ns = 0.0f;   ///< Phong exponent (Ns), >= 0.
     float ni = 1.0f;   ///< index of refraction (Ni), > 0.
     int illum = 2;     ///< MTL illumination model (illum), passed on unchecked; 2 in the default.
+    /// The diffuse texture's file (map_Kd), relative to the OBJ's folder as written; empty
+    /// without one. io/obj_scene.hpp loads it (io/image_file.hpp).
+    std::string map_kd;
 };
 
 /// A triangle soup loaded by load_obj(): fan-triangulated faces with, per triangle, its
@@ -74,6 +80,10 @@ struct ObjMesh {
     /// its vertices; a face without `vn` has its triangles' geometric normal at every corner.
     /// Empty where no face names a normal.
     std::vector<std::array<Vec3f, 3>> normals;
+    /// Per triangle, its corners' texture coordinates (the faces' `vt` as (u, 1 - v): OBJ's
+    /// v runs up from the image's bottom row, glint's down from its top row, as glTF's; a
+    /// face without them has (0, 0) at every corner). Empty where no face names them.
+    std::vector<std::array<Vec2<float>, 3>> uvs;
     /// The MTL materials in file order, then the default grey material (always last, used by
     /// faces without a known material).
     std::vector<ObjMaterial> materials;
@@ -81,168 +91,6 @@ struct ObjMesh {
 };
 
 namespace detail {
-
-inline std::vector<std::string_view> obj_tokens(std::string_view line) {
-    std::vector<std::string_view> out;
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-        const std::size_t b = i;
-        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-        if (i > b) out.push_back(line.substr(b, i - b));
-    }
-    return out;
-}
-
-/// Reads one line ending in "\n", "\r\n" or a lone "\r" (tinyobjloader splits lines at
-/// all three, so the checks must see the same lines it parses). False at end of input.
-inline bool obj_getline(std::istream& in, std::string& line) {
-    line.clear();
-    std::streambuf* buf = in.rdbuf();
-    for (;;) {
-        const int c = buf->sbumpc();
-        if (c == std::char_traits<char>::eof()) {
-            if (line.empty()) in.setstate(std::ios::eofbit);
-            return !line.empty();
-        }
-        if (c == '\n') return true;
-        if (c == '\r') {
-            if (buf->sgetc() == '\n') buf->sbumpc();
-            return true;
-        }
-        line += static_cast<char>(c);
-    }
-}
-
-/// A number that is finite as a float, or glint::Error naming `where` and the token.
-inline float obj_number(std::string_view tok, const std::string& where) {
-    const std::string s(tok);
-    char* end = nullptr;
-    const double x = std::strtod(s.c_str(), &end);
-    if (end == s.c_str() || *end) throw Error(where + ": '" + s + "' is not a number");
-    if (!std::isfinite(x) || !std::isfinite(static_cast<float>(x)))
-        throw Error(where + ": '" + s + "' is not a finite number");
-    return static_cast<float>(x);
-}
-
-/// The OBJ text with every polygon of more than 255 vertices written as a fan of triangles,
-/// the source line of each face in file order, and the checks of the header comment.
-struct ObjScan {
-    std::string text;
-    std::vector<std::uint32_t> face_line;
-};
-
-struct ObjFaceIndex {
-    std::uint32_t line;
-    long index;  // as written (1-based, or negative = relative)
-};
-
-inline void obj_check_indices(const std::string& file, const std::vector<ObjFaceIndex>& positive, long nv) {
-    for (const ObjFaceIndex& f : positive)
-        if (f.index > nv)
-            throw Error(file + ":" + std::to_string(f.line) + ": face refers to vertex " + std::to_string(f.index) +
-                        ", but the file defines " + std::to_string(nv) + " vertices");
-}
-
-/// Checks one `f` line's vertex tokens; returns the positive indices for the end-of-file check.
-inline void obj_scan_face(const std::vector<std::string_view>& tok, const std::string& where, std::uint32_t line,
-                          long nv, std::vector<ObjFaceIndex>& positive) {
-    if (tok.size() < 4)
-        throw Error(where + ": a face needs at least 3 vertices, this one has " + std::to_string(tok.size() - 1));
-    for (std::size_t k = 1; k < tok.size(); ++k) {
-        const std::string s(tok[k].substr(0, tok[k].find('/')));
-        char* end = nullptr;
-        const long i = std::strtol(s.c_str(), &end, 10);
-        if (end == s.c_str() || *end) throw Error(where + ": face vertex '" + std::string(tok[k]) + "' is not an index");
-        if (i < -std::numeric_limits<int>::max() || i > std::numeric_limits<int>::max())  // tinyobjloader reads an int
-            throw Error(where + ": face vertex index " + s + " is out of range");
-        if (i == 0) throw Error(where + ": face vertex index 0 (OBJ indices start at 1)");
-        if (i < 0 && nv + i < 0)
-            throw Error(where + ": face vertex " + s + " refers " + std::to_string(-i) + " vertices back, but only " +
-                        std::to_string(nv) + " vertices are defined before this line");
-        if (i > 0) positive.push_back({line, i});
-    }
-}
-
-inline ObjScan obj_scan(const std::string& file, std::istream& in) {
-    ObjScan scan;
-    std::vector<ObjFaceIndex> positive;
-    long nv = 0;
-    std::string raw;
-    std::uint32_t line = 0;
-    while (obj_getline(in, raw)) {
-        ++line;
-        const std::vector<std::string_view> tok = obj_tokens(raw);
-        const std::string where = file + ":" + std::to_string(line);
-        if (!tok.empty() && tok[0] == "v") {
-            if (tok.size() < 4) throw Error(where + ": a vertex needs 3 coordinates");
-            for (std::size_t k = 1; k <= 3; ++k) obj_number(tok[k], where + ": vertex coordinate");
-            ++nv;
-        } else if (!tok.empty() && tok[0] == "f") {
-            obj_scan_face(tok, where, line, nv, positive);
-            if (tok.size() - 1 > 255) {  // tinyobjloader would wrap the count at 256
-                for (std::size_t k = 2; k + 1 < tok.size(); ++k) {
-                    scan.text.append("f ").append(tok[1]).append(" ").append(tok[k]).append(" ").append(tok[k + 1]);
-                    scan.text += '\n';
-                    scan.face_line.push_back(line);
-                }
-                continue;
-            }
-            scan.face_line.push_back(line);
-        }
-        scan.text.append(raw) += '\n';
-    }
-    obj_check_indices(file, positive, nv);
-    return scan;
-}
-
-/// Checks the Kd, Ks, Ke, Ns and Ni lines of an MTL text (see the header comment).
-inline void mtl_validate(const std::string& file, std::istream& in) {
-    std::string raw, material = "(before any newmtl)";
-    std::uint32_t line = 0;
-    while (obj_getline(in, raw)) {
-        ++line;
-        const std::vector<std::string_view> tok = obj_tokens(raw);
-        if (tok.empty()) continue;
-        if (tok[0] == "newmtl" && tok.size() > 1) material = std::string(tok[1]);
-        const bool colour = tok[0] == "Kd" || tok[0] == "Ks" || tok[0] == "Ke";
-        if (!colour && tok[0] != "Ns" && tok[0] != "Ni") continue;
-        const std::string where = file + ":" + std::to_string(line) + ": material '" + material + "' " + std::string(tok[0]);
-        if (tok.size() < 2) throw Error(where + " has no value");
-        for (std::size_t k = 1; k < std::min<std::size_t>(tok.size(), colour ? 4 : 2); ++k) {
-            const float v = obj_number(tok[k], where);
-            if (v < 0.0f || (tok[0] == "Ni" && v == 0.0f))
-                throw Error(where + " = " + std::string(tok[k]) + (v < 0.0f ? " is negative" : " is not positive"));
-        }
-    }
-}
-
-/// tinyobjloader's MTL lookup next to the OBJ, with glint's checks and a warning for a
-/// missing file.
-class ObjMaterialReader : public tinyobj::MaterialReader {
-public:
-    explicit ObjMaterialReader(std::string dir) : dir_(std::move(dir)) {}
-    bool operator()(const std::string& id, std::vector<tinyobj::material_t>* materials,
-                    std::map<std::string, int>* names, std::string* warn, std::string* err) override {
-        const std::string file = dir_ + id;
-        std::ifstream f(file, std::ios::binary);
-        if (!f) {
-            warnings.push_back("material file '" + file + "' not found; its materials render as default grey");
-            return false;
-        }
-        std::stringstream text;
-        text << f.rdbuf();
-        mtl_validate(file, text);
-        text.clear();
-        text.seekg(0);
-        tinyobj::LoadMtl(names, materials, &text, warn, err);
-        return true;
-    }
-    std::vector<std::string> warnings;
-
-private:
-    std::string dir_;
-};
 
 inline Rgb<float> obj_reflectance(const float v[3], const std::string& what, std::vector<std::string>& warnings) {
     Rgb<float> r(v[0], v[1], v[2]);
@@ -263,6 +111,11 @@ inline ObjMaterial obj_material(const tinyobj::material_t& m, const std::string&
     om.ns = m.shininess;
     om.ni = m.ior;
     om.illum = m.illum;
+    if (!m.diffuse_texname.empty()) {
+        const auto slash = path.find_last_of('/');
+        om.map_kd = (slash == std::string::npos || m.diffuse_texname.starts_with('/') ? "" : path.substr(0, slash + 1)) +
+                    m.diffuse_texname;
+    }
     return om;
 }
 
@@ -272,10 +125,27 @@ struct ObjDegenerates {
     std::uint32_t first_line = 0;
 };
 
-/// A face's vertices and, where it names them, its vertex normals (one per vertex, or none).
+/// A face's vertices and, where it names them, its vertex normals and texture coordinates
+/// (one per vertex, or none).
 struct ObjFace {
     std::vector<Vec3f> poly, normals;
+    std::vector<Vec2<float>> uvs;
 };
+
+/// Face vertex k's texture coordinates into face.uvs, where it names them; a named `vt` that
+/// is missing or not finite is an error naming the face's line.
+inline void obj_face_uv(const tinyobj::attrib_t& attrib, const tinyobj::index_t& k, const std::string& where, ObjFace& face) {
+    if (k.texcoord_index < 0) return;
+    const auto j = std::size_t(k.texcoord_index);
+    if (2 * j + 1 >= attrib.texcoords.size())
+        throw Error(where + "the face names texture coordinate " + std::to_string(j + 1) + " but there are " +
+                    std::to_string(attrib.texcoords.size() / 2) + " vt lines");
+    // OBJ's v runs up from the image's bottom row; glint's (glTF's) down from its top row.
+    const Vec2<float> uv(attrib.texcoords[2 * j], 1.0f - attrib.texcoords[2 * j + 1]);
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+        throw Error(where + "the face's texture coordinate vt " + std::to_string(j + 1) + " is not finite");
+    face.uvs.push_back(uv);
+}
 
 /// The vertices of one face (its `count` indices) into face.poly, and its normals, unit
 /// length, into face.normals where it names one at every vertex (none otherwise); a named
@@ -284,6 +154,7 @@ inline void obj_face(const tinyobj::attrib_t& attrib, std::span<const tinyobj::i
                      std::uint32_t line, ObjFace& face) {
     face.poly.clear();
     face.normals.clear();
+    face.uvs.clear();
     const std::string where = path + ":" + std::to_string(line) + ": ";
     for (const tinyobj::index_t& k : idx) {
         const auto i = std::size_t(k.vertex_index);
@@ -291,6 +162,7 @@ inline void obj_face(const tinyobj::attrib_t& attrib, std::span<const tinyobj::i
             throw Error(where + "a face parsed with vertex " + std::to_string(i + 1) + " of " +
                         std::to_string(attrib.vertices.size() / 3));
         face.poly.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
+        obj_face_uv(attrib, k, where, face);
         if (k.normal_index < 0) continue;
         const auto j = std::size_t(k.normal_index);
         if (3 * j + 2 >= attrib.normals.size())
@@ -303,6 +175,7 @@ inline void obj_face(const tinyobj::attrib_t& attrib, std::span<const tinyobj::i
         face.normals.push_back(n / len);
     }
     if (face.normals.size() != face.poly.size()) face.normals.clear();  // normals at some vertices only: none
+    if (face.uvs.size() != face.poly.size()) face.uvs.clear();
 }
 
 /// Appends the fan of one face (and its corner normals); throws for an emissive fan triangle
@@ -318,6 +191,8 @@ inline void obj_add_face(ObjMesh& mesh, const ObjFace& face, std::uint32_t mat, 
         const Vec3f g = safe_normalize(cross);
         mesh.normals.push_back(face.normals.empty() ? std::array<Vec3f, 3>{g, g, g}
                                                     : std::array<Vec3f, 3>{face.normals[0], face.normals[k], face.normals[k + 1]});
+        mesh.uvs.push_back(face.uvs.empty() ? std::array<Vec2<float>, 3>{}
+                                            : std::array<Vec2<float>, 3>{face.uvs[0], face.uvs[k], face.uvs[k + 1]});
         if (zero_area && emissive)
             throw Error(path + ":" + std::to_string(line) + ": emissive face (material '" + mesh.materials[mat].name +
                         "') has a triangle of zero area");
@@ -355,7 +230,7 @@ inline ObjMesh load_obj(const std::string& path) {
     std::size_t face = 0;
     detail::ObjDegenerates degenerate;
     detail::ObjFace poly;
-    bool any_normal = false;
+    bool any_normal = false, any_uv = false;
     for (const auto& shape : shapes) {
         std::size_t offset = 0;
         for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face) {
@@ -364,6 +239,7 @@ inline ObjMesh load_obj(const std::string& path) {
             const std::uint32_t line = scan.face_line[face];
             detail::obj_face(attrib, std::span(shape.mesh.indices).subspan(offset, count), path, line, poly);
             any_normal |= !poly.normals.empty();
+            any_uv |= !poly.uvs.empty();
             const int mid = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
             const std::uint32_t mat =
                 mid >= 0 && std::size_t(mid) < default_material ? static_cast<std::uint32_t>(mid) : default_material;
@@ -373,6 +249,7 @@ inline ObjMesh load_obj(const std::string& path) {
     }
     if (mesh.triangles.empty()) throw Error("load_obj(" + path + "): no faces");
     if (!any_normal) mesh.normals.clear();
+    if (!any_uv) mesh.uvs.clear();
     if (degenerate.count > 0)
         mesh.warnings.push_back(path + ":" + std::to_string(degenerate.first_line) + ": " +
                                 std::to_string(degenerate.count) + " triangle(s) of zero area, the first on this line; "

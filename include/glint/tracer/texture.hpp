@@ -1,15 +1,15 @@
 // glint/tracer/texture.hpp: an RGB image over texture coordinates, the base-colour texture a
 // material's diffuse reflectance is multiplied by (Scene::material_at).
 //
-//   Texture<float> t = Texture<float>::from_srgb8(width, height, 3, bytes);  // rows top first
+//   Texture<float> t = Texture<float>::from_srgb(width, height, 3, 8, bytes);  // rows top first
 //   Rgb<float> kd = t.lookup(Vec2<float>(0.25f, 0.75f));
 //
 // Coordinates follow glTF 2.0 (§3.8.4): (0, 0) is the image's first texel (its top-left
 // corner as stored), u runs along a row, v down the rows; a texel's centre sits at
 // ((i + 1/2) / width, (j + 1/2) / height). Outside [0, 1] the wrap mode repeats, mirrors or
 // clamps. `linear` filtering blends the four nearest texel centres (bilinear); `nearest`
-// takes the texel the point falls in. Stored texels are linear reflectances in [0, 1]: 8-bit
-// colour images are decoded from sRGB by its transfer curve (IEC 61966-2-1).
+// takes the texel the point falls in. Stored texels are linear reflectances in [0, 1]: 8- and
+// 16-bit colour images are decoded from sRGB by its transfer curve (IEC 61966-2-1).
 #pragma once
 
 #include <algorithm>
@@ -38,27 +38,36 @@ T srgb_to_linear(T c) {
 /// An RGB texture: linear texels in rows (row 0 at v = 0), a filter and a wrap mode per axis.
 template <Scalar T>
 struct Texture {
-    int width = 0, height = 0;
+    int width = 0;               ///< Texels per row, > 0.
+    int height = 0;              ///< Rows, > 0.
     std::vector<Rgb<T>> texels;  ///< width * height linear reflectances, row after row.
     bool nearest = false;        ///< true: the texel the point falls in; false: bilinear.
-    TextureWrap wrap_u = TextureWrap::repeat, wrap_v = TextureWrap::repeat;
+    TextureWrap wrap_u = TextureWrap::repeat;  ///< How u outside [0, 1] maps into a row.
+    TextureWrap wrap_v = TextureWrap::repeat;  ///< How v outside [0, 1] maps into the rows.
     std::string source;  ///< Where it was read from (messages); empty for a texture made in code.
 
-    /// A texture of 8-bit sRGB-encoded texels with `channels` (1 to 4; grey is copied to every
-    /// band, alpha ignored) per texel, rows top first, decoded to linear.
-    static Texture from_srgb8(int width, int height, int channels, std::span<const std::uint8_t> bytes) {
+    /// A texture of sRGB-encoded texels of `bits` (8 or 16, little endian) per channel and
+    /// `channels` (1 to 4; grey is copied to every band, alpha ignored) per texel, rows top
+    /// first, decoded to linear.
+    static Texture from_srgb(int width, int height, int channels, int bits, std::span<const std::uint8_t> bytes) {
         Texture t;
         t.width = width, t.height = height;
-        if (width <= 0 || height <= 0 || channels < 1 || channels > 4 ||
-            bytes.size() != std::size_t(width) * std::size_t(height) * std::size_t(channels))
-            throw Error("Texture::from_srgb8: " + std::to_string(width) + " x " + std::to_string(height) + " texels of " +
-                        std::to_string(channels) + " channels do not match " + std::to_string(bytes.size()) + " bytes");
+        const std::size_t bytes_per = std::size_t(channels) * std::size_t(bits / 8);
+        if (width <= 0 || height <= 0 || channels < 1 || channels > 4 || (bits != 8 && bits != 16) ||
+            bytes.size() != std::size_t(width) * std::size_t(height) * bytes_per)
+            throw Error("Texture::from_srgb: " + std::to_string(width) + " x " + std::to_string(height) + " texels of " +
+                        std::to_string(channels) + " channels of " + std::to_string(bits) + " bits do not match " +
+                        std::to_string(bytes.size()) + " bytes");
         T table[256];
         for (int k = 0; k < 256; ++k) table[k] = srgb_to_linear(T(k) / T(255));
+        const auto channel = [&](const std::uint8_t* p, int c) {
+            if (bits == 8) return table[p[c]];
+            return srgb_to_linear(T(unsigned(p[2 * c]) | unsigned(p[2 * c + 1]) << 8) / T(65535));
+        };
         t.texels.resize(std::size_t(width) * std::size_t(height));
         for (std::size_t i = 0; i < t.texels.size(); ++i) {
-            const std::uint8_t* p = bytes.data() + i * std::size_t(channels);
-            t.texels[i] = channels < 3 ? Rgb<T>(table[p[0]]) : Rgb<T>(table[p[0]], table[p[1]], table[p[2]]);
+            const std::uint8_t* p = bytes.data() + i * bytes_per;
+            t.texels[i] = channels < 3 ? Rgb<T>(channel(p, 0)) : Rgb<T>(channel(p, 0), channel(p, 1), channel(p, 2));
         }
         return t;
     }
