@@ -35,7 +35,7 @@ struct LightWalkVertex {
     Vec3<T> n;                    ///< geometric normal on the side the walk arrived from
     Vec3<T> direction;            ///< unit direction the walk arrived in (towards the surface)
     Rgb<T> power;                 ///< power arriving at x
-    const Material<T>* material;  ///< the hit's material (not specular)
+    const Material<T>* material;  ///< the hit's material (not specular; kd textured): valid during the visit only
     std::uint32_t triangle;       ///< the scene triangle hit
     int depth;                    ///< scattering vertices before this one (first_depth at the first hit)
     bool first;                   ///< no non-specular vertex before this one on the walk
