@@ -64,8 +64,8 @@ struct ObjMaterial {
     float ns = 0.0f;   ///< Phong exponent (Ns), >= 0.
     float ni = 1.0f;   ///< index of refraction (Ni), > 0.
     int illum = 2;     ///< MTL illumination model (illum), passed on unchecked; 2 in the default.
-    /// The diffuse texture's file (map_Kd), relative to the OBJ's folder as written; empty
-    /// without one. io/obj_scene.hpp loads it (io/image_file.hpp).
+    /// The diffuse texture's file (map_Kd) as a path to open: a relative name is taken from
+    /// the OBJ's folder; empty without one. io/obj_scene.hpp loads it (io/image_file.hpp).
     std::string map_kd;
 };
 
@@ -102,7 +102,10 @@ inline Rgb<float> obj_reflectance(const float v[3], const std::string& what, std
     return r;
 }
 
-inline ObjMaterial obj_material(const tinyobj::material_t& m, const std::string& path, std::vector<std::string>& warn) {
+/// An MTL material as glint reads it; `dir` is the OBJ's folder (with its '/', or empty),
+/// where the MTL was found and relative texture paths start.
+inline ObjMaterial obj_material(const tinyobj::material_t& m, const std::string& path, const std::string& dir,
+                                std::vector<std::string>& warn) {
     ObjMaterial om;
     om.name = m.name;
     om.kd = obj_reflectance(m.diffuse, path + ": material '" + m.name + "' Kd", warn);
@@ -111,11 +114,7 @@ inline ObjMaterial obj_material(const tinyobj::material_t& m, const std::string&
     om.ns = m.shininess;
     om.ni = m.ior;
     om.illum = m.illum;
-    if (!m.diffuse_texname.empty()) {
-        const auto slash = path.find_last_of('/');
-        om.map_kd = (slash == std::string::npos || m.diffuse_texname.starts_with('/') ? "" : path.substr(0, slash + 1)) +
-                    m.diffuse_texname;
-    }
+    if (!m.diffuse_texname.empty()) om.map_kd = (m.diffuse_texname.starts_with('/') ? "" : dir) + m.diffuse_texname;
     return om;
 }
 
@@ -212,7 +211,8 @@ inline ObjMesh load_obj(const std::string& path) {
     if (!file) throw Error("load_obj(" + path + "): cannot read the file");
     const detail::ObjScan scan = detail::obj_scan(path, file);
     const auto slash = path.find_last_of('/');
-    detail::ObjMaterialReader mtl(slash == std::string::npos ? "" : path.substr(0, slash + 1));
+    const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+    detail::ObjMaterialReader mtl(dir);
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;
@@ -222,7 +222,7 @@ inline ObjMesh load_obj(const std::string& path) {
         throw Error("load_obj(" + path + "): " + (err.empty() ? "cannot parse the file" : err));
     ObjMesh mesh;
     mesh.warnings = mtl.warnings;
-    for (const auto& m : materials) mesh.materials.push_back(detail::obj_material(m, path, mesh.warnings));
+    for (const auto& m : materials) mesh.materials.push_back(detail::obj_material(m, path, dir, mesh.warnings));
     if (warn.find("material [") != std::string::npos)
         mesh.warnings.push_back(path + ": faces use a material no MTL file defines; they render as default grey");
     const auto default_material = static_cast<std::uint32_t>(mesh.materials.size());

@@ -1,7 +1,8 @@
 // glint/io/scene_json_read.hpp: reads back the JSON that io/scene_json.hpp writes (glint-render
 // --export-scene), so that a built scene is a file: the camera, the materials, the area and
 // point lights, the triangles with their materials and area lights, corner normals, texture
-// coordinates and textures where the file has them, the image size and the path-length cap. A float scene reads back exactly (9 significant digits round-trip every
+// coordinates and textures where the file has them, the image size and the path-length cap.
+// A float scene reads back exactly (9 significant digits round-trip every
 // float); a double scene to 9 digits.
 //
 // A hand-written scene may also name meshes by path: "meshes": [{"path": "bunny.obj",
@@ -114,10 +115,12 @@ void read_json_textures(const SceneJsonReader& r, const JsonValue& doc, Scene<T>
         const JsonValue& wrap = r.member(t, "wrap", JsonValue::Kind::array);
         if (wrap.items.size() != 2) r.fail(wrap, "wrap needs two modes (u, v)");
         for (std::size_t k = 0; k < 2; ++k) {
-            const std::string& w = wrap.items[k].string;
-            if (wrap.items[k].kind != JsonValue::Kind::string || (w != "repeat" && w != "mirrored_repeat" && w != "clamp"))
-                r.fail(wrap.items[k], "a wrap mode is not one of repeat, mirrored_repeat, clamp");
-            (k ? tex.wrap_v : tex.wrap_u) = w == "clamp" ? TextureWrap::clamp : w == "repeat" ? TextureWrap::repeat : TextureWrap::mirrored_repeat;
+            const auto modes = {TextureWrap::repeat, TextureWrap::mirrored_repeat, TextureWrap::clamp};
+            const auto mode = std::find_if(modes.begin(), modes.end(), [&](TextureWrap w) {
+                return wrap.items[k].kind == JsonValue::Kind::string && wrap.items[k].string == texture_wrap_name(w);
+            });
+            if (mode == modes.end()) r.fail(wrap.items[k], "a wrap mode is not one of repeat, mirrored_repeat, clamp");
+            (k ? tex.wrap_v : tex.wrap_u) = *mode;
         }
         if (const JsonValue* source = t.find("source"); source && source->kind == JsonValue::Kind::string) tex.source = source->string;
         std::vector<T> texels(std::size_t(tex.width) * std::size_t(tex.height) * 3);
