@@ -46,6 +46,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/tracer/smooth_normals.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 #include "photon_cli.hpp"
 #include "vpl_cli.hpp"
 
@@ -70,68 +71,6 @@ constexpr Choice<bool> visibilities[] = {{"rays", "shadow rays", false},
 constexpr Choice<VplGather> gathers[] = {{"all", "every VPL, a shadow ray each", VplGather::all},
                                          {"cuts", "through a light cut of the VPLs (Fernandez 2004 5.2; biased)", VplGather::cuts}};
 
-/// A flag's line of the usage text, then its choices (the first is the default).
-template <class Make>
-std::string choices(const char* flag, std::span<const Choice<Make>> table) {
-    return std::string(flag) + " (default " + std::string(table.front().name) + ")\n" + choice_usage(table);
-}
-
-void usage() {
-    std::string text =
-        "usage: glint-render (--scene NAME | --mesh FILE.obj | --scene-file FILE) [options]   (or --help, --version)\n"
-        "  (a flag's value may follow it or be joined to it: --spp 64 or --spp=64)\n"
-        "  --scene NAME        a built-in scene:\n" + choice_usage(scene_choices<float>()) +
-        "  --mesh FILE         an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky\n"
-        "  --scene-file FILE   FILE.gltf or FILE.glb: a glTF 2.0 scene (meshes, materials, the first camera,\n"
-        "                      KHR_lights_punctual lights; a sky if nothing emits); FILE.json: a scene\n"
-        "                      --export-scene wrote (its size and --max-depth unless given)\n"
-        "  --env FILE.exr      lat-long environment map (envmap scene, --mesh or --scene-file)\n"
-        "  --smooth DEGREES    --mesh or --scene-file: shade smoothly with corner normals averaged over the\n"
-        "                      faces within DEGREES (0-180) of each other, replacing the file's normals\n"
-        "  --size N            image width and height (default 256; at most 16384)\n"
-        "  --width N, --height N  image width, height (rectangular images)\n"
-        "  --spp N             samples per pixel (default 16)\n"
-        "  --out FILE          FILE.exr or FILE.png: writes FILE.exr (RGB, variance and the integrator's\n"
-        "                      layers) and the tone-mapped preview FILE.png (default out.exr)\n"
-        "  --aov               path: also the first-hit layers albedo, normal and depth in FILE.exr\n"
-        "  --eye X,Y,Z --look-at X,Y,Z --up X,Y,Z --fov DEGREES\n"
-        "                      camera (default: the scene's; a mesh is framed by its bounding box)\n"
-        "  --max-depth N       path length cap (default 1024)\n" +
-        choices("  --roulette NAME     the roulette rule; each also as NAME+estimate (Szecsi 2009 2.3's\n"
-                "                      radiance estimate on top; estimate = classic+estimate)", roulette_choices<float>()) +
-        "  --rr-depth N        throughput roulettes: vertices before the first decision (default 3)\n" +
-        choices("  --direct NAME       direct lighting", direct_choices<float>()) +
-        choices("  --selection NAME    BRDF selection", selection_choices()) +
-        "  --light-samples N   light samples per vertex (default 1; at most 1024)\n" +
-        choices("  --accel NAME        ray accelerator", accelerator_choices()) +
-        choices("  --sampler NAME      sampler", sampler_choices<float>()) +
-        "  --threads N         worker threads (default: all cores)\n" +
-        choices("  --weights NAME      roulette band weights H", weights_choices<float>()) +
-        choices("  --estimate NAME     L~ of the +estimate roulettes", estimate_choices()) +
-        "  --reduce            +estimate roulettes: shorten walks by the estimate's goodness\n"
-        "  --pixel-centres     camera rays through pixel centres (default: jittered over the pixel)\n"
-        "  --exposure EV       PNG preview exposure (default 0; within [-64, 64])\n" +
-        choices("  --tonemap NAME      PNG preview", std::span<const Choice<Tonemap>>(tonemaps)) +
-        "  --seed N            random seed (default 0)\n"
-        "  --time-budget S     progressive passes until S seconds are spent (path, sppm, photons); prints\n"
-        "                      the passes done\n"
-        "  --insert-mesh FILE  put an OBJ mesh (white, Lambertian) on the Cornell box's free floor (cornell,\n"
-        "                      cornell-glossy)\n"
-        "  --export-scene FILE.json  write the built scene, camera and size as JSON and exit\n" +
-        choices("  --integrator NAME   integrator", std::span<const Choice<IntegratorKind>>(integrators)) +
-        "  --vpls N            vpl: shooting walks (default 1024)\n" +
-        choices("  --visibility NAME   vpl: visibility", std::span<const Choice<bool>>(visibilities)) +
-        "  --spheres K         vpl: occluder spheres (default 100)\n"
-        "  --clamp D           vpl: clamp the geometry term at distance D (default 0, unbiased)\n" +
-        choices("  --gather NAME       vpl: the VPL sum", std::span<const Choice<VplGather>>(gathers)) +
-        "  --photons N         sppm, photons: photons emitted per pass (default 100000)\n"
-        "  --radius R          sppm: initial gather radius; photons: largest kNN radius (default 0.05)\n"
-        "  --camera-samples N  sppm: camera rays per pixel and pass for emission and direct light (default 1)\n"
-        "  --knn K             photons: photons per radiance estimate (default 50)\n"
-        "  --final-gather N    photons: final gather rays per pixel sample (default 64)\n";
-    std::fputs(text.c_str(), stdout);
-}
-
 /// load_obj, its warnings printed.
 ObjMesh load_obj_warning(const std::string& path) {
     ObjMesh mesh = load_obj(path);
@@ -147,46 +86,27 @@ Scene<float> scene_from_obj(const std::string& path, const std::string& env_path
     return s;
 }
 
-/// An integer flag value in [lo, hi], or glint::Error naming the flag, the value and the range.
-long long to_int(const std::string& flag, const char* v, long long lo, long long hi) {
-    char* end = nullptr;
-    errno = 0;
-    const long long x = std::strtoll(v, &end, 10);
-    if (end == v || *end || errno == ERANGE || x < lo || x > hi)
-        throw Error(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-    return x;
-}
-
-std::uint64_t to_u64(const std::string& flag, const char* v) {
-    char* end = nullptr;
-    errno = 0;
-    const unsigned long long x = std::strtoull(v, &end, 10);
-    if (end == v || *end || errno == ERANGE || *v == '-')
-        throw Error(flag + " expects a non-negative integer below 2^64, got '" + v + "'");
-    return x;
-}
-
-/// A finite number in [lo, hi], or glint::Error naming the flag and the value.
-float to_float(const std::string& flag, const char* v, float lo, float hi) {
-    char* end = nullptr;
-    const float x = std::strtof(v, &end);
-    if (end == v || *end || !std::isfinite(x) || x < lo || x > hi)
-        throw Error(flag + " expects a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
-    return x;
-}
-
-Vec3f to_vec3(const std::string& flag, const char* v) {
+/// "X,Y,Z" as three finite numbers, or nothing.
+std::optional<Vec3f> parse_vec3(const std::string& text) {
     float c[3];
-    const char* p = v;
+    const char* p = text.c_str();
     for (int k = 0; k < 3; ++k) {
         char* end = nullptr;
         c[k] = std::strtof(p, &end);
-        const char want = k < 2 ? ',' : '\0';
-        if (end == p || *end != want || !std::isfinite(c[k]))
-            throw Error(flag + " expects three finite numbers X,Y,Z, got '" + v + "'");
+        if (end == p || *end != (k < 2 ? ',' : '\0') || !std::isfinite(c[k])) return std::nullopt;
         p = end + 1;
     }
     return Vec3f(c[0], c[1], c[2]);
+}
+
+/// A flag whose value is a point or direction X,Y,Z.
+CLI::Option* vec3_flag(CLI::App& app, const std::string& flag, std::optional<Vec3f>& target, const std::string& help) {
+    const CLI::Validator check(
+        [](std::string& t) { return parse_vec3(t) ? std::string() : "expects three finite numbers X,Y,Z, got '" + t + "'"; },
+        "", "vec3");
+    return app.add_option_function<std::string>(flag, [&target](const std::string& t) { target = parse_vec3(t); }, help)
+        ->check(check)
+        ->type_name("X,Y,Z");
 }
 
 bool ends_with(const std::string& s, const std::string& tail) {
@@ -222,17 +142,6 @@ struct Args {
     PhotonCliOptions photons;
 };
 
-/// Every name the command line gives, checked against its table before any file is read.
-void check_names(const Args& g, const NamedRender<float>& o) {
-    glint::check_names(o);
-    if (!g.scene_name.empty()) find_choice(scene_choices<float>(), "scene", g.scene_name);
-    find_choice(accelerator_choices(), "accelerator", g.accel);
-    find_choice(std::span<const Choice<Tonemap>>(tonemaps), "tonemap", g.tonemap);
-    find_choice(std::span<const Choice<IntegratorKind>>(integrators), "integrator", g.integrator);
-    find_choice(std::span<const Choice<bool>>(visibilities), "visibility", g.vpl.visibility);
-    find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather);
-}
-
 /// Throws for a flag given to a scene it does not act on: --insert-mesh stands a mesh on the
 /// Cornell box's free floor; --env lights open scenes (envmap, a mesh, a scene file), while
 /// the other built-in scenes are closed or lit by their own lights.
@@ -247,76 +156,106 @@ void check_scene_flags(const Args& g) {
                     "' (lit by its own lights)");
 }
 
+/// The flags that choose the scene, the camera and the output.
+void add_scene_flags(CLI::App& app, Args& g) {
+    cli::choice(app, "--scene", g.scene_name, scene_choices<float>(), "scene", "a built-in scene")->group("Scene");
+    cli::text(app, "--mesh", g.mesh, "an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky")->group("Scene");
+    cli::text(app, "--scene-file", g.scene_file,
+              "FILE.gltf or FILE.glb: a glTF 2.0 scene (meshes, materials, the first camera, KHR_lights_punctual "
+              "lights; a sky if nothing emits); FILE.json: a scene --export-scene wrote (its size and --max-depth "
+              "unless given)")->group("Scene");
+    cli::text(app, "--env", g.env, "FILE.exr: a lat-long environment map (envmap scene, --mesh or --scene-file)")->group("Scene");
+    cli::number_to<float>(app, "--smooth", [&g](float d) { g.smooth = d; }, 0.0f, 180.0f,
+                          "--mesh or --scene-file: shade smoothly with corner normals averaged over the faces within "
+                          "DEGREES of each other, replacing the file's normals")->group("Scene");
+    cli::text(app, "--insert-mesh", g.insert,
+              "an OBJ mesh (white, Lambertian) on the Cornell box's free floor (cornell, cornell-glossy)")->group("Scene");
+    cli::text(app, "--export-scene", g.export_json, "FILE.json: write the built scene, camera and size, and exit")->group("Scene");
+    vec3_flag(app, "--eye", g.eye, "camera position (default: the scene's; a mesh is framed by its box)")->group("Camera");
+    vec3_flag(app, "--look-at", g.look_at, "the point the camera looks at")->group("Camera");
+    vec3_flag(app, "--up", g.up, "the camera's up direction")->group("Camera");
+    cli::number_to<float>(app, "--fov", [&g](float d) { g.fov_degrees = d; }, 0.01f, 179.0f,
+                          "vertical field of view, degrees")->group("Camera");
+    cli::text(app, "--out", g.out,
+              "FILE.exr or FILE.png: writes FILE.exr (RGB, variance and the integrator's layers) and the tone-mapped "
+              "preview FILE.png")->group("Output");
+    app.add_flag("--aov", g.aov, "path: also the first-hit layers albedo, normal and depth in FILE.exr")->group("Output");
+    cli::number(app, "--exposure", g.exposure, -64.0f, 64.0f, "PNG preview exposure, EV")->group("Output");
+    cli::choice(app, "--tonemap", g.tonemap, std::span<const Choice<Tonemap>>(tonemaps), "tonemap", "PNG preview")
+        ->group("Output");
+}
+
+/// The image's flags (size, samples, threads) and the path tracer's policies by name.
+void add_render_flags(CLI::App& app, Args& g, NamedRender<float>& o) {
+    cli::number_to<int>(app, "--size", [&](int n) { o.image.width = o.image.height = n, g.width_given = g.height_given = true; },
+                        1, 16384, "image width and height (default 256)")->group("Image");
+    cli::number_to<int>(app, "--width", [&](int n) { o.image.width = n, g.width_given = true; }, 1, 16384,
+                        "image width (over --size)")->group("Image");
+    cli::number_to<int>(app, "--height", [&](int n) { o.image.height = n, g.height_given = true; }, 1, 16384,
+                        "image height (over --size)")->group("Image");
+    cli::number(app, "--spp", o.image.spp, 1, 1 << 20, "samples per pixel")->group("Image");
+    cli::number_to<int>(app, "--threads", [&o](int n) { o.image.threads = n; }, 1, 4096, "worker threads (default: all cores)")
+        ->group("Image");
+    app.add_flag_callback("--pixel-centres", [&o] { o.image.pixel_jitter = false; },
+                          "camera rays through pixel centres (default: jittered over the pixel)")
+        ->group("Image");
+    cli::number(app, "--seed", o.seed, std::uint64_t(0), ~std::uint64_t(0), "random seed")->group("Image");
+    cli::number(app, "--time-budget", g.time_budget, 1e-3, 1e6,
+                "progressive passes until the seconds are spent (path, sppm, photons); prints the passes done")->group("Image");
+    cli::choice(app, "--integrator", g.integrator, std::span<const Choice<IntegratorKind>>(integrators), "integrator",
+                "the integrator")->group("Image");
+    cli::choice(app, "--accel", g.accel, accelerator_choices(), "accelerator", "ray accelerator")->group("Image");
+    cli::number_to<int>(app, "--max-depth", [&](int n) { o.tracer.max_depth = n, g.depth_given = true; }, 1, 1 << 24,
+                        "path length cap (default 1024)")->group("Path tracer");
+    cli::text(app, "--roulette", o.roulette,
+              "the roulette rule; each also as NAME+estimate (Szecsi 2009 2.3's radiance estimate on top; estimate = "
+              "classic+estimate):\n" + choice_usage(roulette_choices<float>(), 4))->type_name("NAME")->group("Path tracer");
+    cli::number(app, "--rr-depth", o.rr_depth, 0, 1 << 20, "throughput roulettes: vertices before the first decision")
+        ->group("Path tracer");
+    cli::choice(app, "--direct", o.direct, direct_choices<float>(), "direct lighting", "direct lighting")->group("Path tracer");
+    cli::choice(app, "--selection", o.selection, selection_choices(), "BRDF selection", "BRDF selection")->group("Path tracer");
+    cli::number(app, "--light-samples", o.tracer.light_samples, 1, 1024, "light samples per vertex")->group("Path tracer");
+    cli::choice(app, "--sampler", o.sampler, sampler_choices<float>(), "sampler", "sampler")->group("Path tracer");
+    cli::choice(app, "--weights", o.weights, weights_choices<float>(), "roulette weights", "roulette band weights H")
+        ->group("Path tracer");
+    cli::choice(app, "--estimate", o.estimate, estimate_choices(), "radiance estimate", "L~ of the +estimate roulettes")
+        ->group("Path tracer");
+    app.add_flag("--reduce", o.reduce_continuation, "+estimate roulettes: shorten walks by the estimate's goodness")
+        ->group("Path tracer");
+}
+
+/// The VPL and photon integrators' flags.
+void add_integrator_flags(CLI::App& app, Args& g) {
+    VplCliOptions& v = g.vpl;
+    PhotonCliOptions& p = g.photons;
+    cli::number(app, "--vpls", v.vpls, std::size_t(1), std::size_t(1) << 24, "shooting walks")->group("VPL");
+    cli::choice(app, "--visibility", v.visibility, std::span<const Choice<bool>>(visibilities), "visibility", "visibility")
+        ->group("VPL");
+    cli::number(app, "--spheres", v.spheres, std::size_t(1), std::size_t(1) << 20, "occluder spheres")->group("VPL");
+    cli::number(app, "--clamp", v.clamp, 0.0, 1e30, "clamp the geometry term at this distance (0: unbiased)")->group("VPL");
+    cli::choice(app, "--gather", v.gather, std::span<const Choice<VplGather>>(gathers), "gather", "the VPL sum")->group("VPL");
+    cli::number(app, "--photons", p.photons, std::size_t(1), std::size_t(1) << 32, "sppm, photons: photons emitted per pass")
+        ->group("Photons");
+    cli::number(app, "--radius", p.radius, 1e-6, 1e6, "sppm: initial gather radius; photons: largest kNN radius")
+        ->group("Photons");
+    cli::number(app, "--camera-samples", p.camera_samples, 1, 1 << 16,
+                "sppm: camera rays per pixel and pass for emission and direct light")->group("Photons");
+    cli::number(app, "--knn", p.knn, 1, 1 << 16, "photons: photons per radiance estimate")->group("Photons");
+    cli::number(app, "--final-gather", p.gather_rays, 0, 1 << 16, "photons: final gather rays per pixel sample")
+        ->group("Photons");
+}
+
 /// Parses and validates every flag (nothing long runs before this returns). Returns false
-/// after --help.
+/// after --help or --version.
 bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
-    for (int i = 1; i < argc; ++i) {
-        std::string a = argv[i], given;  // given: the value of --name=value
-        bool has_given = false;
-        if (const auto eq = a.find('='); a.rfind("--", 0) == 0 && eq != std::string::npos) {
-            given = a.substr(eq + 1);
-            a.resize(eq);
-            has_given = true;
-        }
-        auto value = [&]() -> const char* {
-            if (has_given) {
-                has_given = false;
-                return given.c_str();
-            }
-            if (i + 1 >= argc) throw Error(a + " expects a value");
-            return argv[++i];
-        };
-        if (a == "--help" || a == "-h") { usage(); return false; }
-        if (a == "--version") { std::printf("glint-render %s\n", version_string); return false; }
-        else if (a == "--scene") g.scene_name = value();
-        else if (a == "--mesh") g.mesh = value();
-        else if (a == "--scene-file") g.scene_file = value();
-        else if (a == "--env") g.env = value();
-        else if (a == "--size") { o.image.width = o.image.height = int(to_int(a, value(), 1, 16384)); g.width_given = g.height_given = true; }
-        else if (a == "--width") { o.image.width = int(to_int(a, value(), 1, 16384)); g.width_given = true; }
-        else if (a == "--height") { o.image.height = int(to_int(a, value(), 1, 16384)); g.height_given = true; }
-        else if (a == "--spp") o.image.spp = int(to_int(a, value(), 1, 1 << 20));
-        else if (a == "--out") g.out = value();
-        else if (a == "--aov") g.aov = true;
-        else if (a == "--smooth") g.smooth = to_float(a, value(), 0.0f, 180.0f);
-        else if (a == "--roulette") o.roulette = value();
-        else if (a == "--rr-depth") o.rr_depth = int(to_int(a, value(), 0, 1 << 20));
-        else if (a == "--direct") o.direct = value();
-        else if (a == "--selection") o.selection = value();
-        else if (a == "--light-samples") o.tracer.light_samples = int(to_int(a, value(), 1, 1024));
-        else if (a == "--sampler") o.sampler = value();
-        else if (a == "--accel") g.accel = value();
-        else if (a == "--threads") o.image.threads = int(to_int(a, value(), 1, 4096));
-        else if (a == "--weights") o.weights = value();
-        else if (a == "--estimate") o.estimate = value();
-        else if (a == "--reduce") o.reduce_continuation = true;
-        else if (a == "--pixel-centres") o.image.pixel_jitter = false;
-        else if (a == "--exposure") g.exposure = to_float(a, value(), -64.0f, 64.0f);
-        else if (a == "--max-depth") { o.tracer.max_depth = int(to_int(a, value(), 1, 1 << 24)); g.depth_given = true; }
-        else if (a == "--eye") g.eye = to_vec3(a, value());
-        else if (a == "--look-at") g.look_at = to_vec3(a, value());
-        else if (a == "--up") g.up = to_vec3(a, value());
-        else if (a == "--fov") g.fov_degrees = to_float(a, value(), 0.01f, 179.0f);
-        else if (a == "--tonemap") g.tonemap = value();
-        else if (a == "--seed") o.seed = to_u64(a, value());
-        else if (a == "--time-budget") g.time_budget = to_float(a, value(), 1e-3f, 1e6f);
-        else if (a == "--insert-mesh") g.insert = value();
-        else if (a == "--export-scene") g.export_json = value();
-        else if (a == "--integrator") g.integrator = value();
-        else if (a == "--vpls") g.vpl.vpls = std::size_t(to_int(a, value(), 1, 1 << 24));
-        else if (a == "--visibility") g.vpl.visibility = value();
-        else if (a == "--spheres") g.vpl.spheres = std::size_t(to_int(a, value(), 1, 1 << 20));
-        else if (a == "--clamp") g.vpl.clamp = to_float(a, value(), 0.0f, 1e30f);
-        else if (a == "--gather") g.vpl.gather = value();
-        else if (a == "--photons") g.photons.photons = std::size_t(to_int(a, value(), 1, 1ll << 32));
-        else if (a == "--radius") g.photons.radius = to_float(a, value(), 1e-6f, 1e6f);
-        else if (a == "--knn") g.photons.knn = int(to_int(a, value(), 1, 1 << 16));
-        else if (a == "--final-gather") g.photons.gather_rays = int(to_int(a, value(), 0, 1 << 16));
-        else if (a == "--camera-samples") g.photons.camera_samples = int(to_int(a, value(), 1, 1 << 16));
-        else throw Error("unknown option '" + a + "' (see --help)");
-        if (has_given) throw Error(a + " takes no value, got '" + a + "=" + given + "'");
-    }
-    check_names(g, o);
+    CLI::App app("glint-render: renders a built-in scene (--scene), an OBJ mesh (--mesh) or a scene file "
+                 "(--scene-file) into an EXR and a PNG preview");
+    app.set_version_flag("--version", std::string("glint-render ") + version_string);
+    add_scene_flags(app, g);
+    add_render_flags(app, g, o);
+    add_integrator_flags(app, g);
+    if (!cli::parse(app, argc, argv)) return false;
+    glint::check_names(o);  // the roulette's NAME+estimate grammar
     if (g.time_budget > 0 && g.integrator == "vpl")
         throw Error("--time-budget applies to integrators with passes (path, sppm, photons), not '" + g.integrator + "'");
     if (g.aov && g.integrator != "path") throw Error("--aov applies to the path integrator, not '" + g.integrator + "'");
@@ -324,15 +263,15 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
         throw Error("give exactly one of --scene NAME, --mesh FILE and --scene-file FILE (see --help)");
     if (!g.scene_file.empty() && !ends_with(g.scene_file, ".gltf") && !ends_with(g.scene_file, ".glb") &&
         !ends_with(g.scene_file, ".json"))
-        throw Error("--scene-file expects FILE.gltf, FILE.glb or FILE.json, got '" + g.scene_file + "'");
+        throw Error("--scene-file: expects FILE.gltf, FILE.glb or FILE.json, got '" + g.scene_file + "'");
     if (std::uint64_t(o.image.width) * std::uint64_t(o.image.height) > (std::uint64_t(1) << 26))
         throw Error("--width x --height = " + std::to_string(o.image.width) + " x " + std::to_string(o.image.height) +
                     " is above the limit of 2^26 pixels");
     if (!ends_with(g.out, ".exr") && !ends_with(g.out, ".png"))
-        throw Error("--out expects a file name ending in .exr or .png, got '" + g.out + "'");
+        throw Error("--out: expects a file name ending in .exr or .png, got '" + g.out + "'");
     for (const char* ext : {".exr", ".png"}) check_writable(g.out.substr(0, g.out.size() - 4) + ext);
     if (!g.export_json.empty() && !ends_with(g.export_json, ".json"))
-        throw Error("--export-scene expects a file name ending in .json, got '" + g.export_json + "'");
+        throw Error("--export-scene: expects a file name ending in .json, got '" + g.export_json + "'");
     if (!g.export_json.empty()) check_writable(g.export_json);
     check_scene_flags(g);
     for (const std::string& f : {g.mesh, g.scene_file, g.env})
