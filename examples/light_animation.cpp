@@ -28,6 +28,8 @@
 #include <glint/vpl/light_animation.hpp>
 #include <glint/vpl/scenes.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 
 namespace {
@@ -47,17 +49,13 @@ int main(int argc, char** argv) try {
     std::size_t frames = 10, paths = 1, window = 0;
     int size = 128;
     std::string dir = ".";
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (i + 1 >= argc) throw Error("light_animation: " + a + " needs a value");
-        const std::string v = argv[++i];
-        if (a == "--frames") frames = std::stoul(v);
-        else if (a == "--size") size = std::stoi(v);
-        else if (a == "--paths") paths = std::stoul(v);
-        else if (a == "--window") window = std::stoul(v);
-        else if (a == "--out") dir = v;
-        else throw Error("light_animation: unknown flag '" + a + "'");
-    }
+    CLI::App app("light_animation: VPL frames of the Cornell box with a moving point light, path reuse across frames");
+    cli::number(app, "--frames", frames, std::size_t(1), std::size_t(1) << 16, "frames");
+    cli::number(app, "--size", size, 1, 4096, "image width and height");
+    cli::number(app, "--paths", paths, std::size_t(1), std::size_t(1) << 24, "light paths per frame");
+    cli::number(app, "--window", window, std::size_t(0), std::size_t(1) << 16, "reuse only the last W frames (0: every frame)");
+    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    if (!cli::parse(app, argc, argv)) return 0;
     const Rgb<float> intensity(4.0f, 3.5f, 3.0f);
     Scene<float> scene = with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), intensity);
     const MeshBvh<MollerTrumbore<float>, 8> accel(scene.triangles);

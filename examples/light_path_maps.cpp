@@ -30,6 +30,8 @@
 #include <glint/vpl/scenes.hpp>
 #include "image_error.hpp"
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 
 namespace {
@@ -48,23 +50,19 @@ int main(int argc, char** argv) try {
     std::size_t frames = 8, ref_walks = 4096;
     int size = 96;
     std::string dir = ".";
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (i + 1 >= argc) throw Error("light_path_maps: " + a + " needs a value");
-        const std::string v = argv[++i];
-        if (a == "--entries") opt.entry_points = std::stoul(v);
-        else if (a == "--clusters") opt.clusters = std::stoul(v);
-        else if (a == "--grid") opt.grid = std::stoi(v);
-        else if (a == "--inset") opt.inset = std::stod(v);
-        else if (a == "--branches") opt.branches = std::stoi(v);
-        else if (a == "--frames") frames = std::stoul(v);
-        else if (a == "--size") size = std::stoi(v);
-        else if (a == "--clamp") opt.min_distance = std::stod(v);
-        else if (a == "--ref-walks") ref_walks = std::stoul(v);
-        else if (a == "--seed") opt.seed = std::stoull(v);
-        else if (a == "--out") dir = v;
-        else throw Error("light_path_maps: unknown flag '" + a + "'");
-    }
+    CLI::App app("light_path_maps: light path maps against VPL renders of the Cornell box with a moving point light");
+    cli::number(app, "--entries", opt.entry_points, std::size_t(1), std::size_t(1) << 24, "entry points");
+    cli::number(app, "--clusters", opt.clusters, std::size_t(0), std::size_t(1) << 24, "k-means clusters of entry points (0: no clustering)");
+    cli::number(app, "--grid", opt.grid, 1, 256, "reference grid per triangle (g x g sub-triangles)");
+    cli::number(app, "--inset", opt.inset, 0.0, 0.999, "the grid lattice shrunk toward each centroid (0: on the edges)");
+    cli::number(app, "--branches", opt.branches, 1, 1 << 16, "walks per entry point (the splitting factor)");
+    cli::number(app, "--frames", frames, std::size_t(1), std::size_t(1) << 16, "frames");
+    cli::number(app, "--size", size, 1, 4096, "image width and height");
+    cli::number(app, "--clamp", opt.min_distance, 0.0, 1e30, "clamp the geometry term at this distance");
+    cli::number(app, "--ref-walks", ref_walks, std::size_t(1), std::size_t(1) << 24, "reference VPL walks");
+    cli::number(app, "--seed", opt.seed, std::uint64_t(0), ~std::uint64_t(0), "random seed");
+    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    if (!cli::parse(app, argc, argv)) return 0;
     Scene<float> scene = with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), Rgb<float>(4.0f, 3.5f, 3.0f));
     const Accel accel(scene.triangles);
     const ShadowRayVisibility<Accel> vis(accel, 1e-4f);

@@ -32,6 +32,8 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 using Accel = MeshBvh<MollerTrumbore<float>, 8>;
 
@@ -117,24 +119,18 @@ int main(int argc, char** argv) try {
     ts.texel_size = 0.25f;
     ts.estimate = {50, 0.5f};
     std::string dir = ".";
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (i + 1 >= argc) throw Error("moving_object: " + a + " needs a value");
-        const std::string v = argv[++i];
-        if (a == "--frames") frames = std::stoi(v);
-        else if (a == "--size") size = std::stoi(v);
-        else if (a == "--photons") st.photons.photons = std::stoul(v);
-        else if (a == "--groups") st.groups = std::stoul(v);
-        else if (a == "--texels") ts.texels_per_frame = std::stoul(v);
-        else if (a == "--aim-groups") ts.groups_per_frame = std::stoul(v);
-        else if (a == "--texel-size") ts.texel_size = std::stof(v);
-        else if (a == "--threads") threads = std::stoi(v);
-        else if (a == "--hold") hold = std::stoi(v);
-        else if (a == "--out") dir = v;
-        else throw Error("moving_object: unknown flag '" + a + "'");
-    }
-    if (frames < 1 || size < 1 || threads < 1 || hold < 0)
-        throw Error("moving_object: --frames, --size and --threads must be positive, --hold not negative");
+    CLI::App app("moving_object: selective photon tracing and texel caches while a box moves through the Cornell box");
+    cli::number(app, "--frames", frames, 1, 1 << 16, "frames");
+    cli::number(app, "--size", size, 1, 4096, "image width and height");
+    cli::number(app, "--photons", st.photons.photons, std::size_t(1), std::size_t(1) << 32, "photons per full trace");
+    cli::number(app, "--groups", st.groups, std::size_t(1), std::size_t(1) << 24, "photon groups");
+    cli::number(app, "--texels", ts.texels_per_frame, std::size_t(0), std::size_t(1) << 32, "IIM updates (texels) per frame");
+    cli::number(app, "--aim-groups", ts.groups_per_frame, std::size_t(0), std::size_t(1) << 24, "AIM updates (whole groups) per frame");
+    cli::number(app, "--texel-size", ts.texel_size, 1e-6f, 1e6f, "texel edge length");
+    cli::number(app, "--threads", threads, 1, 4096, "worker threads");
+    cli::number(app, "--hold", hold, 0, 1 << 16, "frames the box holds still first");
+    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    if (!cli::parse(app, argc, argv)) return 0;
     st.photons.threads = ts.threads = threads;
     const auto x_at = [&](int f) { return -0.6f + 1.2f * float(std::min(f, frames - 1)) / float(std::max(frames - 1, 1)); };
 

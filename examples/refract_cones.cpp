@@ -33,6 +33,8 @@
 #include <glint/intersection/ivm.hpp>
 #include "tree_scenes.hpp"
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 
 namespace {
@@ -85,19 +87,13 @@ Vec3f environment(const Vec3f& d, const Vec3f& up, const Vec3f& b1, const Vec3f&
 int main(int argc, char** argv) try {
     std::string mesh_path, out = "refract_cones";
     int size = 512, tile = 16, passes = 8;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (i + 1 >= argc) throw Error("refract_cones: missing value after " + a);
-        const std::string v = argv[++i];
-        if (a == "--mesh") mesh_path = v;
-        else if (a == "--out") out = v;
-        else if (a == "--size") size = std::atoi(v.c_str());
-        else if (a == "--tile") tile = std::atoi(v.c_str());
-        else if (a == "--passes") passes = std::atoi(v.c_str());
-        else throw Error("refract_cones: unknown argument " + a +
-                         " (use --mesh FILE.obj, --size N, --tile N, --passes N, --out PREFIX)");
-    }
-    if (size <= 0 || size > 8192) throw Error("refract_cones: --size must be in 1..8192");
+    CLI::App app("refract_cones: refracted rays through a glass object, the ray-tile hierarchy against brute force");
+    cli::text(app, "--mesh", mesh_path, "FILE.obj: the glass object (default: a torus knot)");
+    cli::text(app, "--out", out, "PREFIX of the images written");
+    cli::number(app, "--size", size, 1, 8192, "image width and height");
+    cli::number(app, "--tile", tile, 1, 8192, "tile edge in pixels");
+    cli::number(app, "--passes", passes, 1, 1 << 16, "passes");
+    if (!cli::parse(app, argc, argv)) return 0;
 
     // The glass object and its frame: z up for the knot, y up for OBJ files.
     const Mesh<float> mesh = mesh_path.empty() ? make_torus_knot<float>(300, 24) : load_obj(mesh_path);

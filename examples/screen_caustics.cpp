@@ -28,6 +28,8 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 using Accel = MeshBvh<MollerTrumbore<float>, 8>;
 
@@ -63,17 +65,13 @@ int main(int argc, char** argv) try {
     int size = 128;
     std::size_t photons = 200000, ref_photons = 4000000, ref_k = 200;
     std::string dir = ".";
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (i + 1 >= argc) throw Error("screen_caustics: " + a + " needs a value");
-        const std::string v = argv[++i];
-        if (a == "--size") size = std::stoi(v);
-        else if (a == "--photons") photons = std::stoul(v);
-        else if (a == "--ref-photons") ref_photons = std::stoul(v);
-        else if (a == "--ref-k") ref_k = std::stoul(v);
-        else if (a == "--out") dir = v;
-        else throw Error("screen_caustics: unknown flag '" + a + "'");
-    }
+    CLI::App app("screen_caustics: the screen-space caustic filter against a photon-map reference");
+    cli::number(app, "--size", size, 1, 4096, "image width and height");
+    cli::number(app, "--photons", photons, std::size_t(1), std::size_t(1) << 32, "caustic photons");
+    cli::number(app, "--ref-photons", ref_photons, std::size_t(1), std::size_t(1) << 32, "reference photons");
+    cli::number(app, "--ref-k", ref_k, std::size_t(1), std::size_t(1) << 16, "reference photons per estimate");
+    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    if (!cli::parse(app, argc, argv)) return 0;
     const Scene<float> s = builtin_scene<float>("cornell-caustics");
     const Accel accel(s.triangles);
     const std::vector<ScreenSurface> screen = screen_surfaces(s, accel, size, size);
