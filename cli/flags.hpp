@@ -1,35 +1,82 @@
 // cli/flags.hpp: the command-line conventions of glint's programs (glint-render, the
-// examples and the benchmarks), on CLI11 (Debian libcli11-dev). Not part of the library:
-// a program that includes glint's headers parses its own command line.
+// examples and the benchmarks). Not part of the library: a program that includes glint's
+// headers parses its own command line.
 //
-//   CLI::App app("bench_trees: the wide BVH against Embree");
+//   cli::App app("bench_trees: the wide BVH against Embree");
 //   cli::number(app, "--reps", o.reps, 1, 1000, "timed repetitions");
 //   cli::choice(app, "--tonemap", o.tonemap, std::span(tonemaps), "tonemap", "PNG preview");
+//   cli::flag(app, "--csv-only", o.csv_only, "no table, only the CSV");
 //   if (!cli::parse(app, argc, argv)) return 0;   // --help or --version printed
 //
-// Every flag takes its value as `--flag value` or `--flag=value`. A number is parsed whole
-// (no trailing text, finite) and range checked, and a name is looked up in its choice table,
-// while the command line is parsed: a bad value stops the program before it reads a file,
-// with an Error naming the flag, the value and what it expects ("--size: expects an integer
-// in [1, 16384], got '100000'").
+// Every flag takes its value as `--flag value` or `--flag=value`; a flag given twice keeps
+// the last value (cli::texts collects every one). A number is parsed whole (no trailing text,
+// finite) and range checked, and a name is looked up in its choice table, while the command
+// line is parsed: a bad value stops the program before it reads a file, with a glint::Error
+// naming the flag, the value and what it expects ("--size: expects an integer in
+// [1, 16384], got '100000'"). A flag that takes no value given one (--aov=1) is an error.
+//
+// The parser is CLI11 (Debian libcli11-dev), compiled once in cli/flags.cpp (the glint_cli
+// library): CLI11 2.1 is header-only and costs about 15 CPU-s in every translation unit that
+// includes it at -O2, so this header declares the conventions without it.
 #pragma once
 
 #include <charconv>
 #include <cmath>
 #include <concepts>
-#include <cstdio>
+#include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
 #include <system_error>
-#include <utility>
+#include <vector>
 
-#include <CLI/CLI.hpp>
-
-#include <glint/core/error.hpp>
 #include <glint/tracer/choice.hpp>
 
+namespace CLI {
+class App;
+class Option;
+}  // namespace CLI
+
 namespace glint::cli {
+
+/// One flag of an App, to chain settings on: `->group("Camera")`; given() after parsing.
+class Flag {
+public:
+    explicit Flag(CLI::Option* o) : o_(o) {}
+    /// The heading the flag is listed under in --help.
+    Flag* group(const std::string& name);
+    /// Whether the command line gave the flag (after parse()).
+    bool given() const;
+
+private:
+    CLI::Option* o_;
+};
+
+/// A program's command line: its description, its flags, --help and --version.
+class App {
+public:
+    explicit App(const std::string& description);
+    ~App();
+    App(const App&) = delete;
+    App& operator=(const App&) = delete;
+
+    /// Adds --version, printing `text`.
+    void version(const std::string& text);
+    /// A flag with a value: `set` parses and stores one value and returns "" or what was wrong
+    /// ("expects ..., got '...'"). `type` and `default_text` are shown by --help; `repeat`:
+    /// the flag may be given several times, `set` called for each value in order.
+    Flag* value(const std::string& flag, std::function<std::string(const std::string&)> set, const std::string& help,
+                const std::string& type, const std::string& default_text, bool repeat = false);
+    /// A flag without a value: `set` runs when it is given.
+    Flag* flag(const std::string& flag, std::function<void()> set, const std::string& help);
+    /// Parses (see cli::parse).
+    bool parse(int argc, const char* const* argv);
+
+private:
+    std::unique_ptr<CLI::App> app_;
+    std::vector<std::unique_ptr<Flag>> flags_;
+};
 
 /// `text` parsed whole as an N (std::from_chars: no sign '+', no trailing text); false for
 /// anything else, for a non-finite float, and outside [lo, hi].
@@ -42,96 +89,101 @@ bool parse_number(std::string_view text, N lo, N hi, N& out) {
     return out >= lo && out <= hi;
 }
 
-/// What a number flag expects, for its errors and its help: "an integer in [1, 16384]".
+/// A number as --help and the errors show it ("0.05", "16384").
+template <class N>
+std::string number_text(N x) {
+    if constexpr (std::floating_point<N>) {
+        char buf[32];
+        const auto r = std::to_chars(buf, buf + sizeof buf, x);
+        return std::string(buf, r.ptr);
+    } else {
+        return std::to_string(x);
+    }
+}
+
+/// What a number flag expects: "an integer in [1, 16384]".
 template <class N>
 std::string number_range(N lo, N hi) {
-    auto text = [](N x) {
-        if constexpr (std::floating_point<N>) {
-            char buf[32];
-            std::snprintf(buf, sizeof buf, "%g", double(x));
-            return std::string(buf);
-        } else {
-            return std::to_string(x);
-        }
-    };
-    return std::string(std::floating_point<N> ? "a number" : "an integer") + " in [" + text(lo) + ", " + text(hi) + "]";
-}
-
-/// The check of a number flag: its value parsed whole as an N in [lo, hi].
-template <class N>
-CLI::Validator number_check(N lo, N hi) {
-    return CLI::Validator(
-        [lo, hi, range = number_range(lo, hi)](std::string& text) {
-            N x{};
-            return parse_number(text, lo, hi, x) ? std::string() : "expects " + range + ", got '" + text + "'";
-        },
-        "", "range");
-}
-
-/// A flag whose value is an N in [lo, hi], written to `target` (left as is when the flag is
-/// absent; its default shows in --help). Returns the option, e.g. to ask ->count().
-template <class N>
-CLI::Option* number(CLI::App& app, const std::string& flag, N& target, N lo, N hi, const std::string& help) {
-    return app.add_option(flag, target, help + " (" + number_range(lo, hi) + ")")
-        ->check(number_check(lo, hi))
-        ->capture_default_str();
+    return std::string(std::floating_point<N> ? "a number" : "an integer") + " in [" + number_text(lo) + ", " +
+           number_text(hi) + "]";
 }
 
 /// A flag whose value is an N in [lo, hi], handed to `set` (for a value that sets several
 /// fields, or an optional one); `help` states the default.
 template <class N, class Set>
-CLI::Option* number_to(CLI::App& app, const std::string& flag, Set set, N lo, N hi, const std::string& help) {
-    return app.add_option_function<N>(flag, std::move(set), help + " (" + number_range(lo, hi) + ")")
-        ->check(number_check(lo, hi));
+Flag* number_to(App& app, const std::string& flag, Set set, N lo, N hi, const std::string& help,
+                const std::string& default_text = "") {
+    const std::string range = number_range(lo, hi);
+    return app.value(
+        flag,
+        [set = std::move(set), lo, hi, range](const std::string& text) {
+            N x{};
+            if (!parse_number(text, lo, hi, x)) return "expects " + range + ", got '" + text + "'";
+            set(x);
+            return std::string();
+        },
+        help + " (" + range + ")", std::floating_point<N> ? "NUMBER" : "INT", default_text);
 }
 
-/// A flag whose value is a name of `table` (`what` names the table in the error: "unknown
-/// tonemap 'x' (clamp, reinhard)"); the table's names and help lines follow the flag's help.
+/// A flag whose value is an N in [lo, hi], written to `target` (left as is when the flag is
+/// absent; its value now shows in --help as the default).
+template <class N>
+Flag* number(App& app, const std::string& flag, N& target, N lo, N hi, const std::string& help) {
+    return number_to<N>(app, flag, [&target](N x) { target = x; }, lo, hi, help, number_text(target));
+}
+
+/// A flag whose value is a name of `table`, written to `target` (`what` names the table in
+/// the error: "unknown tonemap 'x' (clamp, reinhard)"); the names and their help lines follow
+/// the flag's help.
 template <class Make>
-CLI::Option* choice(CLI::App& app, const std::string& flag, std::string& target, std::span<const Choice<Make>> table,
-                    const std::string& what, const std::string& help) {
-    CLI::Validator check(
-        [table, what](std::string& text) {
-            for (const auto& c : table)
-                if (c.name == text) return std::string();
-            return "unknown " + what + " '" + text + "' (" + choice_names(table) + ")";
-        },
-        "", "choice");
+Flag* choice(App& app, const std::string& flag, std::string& target, std::span<const Choice<Make>> table,
+             const std::string& what, const std::string& help) {
     std::string names = choice_usage(table, 4);
     names.pop_back();  // the last line's newline
-    return app.add_option(flag, target, help + ":\n" + names)->check(check)->capture_default_str()->type_name("NAME");
+    return app.value(
+        flag,
+        [&target, table, what](const std::string& text) {
+            for (const auto& c : table) {
+                if (c.name != text) continue;
+                target = text;
+                return std::string();
+            }
+            return "unknown " + what + " '" + text + "' (" + choice_names(table) + ")";
+        },
+        help + ":\n" + names, "NAME", target);
 }
 
-/// A flag whose value is any text: a file name (as --help shows it), or a name that the
-/// program checks itself (against a table with a grammar, such as roulette+estimate).
-inline CLI::Option* text(CLI::App& app, const std::string& flag, std::string& target, const std::string& help) {
-    return app.add_option(flag, target, help)->capture_default_str()->type_name("FILE");
+/// A flag whose value is any text, written to `target`: a file name (`type` as --help shows
+/// it), or a name the program checks itself (against a table with a grammar).
+inline Flag* text(App& app, const std::string& flag, std::string& target, const std::string& help,
+                  const std::string& type = "FILE") {
+    const auto set = [&target](const std::string& t) {
+        target = t;
+        return std::string();
+    };
+    return app.value(flag, set, help, type, target);
+}
+
+/// A flag that may be given several times, each value appended to `target`.
+inline Flag* texts(App& app, const std::string& flag, std::vector<std::string>& target, const std::string& help,
+                   const std::string& type = "FILE") {
+    const auto add = [&target](const std::string& t) {
+        target.push_back(t);
+        return std::string();
+    };
+    return app.value(flag, add, help, type, "", true);
+}
+
+/// A flag whose value is an existing folder, written to `target`.
+Flag* folder(App& app, const std::string& flag, std::string& target, const std::string& help);
+
+/// A flag without a value that sets `target` to true.
+inline Flag* flag(App& app, const std::string& flag, bool& target, const std::string& help) {
+    return app.flag(flag, [&target] { target = true; }, help);
 }
 
 /// Parses the command line. Returns false after printing --help or --version (the program
 /// then exits with 0); throws glint::Error naming the flag and the value for a bad one.
-inline bool parse(CLI::App& app, int argc, const char* const* argv) {
-    for (int i = 1; i < argc; ++i) {  // --flag=value for a flag that takes none: an error, not a value
-        const std::string_view a = argv[i];
-        const auto eq = a.find('=');
-        if (!a.starts_with("--") || eq == std::string_view::npos) continue;
-        const CLI::Option* o = app.get_option_no_throw(std::string(a.substr(0, eq)));
-        if (o != nullptr && o->get_expected_max() == 0)
-            throw Error(std::string(a.substr(0, eq)) + " takes no value, got '" + std::string(a) + "'");
-    }
-    try {
-        app.parse(argc, argv);
-        return true;
-    } catch (const CLI::CallForHelp&) {
-        std::fputs(app.help().c_str(), stdout);
-    } catch (const CLI::CallForAllHelp&) {
-        std::fputs(app.help("", CLI::AppFormatMode::All).c_str(), stdout);
-    } catch (const CLI::CallForVersion& v) {
-        std::printf("%s\n", v.what());
-    } catch (const CLI::ParseError& e) {
-        throw Error(std::string(e.what()) + " (see --help)");
-    }
-    return false;
-}
+inline bool parse(App& app, int argc, const char* const* argv) { return app.parse(argc, argv); }
 
 }  // namespace glint::cli

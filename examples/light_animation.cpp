@@ -49,12 +49,12 @@ int main(int argc, char** argv) try {
     std::size_t frames = 10, paths = 1, window = 0;
     int size = 128;
     std::string dir = ".";
-    CLI::App app("light_animation: VPL frames of the Cornell box with a moving point light, path reuse across frames");
+    cli::App app("light_animation: VPL frames of the Cornell box with a moving point light, path reuse across frames");
     cli::number(app, "--frames", frames, std::size_t(1), std::size_t(1) << 16, "frames");
     cli::number(app, "--size", size, 1, 4096, "image width and height");
     cli::number(app, "--paths", paths, std::size_t(1), std::size_t(1) << 24, "light paths per frame");
     cli::number(app, "--window", window, std::size_t(0), std::size_t(1) << 16, "reuse only the last W frames (0: every frame)");
-    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    cli::folder(app, "--out", dir, "folder for the images");
     if (!cli::parse(app, argc, argv)) return 0;
     const Rgb<float> intensity(4.0f, 3.5f, 3.0f);
     Scene<float> scene = with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), intensity);

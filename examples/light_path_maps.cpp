@@ -50,7 +50,7 @@ int main(int argc, char** argv) try {
     std::size_t frames = 8, ref_walks = 4096;
     int size = 96;
     std::string dir = ".";
-    CLI::App app("light_path_maps: light path maps against VPL renders of the Cornell box with a moving point light");
+    cli::App app("light_path_maps: light path maps against VPL renders of the Cornell box with a moving point light");
     cli::number(app, "--entries", opt.entry_points, std::size_t(1), std::size_t(1) << 24, "entry points");
     cli::number(app, "--clusters", opt.clusters, std::size_t(0), std::size_t(1) << 24, "k-means clusters of entry points (0: no clustering)");
     cli::number(app, "--grid", opt.grid, 1, 256, "reference grid per triangle (g x g sub-triangles)");
@@ -61,7 +61,7 @@ int main(int argc, char** argv) try {
     cli::number(app, "--clamp", opt.min_distance, 0.0, 1e30, "clamp the geometry term at this distance");
     cli::number(app, "--ref-walks", ref_walks, std::size_t(1), std::size_t(1) << 24, "reference VPL walks");
     cli::number(app, "--seed", opt.seed, std::uint64_t(0), ~std::uint64_t(0), "random seed");
-    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    cli::folder(app, "--out", dir, "folder for the images");
     if (!cli::parse(app, argc, argv)) return 0;
     Scene<float> scene = with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), Rgb<float>(4.0f, 3.5f, 3.0f));
     const Accel accel(scene.triangles);

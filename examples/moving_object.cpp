@@ -119,7 +119,7 @@ int main(int argc, char** argv) try {
     ts.texel_size = 0.25f;
     ts.estimate = {50, 0.5f};
     std::string dir = ".";
-    CLI::App app("moving_object: selective photon tracing and texel caches while a box moves through the Cornell box");
+    cli::App app("moving_object: selective photon tracing and texel caches while a box moves through the Cornell box");
     cli::number(app, "--frames", frames, 1, 1 << 16, "frames");
     cli::number(app, "--size", size, 1, 4096, "image width and height");
     cli::number(app, "--photons", st.photons.photons, std::size_t(1), std::size_t(1) << 32, "photons per full trace");
@@ -129,7 +129,7 @@ int main(int argc, char** argv) try {
     cli::number(app, "--texel-size", ts.texel_size, 1e-6f, 1e6f, "texel edge length");
     cli::number(app, "--threads", threads, 1, 4096, "worker threads");
     cli::number(app, "--hold", hold, 0, 1 << 16, "frames the box holds still first");
-    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    cli::folder(app, "--out", dir, "folder for the images");
     if (!cli::parse(app, argc, argv)) return 0;
     st.photons.threads = ts.threads = threads;
     const auto x_at = [&](int f) { return -0.6f + 1.2f * float(std::min(f, frames - 1)) / float(std::max(frames - 1, 1)); };

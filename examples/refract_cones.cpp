@@ -87,7 +87,7 @@ Vec3f environment(const Vec3f& d, const Vec3f& up, const Vec3f& b1, const Vec3f&
 int main(int argc, char** argv) try {
     std::string mesh_path, out = "refract_cones";
     int size = 512, tile = 16, passes = 8;
-    CLI::App app("refract_cones: refracted rays through a glass object, the ray-tile hierarchy against brute force");
+    cli::App app("refract_cones: refracted rays through a glass object, the ray-tile hierarchy against brute force");
     cli::text(app, "--mesh", mesh_path, "FILE.obj: the glass object (default: a torus knot)");
     cli::text(app, "--out", out, "PREFIX of the images written");
     cli::number(app, "--size", size, 1, 8192, "image width and height");

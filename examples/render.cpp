@@ -100,13 +100,12 @@ std::optional<Vec3f> parse_vec3(const std::string& text) {
 }
 
 /// A flag whose value is a point or direction X,Y,Z.
-CLI::Option* vec3_flag(CLI::App& app, const std::string& flag, std::optional<Vec3f>& target, const std::string& help) {
-    const CLI::Validator check(
-        [](std::string& t) { return parse_vec3(t) ? std::string() : "expects three finite numbers X,Y,Z, got '" + t + "'"; },
-        "", "vec3");
-    return app.add_option_function<std::string>(flag, [&target](const std::string& t) { target = parse_vec3(t); }, help)
-        ->check(check)
-        ->type_name("X,Y,Z");
+cli::Flag* vec3_flag(cli::App& app, const std::string& flag, std::optional<Vec3f>& target, const std::string& help) {
+    const auto set = [&target](const std::string& t) {
+        target = parse_vec3(t);
+        return target ? std::string() : "expects three finite numbers X,Y,Z, got '" + t + "'";
+    };
+    return app.value(flag, set, help, "X,Y,Z", "");
 }
 
 bool ends_with(const std::string& s, const std::string& tail) {
@@ -157,7 +156,7 @@ void check_scene_flags(const Args& g) {
 }
 
 /// The flags that choose the scene, the camera and the output.
-void add_scene_flags(CLI::App& app, Args& g) {
+void add_scene_flags(cli::App& app, Args& g) {
     cli::choice(app, "--scene", g.scene_name, scene_choices<float>(), "scene", "a built-in scene")->group("Scene");
     cli::text(app, "--mesh", g.mesh, "an OBJ (+MTL) mesh; lit by its emissive materials, or by a sky")->group("Scene");
     cli::text(app, "--scene-file", g.scene_file,
@@ -179,14 +178,14 @@ void add_scene_flags(CLI::App& app, Args& g) {
     cli::text(app, "--out", g.out,
               "FILE.exr or FILE.png: writes FILE.exr (RGB, variance and the integrator's layers) and the tone-mapped "
               "preview FILE.png")->group("Output");
-    app.add_flag("--aov", g.aov, "path: also the first-hit layers albedo, normal and depth in FILE.exr")->group("Output");
+    cli::flag(app, "--aov", g.aov, "path: also the first-hit layers albedo, normal and depth in FILE.exr")->group("Output");
     cli::number(app, "--exposure", g.exposure, -64.0f, 64.0f, "PNG preview exposure, EV")->group("Output");
     cli::choice(app, "--tonemap", g.tonemap, std::span<const Choice<Tonemap>>(tonemaps), "tonemap", "PNG preview")
         ->group("Output");
 }
 
 /// The image's flags (size, samples, threads) and the path tracer's policies by name.
-void add_render_flags(CLI::App& app, Args& g, NamedRender<float>& o) {
+void add_render_flags(cli::App& app, Args& g, NamedRender<float>& o) {
     cli::number_to<int>(app, "--size", [&](int n) { o.image.width = o.image.height = n, g.width_given = g.height_given = true; },
                         1, 16384, "image width and height (default 256)")->group("Image");
     cli::number_to<int>(app, "--width", [&](int n) { o.image.width = n, g.width_given = true; }, 1, 16384,
@@ -196,7 +195,7 @@ void add_render_flags(CLI::App& app, Args& g, NamedRender<float>& o) {
     cli::number(app, "--spp", o.image.spp, 1, 1 << 20, "samples per pixel")->group("Image");
     cli::number_to<int>(app, "--threads", [&o](int n) { o.image.threads = n; }, 1, 4096, "worker threads (default: all cores)")
         ->group("Image");
-    app.add_flag_callback("--pixel-centres", [&o] { o.image.pixel_jitter = false; },
+    app.flag("--pixel-centres", [&o] { o.image.pixel_jitter = false; },
                           "camera rays through pixel centres (default: jittered over the pixel)")
         ->group("Image");
     cli::number(app, "--seed", o.seed, std::uint64_t(0), ~std::uint64_t(0), "random seed")->group("Image");
@@ -209,7 +208,7 @@ void add_render_flags(CLI::App& app, Args& g, NamedRender<float>& o) {
                         "path length cap (default 1024)")->group("Path tracer");
     cli::text(app, "--roulette", o.roulette,
               "the roulette rule; each also as NAME+estimate (Szecsi 2009 2.3's radiance estimate on top; estimate = "
-              "classic+estimate):\n" + choice_usage(roulette_choices<float>(), 4))->type_name("NAME")->group("Path tracer");
+              "classic+estimate):\n" + choice_usage(roulette_choices<float>(), 4), "NAME")->group("Path tracer");
     cli::number(app, "--rr-depth", o.rr_depth, 0, 1 << 20, "throughput roulettes: vertices before the first decision")
         ->group("Path tracer");
     cli::choice(app, "--direct", o.direct, direct_choices<float>(), "direct lighting", "direct lighting")->group("Path tracer");
@@ -220,12 +219,12 @@ void add_render_flags(CLI::App& app, Args& g, NamedRender<float>& o) {
         ->group("Path tracer");
     cli::choice(app, "--estimate", o.estimate, estimate_choices(), "radiance estimate", "L~ of the +estimate roulettes")
         ->group("Path tracer");
-    app.add_flag("--reduce", o.reduce_continuation, "+estimate roulettes: shorten walks by the estimate's goodness")
+    cli::flag(app, "--reduce", o.reduce_continuation, "+estimate roulettes: shorten walks by the estimate's goodness")
         ->group("Path tracer");
 }
 
 /// The VPL and photon integrators' flags.
-void add_integrator_flags(CLI::App& app, Args& g) {
+void add_integrator_flags(cli::App& app, Args& g) {
     VplCliOptions& v = g.vpl;
     PhotonCliOptions& p = g.photons;
     cli::number(app, "--vpls", v.vpls, std::size_t(1), std::size_t(1) << 24, "shooting walks")->group("VPL");
@@ -248,9 +247,9 @@ void add_integrator_flags(CLI::App& app, Args& g) {
 /// Parses and validates every flag (nothing long runs before this returns). Returns false
 /// after --help or --version.
 bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
-    CLI::App app("glint-render: renders a built-in scene (--scene), an OBJ mesh (--mesh) or a scene file "
+    cli::App app("glint-render: renders a built-in scene (--scene), an OBJ mesh (--mesh) or a scene file "
                  "(--scene-file) into an EXR and a PNG preview");
-    app.set_version_flag("--version", std::string("glint-render ") + version_string);
+    app.version(std::string("glint-render ") + version_string);
     add_scene_flags(app, g);
     add_render_flags(app, g, o);
     add_integrator_flags(app, g);

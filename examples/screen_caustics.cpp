@@ -65,12 +65,12 @@ int main(int argc, char** argv) try {
     int size = 128;
     std::size_t photons = 200000, ref_photons = 4000000, ref_k = 200;
     std::string dir = ".";
-    CLI::App app("screen_caustics: the screen-space caustic filter against a photon-map reference");
+    cli::App app("screen_caustics: the screen-space caustic filter against a photon-map reference");
     cli::number(app, "--size", size, 1, 4096, "image width and height");
     cli::number(app, "--photons", photons, std::size_t(1), std::size_t(1) << 32, "caustic photons");
     cli::number(app, "--ref-photons", ref_photons, std::size_t(1), std::size_t(1) << 32, "reference photons");
     cli::number(app, "--ref-k", ref_k, std::size_t(1), std::size_t(1) << 16, "reference photons per estimate");
-    cli::text(app, "--out", dir, "folder for the images")->check(CLI::ExistingDirectory);
+    cli::folder(app, "--out", dir, "folder for the images");
     if (!cli::parse(app, argc, argv)) return 0;
     const Scene<float> s = builtin_scene<float>("cornell-caustics");
     const Accel accel(s.triangles);
