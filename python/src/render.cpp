@@ -20,6 +20,9 @@
 #include <glint/tracer/scenes.hpp>
 
 #include "arrays.hpp"
+#ifdef GLINT_SHARED_INSTANCES
+#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#endif
 
 namespace glint::python {
 
