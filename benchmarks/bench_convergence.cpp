@@ -72,7 +72,7 @@
 #include <glint/tracer/scenes.hpp>
 
 
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 
 using namespace glint;
 
@@ -536,36 +536,33 @@ double efficiency_ratio(const std::vector<Point>& m, const std::vector<Point>& b
 int main(int argc, char** argv) {
     try {
         Config cfg;
-        bench::Args args(argc, argv);
-        while (args.next()) {
-            const std::string& a = args.flag();
-            if (a == "--scene") cfg.scene = args.value();
-            else if (a == "--csv") cfg.csv = args.value();
-            else if (a == "--cache") cfg.cache = args.value();
-            else if (a == "--plot") cfg.plot = args.value();
-            else if (a == "--size") cfg.size = args.number(4, 1 << 14);
-            else if (a == "--max-spp") cfg.max_spp = args.number(1, 1 << 20);
-            else if (a == "--threads") cfg.threads = args.number(0, 1 << 20);
-            else if (a == "--quick") cfg.quick = true;
-            else if (a == "--direct") cfg.direct = args.value();
-            else if (a == "--estimate") cfg.radiance_estimate = args.value();
-            else if (a == "--reduce") cfg.reduce = true;
-            else if (a == "--analysis") cfg.analysis = true;
-            else if (a == "--jitter") cfg.jitter = true;
-            else if (a == "--sampler") cfg.sampler = args.value();
-            else if (a == "--seed") cfg.seed = args.number<std::uint64_t>();
-            else if (a == "--light-samples") cfg.light_samples = args.number(1, 1 << 20);
-            else if (a == "--weights") cfg.weights = args.value();
-            else if (a == "--compare") cfg.compare = args.value();
-            else if (a == "--rr-depth") cfg.rr_depth = args.number(0, 1 << 20);
-            else args.unknown("bench_convergence --scene NAME|all --csv FILE --size N --max-spp N "
-                             "--cache DIR --plot FILE.png --threads N --direct NAME --estimate pilot|scene --reduce "
-                             "--weights mean|luminance --analysis --quick --jitter --light-samples N --sampler random|halton|halton-owen|halton-cp --seed N --compare roulette --rr-depth N");
-        }
+        cli::App app("bench_convergence: the path tracer's RMSE against time for the roulettes, BRDF selection, "
+                     "correlated sampling and the samplers, single thread per method");
+        cli::text(app, "--scene", cfg.scene, "furnace, cornell, cornell-glossy, arealight, envmap or all", "NAME");
+        cli::output(app, "--csv", cfg.csv, "write the curves as CSV (and the plot beside it)");
+        cli::text(app, "--cache", cfg.cache, "folder of cached references", "DIR");
+        cli::output(app, "--plot", cfg.plot, "FILE.png: the plot");
+        cli::number(app, "--size", cfg.size, 4, 1 << 14, "image width and height");
+        cli::number(app, "--max-spp", cfg.max_spp, 1, 1 << 20, "largest samples per pixel");
+        cli::number(app, "--threads", cfg.threads, 0, 1 << 20, "threads (0: all cores)");
+        cli::flag(app, "--quick", cfg.quick, "a smoke run: 16 x 16, up to 4 spp");
+        cli::text(app, "--direct", cfg.direct, "direct lighting of the roulette and selection scenes (default per scene)",
+                  "NAME");
+        cli::choice(app, "--estimate", cfg.radiance_estimate, estimate_choices(), "radiance estimate",
+                    "L~ of the estimate roulettes");
+        cli::flag(app, "--reduce", cfg.reduce, "shorten walks by the estimate's goodness");
+        cli::flag(app, "--analysis", cfg.analysis, "Szecsi 2009 2.3's goodness d and termination's share");
+        cli::flag(app, "--jitter", cfg.jitter, "camera rays jittered over each pixel (default: through its centre)");
+        cli::choice(app, "--sampler", cfg.sampler, sampler_choices<float>(), "sampler", "sampler");
+        cli::number(app, "--seed", cfg.seed, std::uint64_t(0), ~std::uint64_t(0), "methods render with seed 1000 N + spp");
+        cli::number(app, "--light-samples", cfg.light_samples, 1, 1 << 20,
+                    "light samples per vertex (default: 1; 10 on arealight)");
+        cli::choice(app, "--weights", cfg.weights, weights_choices<float>(), "roulette weights", "roulette band weights H");
+        cli::text(app, "--compare", cfg.compare, "roulette: the roulette methods on every scene", "NAME");
+        cli::number(app, "--rr-depth", cfg.rr_depth, 0, 1 << 20, "the throughput roulettes' min_depth");
+        if (!cli::parse(app, argc, argv)) return 0;
         if (!cfg.compare.empty() && cfg.compare != "roulette")
             throw Error("--compare expects roulette, not '" + cfg.compare + "'");
-        if (cfg.weights != "mean" && cfg.weights != "luminance")
-            throw Error("--weights expects mean or luminance, not '" + cfg.weights + "'");
         if (cfg.quick) {
             cfg.size = 16;
             cfg.max_spp = 4;

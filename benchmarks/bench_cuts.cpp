@@ -35,7 +35,7 @@
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
 #include "counted_visibility.hpp"
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 
 using namespace glint;
 
@@ -61,35 +61,22 @@ struct Run {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
-template <class N>
-std::vector<N> list(const std::string& v) {
-    std::vector<N> out;
-    std::stringstream ss(v);
-    for (std::string t; std::getline(ss, t, ',');) out.push_back(N(std::stod(t)));
-    if (out.empty()) throw Error("bench_cuts: empty list '" + v + "'");
-    return out;
-}
-
 Config parse(int argc, char** argv) {
     Config c;
-    bench::Args a(argc, argv);
-    while (a.next()) {
-        const std::string& f = a.flag();
-        if (f == "--quick") c.size = 12, c.vpls = {2000}, c.tree_sizes = {1000, 10000}, c.thresholds = {0.02};
-        else if (f == "--size") c.size = a.number<int>(1, 4096);
-        else if (f == "--reps") c.reps = a.number<int>(1, 100);
-        else if (f == "--max-nodes") c.max_nodes = a.number<int>(0, 1 << 30);
-        else if (f == "--vpls") c.vpls = list<std::size_t>(a.value());
-        else if (f == "--tree-sizes") c.tree_sizes = list<std::size_t>(a.value());
-        else if (f == "--thresholds") c.thresholds = list<double>(a.value());
-        else if (f == "--mesh") c.mesh = a.value();
-        else if (f == "--csv") c.csv = a.value();
-        else if (f == "--tree-csv") c.tree_csv = a.value();
-        else a.unknown("bench_cuts [--quick] [--size N] [--vpls N,N] [--thresholds T,T] [--max-nodes N] [--reps R] "
-                       "[--tree-sizes N,N] [--mesh FILE] [--csv FILE] [--tree-csv FILE]");
-    }
-    for (double t : c.thresholds)
-        if (!(t >= 0)) throw Error("bench_cuts: --thresholds needs values >= 0");
+    cli::App app("bench_cuts: the VPL integrator's gather through light cuts against every VPL, single thread");
+    // --quick first: the flags after it in this list (any given with it) override its sizes.
+    app.flag("--quick", [&c] { c.size = 12, c.vpls = {2000}, c.tree_sizes = {1000, 10000}, c.thresholds = {0.02}; },
+             "a smoke run: 12 x 12, 2000 VPLs, threshold 0.02");
+    cli::number(app, "--size", c.size, 1, 4096, "image width and height");
+    cli::number(app, "--reps", c.reps, 1, 100, "timed repetitions");
+    cli::number(app, "--max-nodes", c.max_nodes, 0, 1 << 30, "largest cut (0: unlimited)");
+    cli::numbers(app, "--vpls", c.vpls, std::size_t(1), std::size_t(1) << 28, "VPL counts");
+    cli::numbers(app, "--tree-sizes", c.tree_sizes, std::size_t(1), std::size_t(1) << 28, "lights of the tree build rows");
+    cli::numbers(app, "--thresholds", c.thresholds, 0.0, 1.0, "cut thresholds");
+    cli::text(app, "--mesh", c.mesh, "FILE.obj: the bunny row's mesh");
+    cli::output(app, "--csv", c.csv, "write the rows as CSV");
+    cli::output(app, "--tree-csv", c.tree_csv, "write the tree build rows as CSV");
+    if (!cli::parse(app, argc, argv)) std::exit(0);
     return c;
 }
 

@@ -54,7 +54,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 
 using namespace glint;
 
@@ -206,23 +206,21 @@ Estimate paired_bias2(const Renders& a, const Renders& b, const std::vector<std:
 
 Config parse(int argc, char** argv) {
     Config cfg;
-    bench::Args args(argc, argv);
-    while (args.next()) {
-        const std::string& a = args.flag();
-        auto count = [&](int lo) { return args.number(lo, 1 << 20); };
-        if (a == "--scene") cfg.scene = args.value();
-        else if (a == "--csv") cfg.csv = args.value();
-        else if (a == "--size") cfg.size = count(4);
-        else if (a == "--spp") cfg.spp = count(1);
-        else if (a == "--light-samples") cfg.light_samples = count(2);
-        else if (a == "--renders") cfg.renders = count(3);
-        else if (a == "--ref-renders") cfg.ref_renders = count(1);
-        else if (a == "--depth") cfg.depth = count(1);
-        else if (a == "--seed") cfg.seed = args.number<std::uint64_t>();
-        else if (a == "--quick") cfg.size = 16, cfg.renders = 8, cfg.ref_renders = 16;
-        else args.unknown("bench_lambda --scene NAME --csv FILE --size N --spp N --light-samples N "
-                         "--renders N --ref-renders N --depth N --seed N --quick, or --seed-check alone");
-    }
+    cli::App app("bench_lambda: correlated sampling's lambda pooled over pixels (Szecsi 2009, 3.1.1) and statistical "
+                 "lambda, bias and variance over many renders (--seed-check alone: the seeds' stream dependence)");
+    // --quick first: the flags after it in this list (any given with it) override its sizes.
+    app.flag("--quick", [&cfg] { cfg.size = 16, cfg.renders = 8, cfg.ref_renders = 16; },
+             "a smoke run: 16 x 16, 8 renders, 16 reference renders");
+    cli::text(app, "--scene", cfg.scene, "a built-in scene", "NAME");
+    cli::output(app, "--csv", cfg.csv, "write the rows as CSV");
+    cli::number(app, "--size", cfg.size, 4, 1 << 20, "image width and height");
+    cli::number(app, "--spp", cfg.spp, 1, 1 << 20, "samples per pixel of a render");
+    cli::number(app, "--light-samples", cfg.light_samples, 2, 1 << 20, "light samples per vertex");
+    cli::number(app, "--renders", cfg.renders, 3, 1 << 20, "renders per method");
+    cli::number(app, "--ref-renders", cfg.ref_renders, 1, 1 << 20, "reference renders");
+    cli::number(app, "--depth", cfg.depth, 1, 1 << 20, "path length");
+    cli::number(app, "--seed", cfg.seed, std::uint64_t(0), ~std::uint64_t(0), "random seed");
+    if (!cli::parse(app, argc, argv)) std::exit(0);
     // Jackknife groups of equal size: at most 32, renders rounded up to a multiple.
     cfg.groups = std::min(32, cfg.renders);
     cfg.renders = (cfg.renders + cfg.groups - 1) / cfg.groups * cfg.groups;

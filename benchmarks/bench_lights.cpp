@@ -39,6 +39,7 @@
 //                             kitchen at points uniform on their surfaces
 // (support/light_tree_measure.hpp)
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -142,29 +143,26 @@ const std::pair<const char*, Method> methods[] = {
 
 Options parse(int argc, char** argv) {
     Options o;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) throw Error(a + " needs a value");
-            return argv[++i];
-        };
-        if (a == "--quick") o.size = 24, o.spp = 4, o.ref_spp = 64, o.reps = 1, o.direct.quick();
-        else if (a == "--mode") o.mode = next();
-        else if (o.direct.parse(a, next)) continue;
-        else if (a == "--csv") o.csv = next();
-        else if (a == "--scene") o.scene = next();
-        else if (a == "--size") o.size = std::stoi(next());
-        else if (a == "--spp") o.spp = std::stoi(next());
-        else if (a == "--ref-spp") o.ref_spp = std::stoi(next());
-        else if (a == "--reps") o.reps = std::stoi(next());
-        else if (a == "--tree-scaling") o.tree_scaling = true;
-        else if (a == "--pick-timing") o.pick_timing = true;
-        else throw Error("unknown option '" + a + "'");
-    }
-    if (o.size < 1 || o.spp < 1 || o.ref_spp < 1 || o.reps < 1) throw Error("--size, --spp, --ref-spp and --reps must be >= 1");
-    if (o.scene != "all" && o.scene != "hall" && o.scene != "kitchen" && o.scene != "lie-hall")
-        throw Error("unknown scene '" + o.scene + "' (hall, kitchen, lie-hall, all)");
-    if (o.mode != "all" && o.mode != "direct" && o.mode != "path") throw Error("unknown mode '" + o.mode + "' (direct, path, all)");
+    cli::App app("bench_lights: the many-light methods (Fernandez 2004; lightcuts; the stochastic light tree) against the "
+                 "standard ray tracer and power sampling, single thread");
+    // --quick first: the flags after it in this list (any given with it) override its sizes.
+    app.flag("--quick", [&o] { o.size = 24, o.spp = 4, o.ref_spp = 64, o.reps = 1, o.direct.quick(); }, "a smoke run");
+    const std::array<Choice<int>, 3> modes{{{"all", "both sections", 0},
+                                            {"direct", "direct light at the primary hits (Fernandez 2004's measure)", 1},
+                                            {"path", "the path tracer, MSE x time at equal spp", 2}}};
+    cli::choice(app, "--mode", o.mode, std::span<const Choice<int>>(modes), "mode", "what to measure");
+    const std::array<Choice<int>, 4> scenes{{{"all", "the three scenes", 0}, {"hall", "800 point and spot lights", 1},
+                                             {"kitchen", "72 disk lights", 2}, {"lie-hall", "100 point lights", 3}}};
+    cli::choice(app, "--scene", o.scene, std::span<const Choice<int>>(scenes), "scene", "the scene");
+    cli::output(app, "--csv", o.csv, "write the rows as CSV");
+    cli::number(app, "--size", o.size, 1, 1 << 14, "path section: image width and height");
+    cli::number(app, "--spp", o.spp, 1, 1 << 20, "path section: samples per pixel");
+    cli::number(app, "--ref-spp", o.ref_spp, 1, 1 << 24, "path section: the reference's samples per pixel");
+    cli::number(app, "--reps", o.reps, 1, 1000, "path section: timed repetitions");
+    cli::flag(app, "--tree-scaling", o.tree_scaling, "the light tree's build and pick time against the light count");
+    cli::flag(app, "--pick-timing", o.pick_timing, "time one light pick of each sampler");
+    o.direct.add_flags(app);
+    if (!cli::parse(app, argc, argv)) std::exit(0);
     o.direct.validate();
     return o;
 }

@@ -44,7 +44,7 @@
 #include "occluder_box.hpp"
 #include "tree_scenes.hpp"
 
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 
 using namespace glint;
 
@@ -392,16 +392,15 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
     Options o;
     try {
-        bench::Args args(argc, argv);
-        while (args.next()) {
-            const std::string& a = args.flag();
-            if (a == "--fit-gssa") return fit_gssa(400000);
-            if (a == "--quick") o.quick = true;
-            else if (a == "--csv") o.csv = args.value();
-            else if (a == "--mesh") o.mesh = args.value();
-            else if (a == "--images") o.images = args.value();
-            else args.unknown("bench_occluders [--quick] [--csv FILE] [--mesh FILE.obj] [--images DIR] [--fit-gssa]");
-        }
+        cli::App app("bench_occluders: occluder spheres for VPL visibility (Szecsi 2009, ch. 5) against shadow rays");
+        cli::flag(app, "--quick", o.quick, "a smoke run");
+        cli::output(app, "--csv", o.csv, "write the rows as CSV");
+        cli::text(app, "--mesh", o.mesh, "FILE.obj: the mesh row's occluder (default: the bunny)");
+        cli::folder(app, "--images", o.images, "write the images into this folder");
+        bool fit = false;
+        cli::flag(app, "--fit-gssa", fit, "fit the GSSA model's constants and exit");
+        if (!cli::parse(app, argc, argv)) return 0;
+        if (fit) return fit_gssa(400000);
         return run(o);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "bench_occluders: %s\n", e.what());

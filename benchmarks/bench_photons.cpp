@@ -48,7 +48,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 #include "support/clock.hpp"
 
 using namespace glint;
@@ -68,17 +68,22 @@ struct Options {
 
 Options parse(int argc, char** argv) {
     Options o;
-    bench::Args a(argc, argv);
-    while (a.next()) {
-        if (a.flag() == "--quick") o.photons = 20000, o.scene_photons = 5000, o.queries = 200, o.maps = {1, 10}, o.passes = 1, o.knn_sizes = {20000}, o.emission_photons = {1000};
-        else if (a.flag() == "--photons") o.photons = a.number<std::size_t>(1000, 100000000), o.knn_sizes = {o.photons};
-        else if (a.flag() == "--knn-only") o.maps.clear(), o.scene_photons = 0, o.emission_photons.clear();
-        else if (a.flag() == "--emission-only") o.maps.clear(), o.scene_photons = 0, o.knn_sizes.clear();
-        else if (a.flag() == "--queries") o.queries = a.number<std::size_t>(1, 100000000);
-        else if (a.flag() == "--passes") o.passes = a.number<int>(1, 1000);
-        else if (a.flag() == "--seed") o.seed = a.number<std::uint64_t>();
-        else a.unknown("bench_photons [--quick] [--photons N] [--queries Q] [--passes P] [--seed S] [--knn-only] [--emission-only]");
-    }
+    cli::App app("bench_photons: the photon maps' balancing and k nearest neighbours (Larsen 2004, ch. 8) against "
+                 "nanoflann, and photon emission");
+    // --quick and the section flags first: --photons and the counts after them in this list override them.
+    app.flag("--quick", [&o] {
+        o.photons = 20000, o.scene_photons = 5000, o.queries = 200, o.maps = {1, 10}, o.passes = 1, o.knn_sizes = {20000};
+        o.emission_photons = {1000};
+    }, "a smoke run");
+    app.flag("--knn-only", [&o] { o.maps.clear(), o.scene_photons = 0, o.emission_photons.clear(); },
+             "only the kNN rows against nanoflann");
+    app.flag("--emission-only", [&o] { o.maps.clear(), o.scene_photons = 0, o.knn_sizes.clear(); }, "only the emission rows");
+    cli::number_to<std::size_t>(app, "--photons", [&o](std::size_t n) { o.photons = n, o.knn_sizes = {n}; }, 1000, 100000000,
+                                "photons per map (and the one kNN size; default 1000000)");
+    cli::number(app, "--queries", o.queries, std::size_t(1), std::size_t(100000000), "kNN queries");
+    cli::number(app, "--passes", o.passes, 1, 1000, "timed passes");
+    cli::number(app, "--seed", o.seed, std::uint64_t(0), ~std::uint64_t(0), "random seed");
+    if (!cli::parse(app, argc, argv)) std::exit(0);
     return o;
 }
 

@@ -44,6 +44,8 @@
 #include <glint/vpl/light_animation.hpp>
 #include <glint/vpl/scenes.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 
 namespace {
@@ -161,25 +163,17 @@ int main(int argc, char** argv) {
     std::vector<std::size_t> frame_counts{10, 100};
     bool quick = false;
     double clamp = 0.1;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) throw Error("bench_reuse: " + a + " needs a value");
-            return argv[++i];
-        };
-        if (a == "--csv") csv = next();
-        else if (a == "--size") size = std::stoi(next());
-        else if (a == "--threads") threads = std::stoi(next());
-        else if (a == "--ref-walks") ref_walks = std::stoul(next());
-        else if (a == "--reps") reps = std::stoul(next());
-        else if (a == "--clamp") clamp = std::stod(next());
-        else if (a == "--quick") quick = true;
-        else if (a == "--frames") {
-            frame_counts.clear();
-            std::stringstream ss(next());
-            for (std::string t; std::getline(ss, t, ',');) frame_counts.push_back(std::stoul(t));
-        } else throw Error("bench_reuse: unknown flag '" + a + "'");
-    }
+    cli::App app("bench_reuse: path reuse across the frames of a moving point light (Szecsi 2009, 7.3) against "
+                 "independent paths");
+    cli::output(app, "--csv", csv, "write the rows as CSV");
+    cli::number(app, "--size", size, 1, 1 << 14, "image width and height");
+    cli::number(app, "--threads", threads, 0, 4096, "threads (0: all cores)");
+    cli::number(app, "--ref-walks", ref_walks, std::size_t(2), std::size_t(1) << 30, "reference walks per frame");
+    cli::number(app, "--reps", reps, std::uint64_t(1), std::uint64_t(1) << 20, "repetitions");
+    cli::number(app, "--clamp", clamp, 0.0, 1e30, "clamp the geometry term at this distance");
+    cli::flag(app, "--quick", quick, "a smoke run: 16 x 16, 64 reference walks, 4 frames, 2 repetitions");
+    cli::numbers(app, "--frames", frame_counts, std::size_t(1), std::size_t(1) << 20, "frame counts F");
+    cli::parse_or_exit(app, argc, argv, "bench_reuse");
     if (quick) size = 16, ref_walks = 64, frame_counts = {4}, reps = 2;
     Setup s(with_point_light(builtin_scene<float>("cornell"), Vec3<float>(0, 1.7f, 0.2f), Rgb<float>(4.0f, 3.5f, 3.0f)));
     s.image.width = s.image.height = size;

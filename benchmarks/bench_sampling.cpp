@@ -30,6 +30,8 @@
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/permuted_radical_inverse.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 namespace {
 
 using glint::Halton;
@@ -168,32 +170,12 @@ void plot(const std::vector<Row>& rows, int max_log2n, const std::string& png) {
 int main(int argc, char** argv) {
     std::string csv_path, png_path;
     int max_log2n = 20, reps = 4;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) {
-                std::fprintf(stderr, "%s needs a value\n", a.c_str());
-                std::exit(2);
-            }
-            return argv[++i];
-        };
-        if (a == "--csv") csv_path = next();
-        else if (a == "--plot") png_path = next();
-        else if (a == "--max-log2n") max_log2n = std::atoi(next().c_str());
-        else if (a == "--reps") reps = std::atoi(next().c_str());
-        else if (a == "--help" || a == "-h") {
-            std::printf("usage: %s [--csv FILE] [--plot FILE.png] [--max-log2n K (4..26, default 20)] "
-                        "[--reps R (default 4)]\n", argv[0]);
-            return 0;
-        } else {
-            std::fprintf(stderr, "unknown argument %s (try --help)\n", a.c_str());
-            return 2;
-        }
-    }
-    if (max_log2n < 4 || max_log2n > 26 || reps < 1) {
-        std::fprintf(stderr, "--max-log2n must be in [4, 26] and --reps >= 1\n");
-        return 2;
-    }
+    glint::cli::App app("bench_sampling: the samplers' RMSE against point count on smooth and discontinuous integrands");
+    glint::cli::output(app, "--csv", csv_path, "write the rows as CSV");
+    glint::cli::output(app, "--plot", png_path, "FILE.png: the plot");
+    glint::cli::number(app, "--max-log2n", max_log2n, 4, 26, "largest point count, as a power of two");
+    glint::cli::number(app, "--reps", reps, 1, 1 << 20, "seeds per randomized sampler");
+    glint::cli::parse_or_exit(app, argc, argv, "bench_sampling");
     const std::uint64_t n_max = std::uint64_t(1) << max_log2n;
 
     std::vector<Row> rows;

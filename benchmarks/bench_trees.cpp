@@ -64,7 +64,7 @@
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/trees/traversal.hpp>
 
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 #include "support/embree_scene.hpp"
 #include "support/intersector_names.hpp"
 #include "support/user_meshes.hpp"
@@ -541,59 +541,59 @@ void memory_table(const std::vector<std::pair<std::string, Mesh<float>>>& scenes
     }
 }
 
-constexpr const char* usage =
-    "bench_trees [--mesh FILE.obj]... [--csv FILE] [--quick] [--rays N] [--reps N] [--no-generated] "
-    "[--only SCENE] [--all | --few] [--memory] [--ki K_I] [--empty-bonus B] [--wide] [--bvh-ct C_T] [--bvh-ci C_I] "
-    "[--bvh-block B] [--bvh-leaf L] [--bvh-bins K] [--bvh-cn C_N] [--cpu-time] [--set primary|incoherent] [--big] [--build-threads N] "
-    "[--solo glint|embree] [--bvh-siblings 0|1] [--no-build-table] [--quantized] [--sbvh] [--sbvh-alpha A] "
-    "[--sbvh-budget X] [--compact-subtrees]";
+/// The flags that choose what is timed.
+void add_run_flags(cli::App& app, Options& o) {
+    cli::texts(app, "--mesh", o.meshes, "an OBJ mesh to time besides the generated scenes (repeatable)")->group("Run");
+    cli::output(app, "--csv", o.csv, "write the rows as CSV")->group("Run");
+    cli::flag(app, "--quick", o.quick, "a smoke run: at most 20000 rays, one repetition")->group("Run");
+    cli::number_to<std::size_t>(app, "--rays", [&o](std::size_t n) { o.rays = n, o.rays_set = true; }, 1, std::size_t(1) << 40,
+                                "rays per set (default 1000000; --user-meshes: 200000)")->group("Run");
+    cli::number_to<int>(app, "--reps", [&o](int n) { o.reps = n, o.reps_set = true; }, 1, 1000,
+                        "timed repetitions (default 3; --user-meshes: 5)")->group("Run");
+    cli::flag(app, "--no-generated", o.generated, "leave out the generated scenes")->group("Run");
+    cli::text(app, "--only", o.only, "time only this scene", "SCENE")->group("Run");
+    cli::flag(app, "--all", o.all, "every tree, layout and intersector")->group("Run");
+    cli::flag(app, "--few", o.few, "the main rows only")->group("Run");
+    cli::flag(app, "--memory", o.memory, "node memory of each layout")->group("Run");
+    cli::flag(app, "--wide", o.wide, "the wide BVH rows")->group("Run");
+    cli::flag(app, "--cpu-time", use_cpu_time, "time by the process's CPU clock instead of the wall clock")->group("Run");
+    cli::text(app, "--set", o.set, "one ray set only: primary or incoherent", "SET")->group("Run");
+    cli::flag(app, "--big", o.big, "the big generated scenes too")->group("Run");
+    cli::text(app, "--solo", o.solo, "trace with glint or embree alone, untimed (for profilers)", "NAME")->group("Run");
+    app.flag("--no-build-table", [&o] { o.build_table = false; }, "skip the 1- and 2-thread build timing")->group("Run");
+    cli::flag(app, "--quantized", o.quantized, "with --wide --few, also bvh8 with quantized boxes")->group("Run");
+    cli::flag(app, "--sbvh", o.sbvh, "also bvh8 with spatial splits (tree sbvh8)")->group("Run");
+    cli::flag(app, "--compact-subtrees", o.compact, "also the wide BVH in compact subtrees")->group("Run");
+    cli::flag(app, "--user-meshes", o.user_meshes, "every mesh of --scenes through MeshBvh's public API against Embree")
+        ->group("Run");
+    cli::text(app, "--scenes", o.scenes_dir, "--user-meshes: the folder of OBJ meshes", "DIR")->group("Run");
+    cli::number(app, "--primary", o.primary, 1, 8192, "--user-meshes: N x N primary rays")->group("Run");
+}
+
+/// The trees' build settings.
+void add_build_flags(cli::App& app, Options& o) {
+    cli::number(app, "--build-threads", o.build_threads, 1u, 1024u, "the wide BVH rows' build threads")->group("Build");
+    cli::number(app, "--sbvh-alpha", o.bvh.spatial_alpha, 0.0f, 1.0f, "spatial splits: overlap threshold alpha")->group("Build");
+    cli::number(app, "--sbvh-budget", o.bvh.spatial_budget, 1.0f, 4.0f, "spatial splits: references per primitive at most")->group("Build");
+    cli::number_to<int>(app, "--bvh-siblings", [&o](int k) {
+        o.bvh.node_order = k ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
+    }, 0, 1, "1: sibling blocks node order (default 0: depth first)")->group("Build");
+    cli::number(app, "--bvh-ct", o.bvh.traversal_cost, 0.0f, 1e6f, "SAH traversal cost C_T")->group("Build");
+    cli::number(app, "--bvh-ci", o.bvh.intersection_cost, 0.0f, 1e6f, "SAH intersection cost C_I")->group("Build");
+    cli::number(app, "--bvh-cn", o.bvh.wide_node_cost, 0.0f, 1e6f, "collapse: cost of a wide node C_N")->group("Build");
+    cli::number(app, "--bvh-block", o.bvh.leaf_block, 1u, 64u, "triangles per leaf block")->group("Build");
+    cli::number(app, "--bvh-leaf", o.bvh.max_leaf, 1u, 16u, "largest leaf")->group("Build");
+    cli::number(app, "--bvh-bins", o.bvh.bins, 2u, 64u, "SAH centre bins per axis")->group("Build");
+    cli::number(app, "--ki", o.kd.intersection_cost, 1e-6, 1e6, "kd-tree SAH intersection cost K_I (K_T = 1)")->group("Build");
+    cli::number(app, "--empty-bonus", o.kd.empty_bonus, 0.0, 0.999, "kd-tree SAH empty-space bonus")->group("Build");
+}
 
 Options parse(int argc, char** argv) {
     Options o;
-    bench::Args args(argc, argv);
-    while (args.next()) {
-        const std::string& a = args.flag();
-        if (a == "--mesh") o.meshes.push_back(args.value());
-        else if (a == "--csv") o.csv = args.value();
-        else if (a == "--quick") o.quick = true;
-        else if (a == "--all") o.all = true;
-        else if (a == "--few") o.few = true;
-        else if (a == "--no-generated") o.generated = false;
-        else if (a == "--only") o.only = args.value();
-        else if (a == "--memory") o.memory = true;
-        else if (a == "--wide") o.wide = true;
-        else if (a == "--cpu-time") use_cpu_time = true;
-        else if (a == "--set") o.set = args.value();
-        else if (a == "--big") o.big = true;
-        else if (a == "--solo") o.solo = args.value();
-        else if (a == "--no-build-table") o.build_table = false;
-        else if (a == "--quantized") o.quantized = true;
-        else if (a == "--sbvh") o.sbvh = true;
-        else if (a == "--sbvh-alpha") o.bvh.spatial_alpha = args.number<float>();
-        else if (a == "--sbvh-budget") o.bvh.spatial_budget = args.number<float>();
-        else if (a == "--compact-subtrees") o.compact = true;
-        else if (a == "--bvh-siblings") o.bvh.node_order = args.number(0, 1) ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
-        else if (a == "--build-threads") o.build_threads = args.number(1u, 1024u);
-        else if (a == "--bvh-ct") o.bvh.traversal_cost = args.number<float>();
-        else if (a == "--bvh-ci") o.bvh.intersection_cost = args.number<float>();
-        else if (a == "--bvh-cn") o.bvh.wide_node_cost = args.number<float>();
-        else if (a == "--bvh-block") o.bvh.leaf_block = args.number<std::uint32_t>();
-        else if (a == "--bvh-leaf") o.bvh.max_leaf = args.number<std::uint32_t>();
-        else if (a == "--bvh-bins") o.bvh.bins = args.number<std::uint32_t>();
-        else if (a == "--rays") o.rays = args.number<std::size_t>(1, std::size_t(1) << 40), o.rays_set = true;
-        else if (a == "--user-meshes") o.user_meshes = true;
-        else if (a == "--scenes") o.scenes_dir = args.value();
-        else if (a == "--primary") o.primary = args.number(1, 8192);
-        else if (a == "--reps") o.reps = args.number(1, 1000), o.reps_set = true;
-        else if (a == "--ki") o.kd.intersection_cost = args.number<double>();
-        else if (a == "--empty-bonus") o.kd.empty_bonus = args.number<double>();
-        else if (a == "--help" || a == "-h") {
-            std::puts(usage);
-            std::exit(0);
-        } else {
-            args.unknown(usage);
-        }
-    }
+    cli::App app("bench_trees: the trees' ray throughput and build time against Embree 3, single thread");
+    add_run_flags(app, o);
+    add_build_flags(app, o);
+    cli::parse_or_exit(app, argc, argv, "bench_trees");
     if (o.quick) {
         o.rays = std::min<std::size_t>(o.rays, 20'000);
         o.reps = 1;

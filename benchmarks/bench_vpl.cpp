@@ -30,6 +30,8 @@
 #include <glint/vpl/integrator.hpp>
 #include "image_error.hpp"
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 
 namespace {
@@ -59,25 +61,16 @@ int main(int argc, char** argv) try {
     int size = 96, threads = 1;
     std::size_t walks = 512;
     std::vector<std::size_t> counts{25, 100, 400};
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--quick") {
-            size = 16, walks = 16, counts = {25};
-            continue;
-        }
-        if (i + 1 >= argc) throw Error("bench_vpl: " + a + " needs a value");
-        const std::string v = argv[++i];
-        if (a == "--mesh") mesh_path = v;
-        else if (a == "--size") size = std::stoi(v);
-        else if (a == "--vpls") walks = std::stoul(v);
-        else if (a == "--threads") threads = std::stoi(v);
-        else if (a == "--csv") csv = v;
-        else if (a == "--spheres") {
-            counts.clear();
-            std::stringstream ss(v);
-            for (std::string t; std::getline(ss, t, ',');) counts.push_back(std::stoul(t));
-        } else throw Error("bench_vpl: unknown flag '" + a + "'");
-    }
+    cli::App app("bench_vpl: VPL rendering with occluder spheres against shadow rays at equal VPLs");
+    // --quick first: the flags after it in this list (any given with it) override its sizes.
+    app.flag("--quick", [&] { size = 16, walks = 16, counts = {25}; }, "a smoke run: 16 x 16, 16 walks, 25 spheres");
+    cli::text(app, "--mesh", mesh_path, "FILE.obj: the occluding mesh");
+    cli::number(app, "--size", size, 1, 1 << 14, "image width and height");
+    cli::number(app, "--vpls", walks, std::size_t(1), std::size_t(1) << 24, "shooting walks");
+    cli::number(app, "--threads", threads, 1, 4096, "threads");
+    cli::output(app, "--csv", csv, "write the rows as CSV");
+    cli::numbers(app, "--spheres", counts, std::size_t(1), std::size_t(1) << 20, "occluder sphere counts");
+    if (!cli::parse(app, argc, argv)) return 0;
     // The Cornell box without its two blocks (its first 10 triangles are the 5 walls, the last
     // 2 the light), so that the mesh is the only occluder, as in bench_occluders.
     const Scene<float> full = builtin_scene<float>("cornell");

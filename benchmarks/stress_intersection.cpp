@@ -22,6 +22,8 @@
 #include "../tests/intersection_cases.hpp"
 #include "support/intersector_names.hpp"
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+
 using namespace glint;
 using namespace glint::testing;
 
@@ -63,16 +65,11 @@ void run_policy(std::vector<Row>& rows, std::size_t scale) {
 int main(int argc, char** argv) {
     std::string csv;
     std::size_t scale = 1000;
-    for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--csv") && i + 1 < argc) {
-            csv = argv[++i];
-        } else if (!std::strcmp(argv[i], "--quick")) {
-            scale = 100;
-        } else {
-            std::fprintf(stderr, "usage: %s [--csv FILE] [--quick]\n", argv[0]);
-            return 2;
-        }
-    }
+    cli::App app("stress_intersection: the triangle tests on near-degenerate, grazing and edge-crossing rays against "
+                 "exact arithmetic");
+    cli::output(app, "--csv", csv, "write the rows as CSV");
+    app.flag("--quick", [&scale] { scale = 100; }, "a smoke run: a tenth of the rays");
+    cli::parse_or_exit(app, argc, argv, "stress_intersection");
     std::vector<Row> rows;
     run_policy<Ivm<float>>(rows, scale);
     run_policy<MollerTrumbore<float>>(rows, scale);

@@ -1,11 +1,15 @@
 // cli/flags.cpp: cli/flags.hpp's App on CLI11, the one translation unit that compiles CLI11.
 #include "flags.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <utility>
 
 #include <CLI/CLI.hpp>
+#include <unistd.h>
 
 #include <glint/core/error.hpp>
 
@@ -54,6 +58,29 @@ Flag* App::flag(const std::string& flag, std::function<void()> set, const std::s
     return flags_.back().get();
 }
 
+void check_writable(const std::string& path) {
+    const auto slash = path.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+    if (access(dir.c_str(), W_OK) != 0)
+        throw Error("cannot write '" + path + "': folder '" + dir + "' " + std::strerror(errno));
+    if (std::filesystem::is_directory(path)) throw Error("cannot write '" + path + "': it is a folder");
+    if (access(path.c_str(), F_OK) == 0 && access(path.c_str(), W_OK) != 0)
+        throw Error("cannot write '" + path + "': " + std::strerror(errno));
+}
+
+Flag* output(App& app, const std::string& flag, std::string& target, const std::string& help) {
+    const auto set = [&target](const std::string& t) {
+        try {
+            check_writable(t);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        target = t;
+        return std::string();
+    };
+    return app.value(flag, set, help, "FILE", target);
+}
+
 Flag* folder(App& app, const std::string& flag, std::string& target, const std::string& help) {
     const auto set = [&target](const std::string& t) {
         if (!std::filesystem::is_directory(t)) return "expects an existing folder, got '" + t + "'";
@@ -85,6 +112,16 @@ bool App::parse(int argc, const char* const* argv) {
         throw Error(std::string(e.what()) + " (see --help)");
     }
     return false;
+}
+
+void parse_or_exit(App& app, int argc, const char* const* argv, const std::string& program) {
+    try {
+        if (app.parse(argc, argv)) return;
+    } catch (const Error& e) {
+        std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+        std::exit(2);
+    }
+    std::exit(0);
 }
 
 }  // namespace glint::cli

@@ -29,6 +29,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include <glint/tracer/choice.hpp>
@@ -132,6 +133,32 @@ Flag* number(App& app, const std::string& flag, N& target, N lo, N hi, const std
     return number_to<N>(app, flag, [&target](N x) { target = x; }, lo, hi, help, number_text(target));
 }
 
+/// A flag whose value is a comma-separated list of Ns in [lo, hi] ("100,1000,5000"), which
+/// replaces `target` (its value now shows in --help as the default).
+template <class N>
+Flag* numbers(App& app, const std::string& flag, std::vector<N>& target, N lo, N hi, const std::string& help) {
+    std::string shown;
+    for (const N x : target) {
+        if (!shown.empty()) shown += ',';
+        shown += number_text(x);
+    }
+    const std::string range = number_range(lo, hi);
+    const auto set = [&target, lo, hi, range](const std::string& text) {
+        std::vector<N> list;
+        for (std::size_t p = 0; p <= text.size();) {
+            const std::size_t q = std::min(text.find(',', p), text.size());
+            N x{};
+            if (!parse_number(std::string_view(text).substr(p, q - p), lo, hi, x))
+                return "expects a comma-separated list, each " + range + ", got '" + text + "'";
+            list.push_back(x);
+            p = q + 1;
+        }
+        target = std::move(list);
+        return std::string();
+    };
+    return app.value(flag, set, help + " (each " + range + ")", "LIST", shown);
+}
+
 /// A flag whose value is a name of `table`, written to `target` (`what` names the table in
 /// the error: "unknown tonemap 'x' (clamp, reinhard)"); the names and their help lines follow
 /// the flag's help.
@@ -174,6 +201,14 @@ inline Flag* texts(App& app, const std::string& flag, std::vector<std::string>& 
     return app.value(flag, add, help, type, "", true);
 }
 
+/// Throws glint::Error unless `path` can be written: its folder exists and is writable, and
+/// the file, if it exists, is writable and not a folder.
+void check_writable(const std::string& path);
+
+/// A flag whose value is a file the program writes (checked by check_writable while the
+/// command line is parsed, so that a long run is not lost), written to `target`.
+Flag* output(App& app, const std::string& flag, std::string& target, const std::string& help);
+
 /// A flag whose value is an existing folder, written to `target`.
 Flag* folder(App& app, const std::string& flag, std::string& target, const std::string& help);
 
@@ -185,5 +220,9 @@ inline Flag* flag(App& app, const std::string& flag, bool& target, const std::st
 /// Parses the command line. Returns false after printing --help or --version (the program
 /// then exits with 0); throws glint::Error naming the flag and the value for a bad one.
 inline bool parse(App& app, int argc, const char* const* argv) { return app.parse(argc, argv); }
+
+/// parse() for a program's main: exits with 0 after --help or --version, and with 2 after
+/// printing "<program>: <error>" for a bad command line.
+void parse_or_exit(App& app, int argc, const char* const* argv, const std::string& program);
 
 }  // namespace glint::cli

@@ -112,18 +112,6 @@ bool ends_with(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-/// Throws unless `path` can be written: its folder exists and is writable, and the file, if
-/// it exists, is writable. Checked before rendering, so a long render is not lost.
-void check_writable(const std::string& path) {
-    const auto slash = path.find_last_of('/');
-    const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
-    if (access(dir.c_str(), W_OK) != 0)
-        throw Error("cannot write '" + path + "': folder '" + dir + "' " + std::strerror(errno));
-    if (std::filesystem::is_directory(path)) throw Error("cannot write '" + path + "': it is a folder");
-    if (access(path.c_str(), F_OK) == 0 && access(path.c_str(), W_OK) != 0)
-        throw Error("cannot write '" + path + "': " + std::strerror(errno));
-}
-
 /// Everything the command line sets besides the path tracer's NamedRender.
 struct Args {
     std::string scene_name, mesh, scene_file, env, out = "out.exr";
@@ -268,10 +256,10 @@ bool parse_args(int argc, char** argv, Args& g, NamedRender<float>& o) {
                     " is above the limit of 2^26 pixels");
     if (!ends_with(g.out, ".exr") && !ends_with(g.out, ".png"))
         throw Error("--out: expects a file name ending in .exr or .png, got '" + g.out + "'");
-    for (const char* ext : {".exr", ".png"}) check_writable(g.out.substr(0, g.out.size() - 4) + ext);
+    for (const char* ext : {".exr", ".png"}) cli::check_writable(g.out.substr(0, g.out.size() - 4) + ext);
     if (!g.export_json.empty() && !ends_with(g.export_json, ".json"))
         throw Error("--export-scene: expects a file name ending in .json, got '" + g.export_json + "'");
-    if (!g.export_json.empty()) check_writable(g.export_json);
+    if (!g.export_json.empty()) cli::check_writable(g.export_json);
     check_scene_flags(g);
     for (const std::string& f : {g.mesh, g.scene_file, g.env})
         if (!f.empty() && access(f.c_str(), R_OK) != 0) throw Error("cannot read '" + f + "': " + std::strerror(errno));

@@ -1,4 +1,6 @@
-// benchmarks/support/args.hpp: the command-line walk the benchmark programs share. Flags
+// benchmarks/support/args.hpp: bench_cones' command-line walk (every other program parses its
+// flags through cli/flags.hpp; bench_cones stays here while the open finding in
+// docs/hardening.md, its tiles' rays changing with that port, is not explained). Flags
 // come one at a time; a flag's value is the next argument, and numbers are parsed whole
 // and range checked, so that a bad command line stops, before any long work starts, with
 // an Error naming the flag and the text it got (the program's handler adds its own name).

@@ -16,6 +16,7 @@
 
 #include <glint/lights/scenes.hpp>
 
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 #include "support/direct_measure.hpp"
 
 namespace glint::bench {
@@ -40,28 +41,32 @@ struct DirectOptions {
         size = 24, reps = 1, hall_sides = 8, hall_rings = 1, pillar_sides = 8, pillar_rings = 1;
         kitchen_points = 512, lie.samples = 1024;
     }
-    /// Reads the section's flag f (its value from value()) if it is one; false if not.
-    template <class Value>
-    bool parse(const std::string& f, Value&& value) {
-        auto integer = [&] { return std::stoi(value()); };
-        if (f == "--direct-size") size = integer();
-        else if (f == "--direct-reps") reps = integer();
-        else if (f == "--hall-sides") hall_sides = integer();
-        else if (f == "--hall-rings") hall_rings = integer();
-        else if (f == "--pillar-sides") pillar_sides = integer();
-        else if (f == "--pillar-rings") pillar_rings = integer();
-        else if (f == "--kitchen-points") kitchen_points = std::size_t(std::max(integer(), 0));
-        else if (f == "--thresholds") thresholds = numbers(value());
-        else if (f == "--max-nodes") max_nodes = integer();
-        else if (f == "--sparse-samples") sparse_samples = integer();
-        else if (f == "--sparse-agreement") sparse_agreement = std::stod(value());
-        else if (f == "--sparse-priority") sparse_priority = std::stod(value());
-        else if (f == "--lie-samples") lie.samples = integer();
-        else if (f == "--depth") lie.subdivision = LieSubdivision::fixed, lie.depth = integer();
-        else if (f == "--adaptive") lie.subdivision = LieSubdivision::adaptive, lie.blocker_threshold = integer();
-        else if (f == "--three-state") lie.variant = LieVariant::three_state;
-        else return false;
-        return true;
+    /// The section's flags (--help lists them under "Direct section").
+    void add_flags(cli::App& app) {
+        const std::string g = "Direct section";
+        cli::number(app, "--direct-size", size, 1, 1 << 14, "image width and height")->group(g);
+        cli::number(app, "--direct-reps", reps, 1, 1000, "timed repetitions (best of)")->group(g);
+        cli::number(app, "--hall-sides", hall_sides, 3, 1 << 16, "hall: sides of a column")->group(g);
+        cli::number(app, "--hall-rings", hall_rings, 1, 1 << 16, "hall: rings of a column")->group(g);
+        cli::number(app, "--pillar-sides", pillar_sides, 3, 1 << 16, "lie-hall: sides of a pillar")->group(g);
+        cli::number(app, "--pillar-rings", pillar_rings, 1, 1 << 16, "lie-hall: rings of a pillar")->group(g);
+        cli::number(app, "--kitchen-points", kitchen_points, std::size_t(72), std::size_t(1) << 24,
+                    "kitchen: oriented points of the 72 disk lights")->group(g);
+        cli::numbers(app, "--thresholds", thresholds, 0.0, 1.0, "cut thresholds")->group(g);
+        cli::number(app, "--max-nodes", max_nodes, 0, 1 << 30, "largest cut (0: unlimited)")->group(g);
+        cli::number(app, "--sparse-samples", sparse_samples, 0, 1 << 24, "sample cuts per image (0: the seed's density)")
+            ->group(g);
+        cli::number(app, "--sparse-agreement", sparse_agreement, 0.0, 1e6, "reconstruction's agreement tolerance")->group(g);
+        cli::number(app, "--sparse-priority", sparse_priority, 0.0, 0.999, "the fraction of sample cuts placed by priority")
+            ->group(g);
+        cli::number(app, "--lie-samples", lie.samples, 1, 1 << 30, "LIE: image samples of the construction")->group(g);
+        cli::number_to<int>(app, "--depth", [this](int d) { lie.subdivision = LieSubdivision::fixed, lie.depth = d; }, 0, 20,
+                            "LIE: fixed subdivision at this depth (default: adaptive)")->group(g);
+        cli::number_to<int>(app, "--adaptive", [this](int b) {
+            lie.subdivision = LieSubdivision::adaptive, lie.blocker_threshold = b;
+        }, 1, 1 << 20, "LIE: adaptive subdivision, split past this many blockers (default 8)")->group(g);
+        app.flag("--three-state", [this] { lie.variant = LieVariant::three_state; }, "LIE: three states without blocker lists")
+            ->group(g);
     }
     /// Checks every value before any work starts.
     void validate() const {
@@ -75,15 +80,6 @@ struct DirectOptions {
         if (!(sparse_agreement >= 0)) throw Error("--sparse-agreement must be >= 0, got " + std::to_string(sparse_agreement));
         if (!(sparse_priority >= 0 && sparse_priority < 1)) throw Error("--sparse-priority must be in [0, 1), got " + std::to_string(sparse_priority));
         lie.validate();
-    }
-    static std::vector<double> numbers(const std::string& text) {
-        std::vector<double> out;
-        for (std::size_t i = 0; i <= text.size();) {
-            const std::size_t j = std::min(text.find(',', i), text.size());
-            out.push_back(std::stod(text.substr(i, j - i)));
-            i = j + 1;
-        }
-        return out;
     }
 };
 
