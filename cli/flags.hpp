@@ -4,7 +4,7 @@
 //
 //   cli::App app("bench_trees: the wide BVH against Embree");
 //   cli::number(app, "--reps", o.reps, 1, 1000, "timed repetitions");
-//   cli::choice(app, "--tonemap", o.tonemap, std::span(tonemaps), "tonemap", "PNG preview");
+//   cli::choice(app, "--tonemap", o.tonemap, std::span<const Choice<Tonemap>>(tonemaps), "tonemap", "PNG preview");
 //   cli::flag(app, "--csv-only", o.csv_only, "no table, only the CSV");
 //   if (!cli::parse(app, argc, argv)) return 0;   // --help or --version printed
 //
@@ -170,12 +170,13 @@ Flag* choice(App& app, const std::string& flag, std::string& target, std::span<c
     return app.value(
         flag,
         [&target, table, what](const std::string& text) {
-            for (const auto& c : table) {
-                if (c.name != text) continue;
-                target = text;
-                return std::string();
+            try {
+                find_choice(table, what, text);
+            } catch (const Error& e) {
+                return std::string(e.what());
             }
-            return "unknown " + what + " '" + text + "' (" + choice_names(table) + ")";
+            target = text;
+            return std::string();
         },
         help + ":\n" + names, "NAME", target);
 }

@@ -68,17 +68,10 @@ struct DirectOptions {
         app.flag("--three-state", [this] { lie.variant = LieVariant::three_state; }, "LIE: three states without blocker lists")
             ->group(g);
     }
-    /// Checks every value before any work starts.
+    /// Checks what the library validates (the cuts' and LIE's settings) before any work starts;
+    /// the flags' ranges are checked while the command line is parsed.
     void validate() const {
-        if (size < 1 || reps < 1) throw Error("--direct-size and --direct-reps must be >= 1");
-        if (hall_sides < 3 || pillar_sides < 3) throw Error("--hall-sides and --pillar-sides must be >= 3");
-        if (hall_rings < 1 || pillar_rings < 1) throw Error("--hall-rings and --pillar-rings must be >= 1");
-        if (kitchen_points < 72) throw Error("--kitchen-points must be >= 72 (one per disk light), got " + std::to_string(kitchen_points));
         for (const double t : thresholds) CutSettings{t, max_nodes}.validate();
-        if (thresholds.empty()) throw Error("--thresholds needs at least one value");
-        if (sparse_samples < 0) throw Error("--sparse-samples must be >= 0 (0: the seed's density), got " + std::to_string(sparse_samples));
-        if (!(sparse_agreement >= 0)) throw Error("--sparse-agreement must be >= 0, got " + std::to_string(sparse_agreement));
-        if (!(sparse_priority >= 0 && sparse_priority < 1)) throw Error("--sparse-priority must be in [0, 1), got " + std::to_string(sparse_priority));
         lie.validate();
     }
 };
