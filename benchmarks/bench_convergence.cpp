@@ -68,7 +68,7 @@
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/correlated_environment.hpp>
 #include <glint/tracer/named_render.hpp>
-#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#include "glint_instances.hpp"  // render_named for AnyAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 
 
@@ -193,7 +193,7 @@ Image<Rgb<float>> reference(const std::string& scene_name, const Scene<float>& s
         o.direct = "correlated";
         o.tracer.light_samples = 10;
     }
-    const RenderResult r = render_named(scene, accel, o);
+    const RenderResult r = render_named(scene, any_accel_view(accel), o);
     for (const auto& v : r.variance.pixels) ref_var += double(v[0] + v[1] + v[2]) / (3.0 * double(r.variance.size()));
     std::vector<ExrLayer> layers{ExrLayer{"variance", {"R", "G", "B"}, {}}};
     for (const auto& v : r.variance.pixels) layers[0].data.insert(layers[0].data.end(), {v[0], v[1], v[2]});
@@ -327,7 +327,8 @@ auto with_tracer(const Scene<float>& scene, const DefaultAccel& accel, const Rou
                  const NamedRender<float>& o, F&& f) {
     PathTracerSettings<float> ts = o.tracer;
     ts.roulette = roulette;
-    const DirectChoice<float> direct = find_choice(direct_choices<float>(), "direct lighting", o.direct).make(scene, ts, o.image);
+    const DirectChoice<float> direct =
+        find_choice(direct_choices<float>(), "direct lighting", o.direct).make(scene, any_accel_view(accel), ts, o.image);
     return std::visit(
         [&]<class D>(const D& d) {
             return f(PathTracer<DefaultAccel, RandomSampler<float>, D>(scene, accel, d, MisEnvironment<float>(scene), ts));
@@ -604,7 +605,7 @@ int main(int argc, char** argv) {
                     NamedRender<float> o = m.options;
                     o.image.spp = spp;
                     o.seed = 1000 * cfg.seed + std::uint64_t(spp);
-                    const RenderResult r = render_named(scene, accel, o);
+                    const RenderResult r = render_named(scene, any_accel_view(accel), o);
                     const Point p{spp, r.seconds, rmse(r.image, ref, ref_var)};
                     results[name][m.name].push_back(p);
                     if (csv) csv << name << ',' << m.name << ',' << spp << ',' << p.seconds << ',' << p.rmse << '\n';

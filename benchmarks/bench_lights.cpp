@@ -51,7 +51,7 @@
 
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
-#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#include "glint_instances.hpp"  // render_named for AnyAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 
 #include "support/direct_section.hpp"
@@ -104,7 +104,7 @@ RenderResult path_traced(const Scene<float>& s, const DefaultAccel& accel, const
     r.roulette = roulette;
     r.seed = 1;
     const double t0 = cpu_seconds();
-    RenderResult out = render_named(s, accel, r);
+    RenderResult out = render_named(s, any_accel_view(accel), r);
     out.seconds = cpu_seconds() - t0;
     return out;
 }

@@ -21,13 +21,12 @@
 
 #include <cstdio>
 
-#include <glint/intersection/moller_trumbore.hpp>
 #include <glint/photons/photon_integrator.hpp>
+#include <glint/tracer/any_accel.hpp>
 #include <glint/photons/sppm.hpp>
 #include <glint/tracer/lighting.hpp>
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/renderer.hpp>
-#include <glint/trees/mesh_bvh.hpp>
 
 namespace glint {
 
@@ -39,12 +38,10 @@ struct PhotonCliOptions {
     int camera_samples = 1;
 };
 
-using PhotonCliAccel = MeshBvh<MollerTrumbore<float>, 8>;
-
-/// SPPM of `scene` at `image`'s size and threads: passes until `budget` says stop.
-inline SppmResult render_sppm_cli(const Scene<float>& scene, const PhotonCliOptions& p, const RenderSettings& image,
-                                  const PassBudget& budget, std::uint64_t seed) {
-    const PhotonCliAccel accel(scene.triangles);
+/// SPPM of `scene` (traced through `accel`) at `image`'s size and threads: passes until
+/// `budget` says stop.
+inline SppmResult render_sppm_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
+                                  const RenderSettings& image, const PassBudget& budget, std::uint64_t seed) {
     SppmSettings st;
     st.photons = p.photons;
     st.radius = p.radius;
@@ -53,11 +50,10 @@ inline SppmResult render_sppm_cli(const Scene<float>& scene, const PhotonCliOpti
     return render_sppm(scene, accel, MisDirect<float>(scene, PathTracerSettings<float>{}), image, st, budget);
 }
 
-/// Photon mapping of `scene`: passes of new maps (seed + pass) and `image`'s spp until
-/// `budget` says stop, averaged.
-inline ProgressiveResult render_photons_cli(const Scene<float>& scene, const PhotonCliOptions& p, const RenderSettings& image,
-                                            const PassBudget& budget, std::uint64_t seed) {
-    const PhotonCliAccel accel(scene.triangles);
+/// Photon mapping of `scene` (traced through `accel`): passes of new maps (seed + pass) and
+/// `image`'s spp until `budget` says stop, averaged.
+inline ProgressiveResult render_photons_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
+                                            const RenderSettings& image, const PassBudget& budget, std::uint64_t seed) {
     PhotonMapSettings st;
     st.photons = p.photons;
     st.caustic_photons = 4 * p.photons;

@@ -24,7 +24,6 @@
 #include <optional>
 #include <span>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include <unistd.h>
@@ -41,7 +40,7 @@
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
-#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#include "glint_instances.hpp"  // render_named for AnyAccel, compiled once (instances/)
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/scenes.hpp>
 #include <glint/tracer/smooth_normals.hpp>
@@ -359,13 +358,12 @@ std::vector<ExrAttribute> exr_attributes(const Args& g, const NamedRender<float>
 
 /// --aov: the first-hit layers of the beauty pass's camera rays (all `spp` of each pixel's
 /// samples, from sample 0), as EXR layers albedo.RGB, normal.XYZ and depth.Z.
-std::vector<ExrLayer> first_hit_exr_layers(const Scene<float>& scene, const AcceleratorChoice& accel,
+std::vector<ExrLayer> first_hit_exr_layers(const Scene<float>& scene, const AnyAccel& accel,
                                            NamedRender<float> o, int spp) {
     o.image.spp = spp;
     o.image.first_sample = 0;
     const auto start = std::chrono::steady_clock::now();
-    const FirstHitImages f =
-        std::visit([&](const auto& a) { return render_first_hit_named(scene, *a, o); }, accel);
+    const FirstHitImages f = render_first_hit_named(scene, accel, o);
     std::fprintf(stderr, "first-hit layers in %.3f s\n",
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     return {ExrLayer{"albedo", {"R", "G", "B"}, flatten(f.albedo)}, ExrLayer{"normal", {"X", "Y", "Z"}, flatten(f.normal)},
@@ -373,23 +371,28 @@ std::vector<ExrLayer> first_hit_exr_layers(const Scene<float>& scene, const Acce
 }
 
 /// The path tracer's render with the accelerator named --accel; prints what it did.
-int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+/// The tree --accel names over the scene's triangles, and the seconds its build took.
+std::pair<AcceleratorChoice, double> build_accel(const Args& g, const Scene<float>& scene) {
+    const auto start = std::chrono::steady_clock::now();
+    AcceleratorChoice accel = find_choice(accelerator_choices(), "accelerator", g.accel).make(scene.triangles);
+    return {std::move(accel), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+}
+
+int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& scene, const AnyAccel& accel,
+                double build_seconds) {
     std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n", scene.name.c_str(),
                  scene.triangles.size(), scene.area_lights.size(), scene.environment ? ", environment map" : "",
                  o.image.width, o.image.height, o.image.spp, o.roulette.c_str(), o.direct.c_str());
-    const auto build_start = std::chrono::steady_clock::now();
-    const AcceleratorChoice accel = find_choice(accelerator_choices(), "accelerator", g.accel).make(scene.triangles);
-    const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
     ProgressiveResult r;
     if (g.time_budget > 0) {
         // Passes of --spp samples continuing one sequence (pass k: samples k spp ..), averaged.
         r = render_passes(PassBudget{g.time_budget, 0}, [&](int k) {
             NamedRender<float> pass = o;
             pass.image.first_sample = std::uint64_t(k) * std::uint64_t(o.image.spp);
-            return std::visit([&](const auto& a) { return render_named(scene, *a, pass); }, accel);
+            return render_named(scene, accel, pass);
         });
     } else {
-        static_cast<RenderResult&>(r) = std::visit([&](const auto& a) { return render_named(scene, *a, o); }, accel);
+        static_cast<RenderResult&>(r) = render_named(scene, accel, o);
         r.passes = 1;
     }
     const std::string stem = g.out.substr(0, g.out.size() - 4), exr = stem + ".exr", png = stem + ".png";
@@ -419,13 +422,14 @@ void write_images(const Args& g, const Image<Rgb<float>>& image, const std::vect
 }
 
 /// --integrator sppm: --spp passes, or passes for --time-budget seconds.
-int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene, const AnyAccel& accel,
+                     double build_seconds) {
     const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, o.image.spp};
-    const SppmResult r = render_sppm_cli(scene, g.photons, o.image, budget, o.seed);
+    const SppmResult r = render_sppm_cli(scene, accel, g.photons, o.image, budget, o.seed);
     write_images(g, r.image, exr_attributes(g, o, r.passes * g.photons.camera_samples, r.seconds));
-    std::printf("rendered %s with SPPM in %.3f s (build 0 s): %d passes of %zu photons (%zu emitted), mean radius %.4g "
-                "(from %.4g), photon passes %.3f s; wrote %s\n",
-                scene.name.c_str(), r.seconds, r.passes, g.photons.photons, r.photons_emitted, r.mean_radius,
+    std::printf("rendered %s with SPPM in %.3f s (build %s %.3f s): %d passes of %zu photons (%zu emitted), mean radius "
+                "%.4g (from %.4g), photon passes %.3f s; wrote %s\n",
+                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, r.passes, g.photons.photons, r.photons_emitted, r.mean_radius,
                 g.photons.radius, r.photon_seconds, g.out.c_str());
     std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
                 g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
@@ -433,13 +437,14 @@ int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<flo
 }
 
 /// --integrator photons: one render of --spp samples, or passes of new maps for --time-budget.
-int render_photons_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene) {
+int render_photons_main(const Args& g, const NamedRender<float>& o, const Scene<float>& scene, const AnyAccel& accel,
+                        double build_seconds) {
     const PassBudget budget = g.time_budget > 0 ? PassBudget{g.time_budget, 0} : PassBudget{0, 1};
-    const ProgressiveResult r = render_photons_cli(scene, g.photons, o.image, budget, o.seed);
+    const ProgressiveResult r = render_photons_cli(scene, accel, g.photons, o.image, budget, o.seed);
     write_images(g, r.image, exr_attributes(g, o, r.passes * o.image.spp, r.seconds));
-    std::printf("rendered %s with photon maps in %.3f s (build 0 s): %zu + %zu photons per pass, k %d, radius %.4g, "
-                "%d gather rays, %d spp per pass; wrote %s\n",
-                scene.name.c_str(), r.seconds, g.photons.photons, 4 * g.photons.photons, g.photons.knn, g.photons.radius,
+    std::printf("rendered %s with photon maps in %.3f s (build %s %.3f s): %zu + %zu photons per pass, k %d, radius "
+                "%.4g, %d gather rays, %d spp per pass; wrote %s\n",
+                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, g.photons.photons, 4 * g.photons.photons, g.photons.knn, g.photons.radius,
                 g.photons.gather_rays, o.image.spp, g.out.c_str());
     std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
                 g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
@@ -475,15 +480,16 @@ int main(int argc, char** argv) {
             write_scene_json(g.export_json, scene, SceneJsonView{o.image.width, o.image.height, o.tracer.max_depth});
             return 0;
         }
-        if (g.integrator == "path") return render_path(g, o, scene);
-        if (g.integrator == "sppm") return render_sppm_main(g, o, scene);
-        if (g.integrator == "photons") return render_photons_main(g, o, scene);
+        const auto [accel, build_seconds] = build_accel(g, scene);
+        if (g.integrator == "path") return render_path(g, o, scene, *accel, build_seconds);
+        if (g.integrator == "sppm") return render_sppm_main(g, o, scene, *accel, build_seconds);
+        if (g.integrator == "photons") return render_photons_main(g, o, scene, *accel, build_seconds);
         VplSettings st;
         st.seed = o.seed + 1;
         st.gather = find_choice(std::span<const Choice<VplGather>>(gathers), "gather", g.vpl.gather).make;
         const std::span<const TriangleVertices<float>> mesh(scene.triangles.data() + before_insert,
                                                             scene.triangles.size() - before_insert);
-        const VplResult r = render_vpl_cli(scene, mesh, g.vpl, o.image, st);
+        const VplResult r = render_vpl_cli(scene, *accel, mesh, g.vpl, o.image, st);
         const std::string stem = g.out.substr(0, g.out.size() - 4);
         write_exr(stem + ".exr", r.image, {ExrLayer{"indirect", {"R", "G", "B"}, flatten(r.indirect)}},
                   exr_attributes(g, o, o.image.spp, r.seconds));

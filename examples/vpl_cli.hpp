@@ -3,7 +3,7 @@
 // types. Included by render.cpp only.
 //
 //   --vpls N            shooting walks (default 1024; each leaves a VPL per diffuse hit)
-//   --visibility NAME   rays (shadow rays through the wide BVH) or spheres (occluder spheres
+//   --visibility NAME   rays (shadow rays through the --accel tree) or spheres (occluder spheres
 //                       of Szécsi 2009, ch. 5, built from the --insert-mesh mesh, or from the
 //                       --mesh mesh; the linear scan below 800 spheres, the kd-tree above)
 //   --spheres K         occluder spheres (default 100)
@@ -17,12 +17,11 @@
 #include <string>
 
 #include <glint/core/error.hpp>
-#include <glint/intersection/moller_trumbore.hpp>
 #include <glint/occluders/spheres.hpp>
 #include <glint/occluders/visibility.hpp>
 #include <glint/sampling/roulette.hpp>
+#include <glint/tracer/any_accel.hpp>
 #include <glint/tracer/renderer.hpp>
-#include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
 
 namespace glint {
@@ -33,19 +32,18 @@ struct VplCliOptions {
     double clamp = 0;
 };
 
-/// Renders `scene` with the VPL integrator at `image`'s size and threads, one camera ray
-/// through each pixel's centre; occluders (for spheres) are built from `mesh`.
-inline VplResult render_vpl_cli(const Scene<float>& scene, std::span<const TriangleVertices<float>> mesh,
+/// Renders `scene` (traced through `accel`) with the VPL integrator at `image`'s size and
+/// threads, one camera ray through each pixel's centre; occluders (for spheres) are built
+/// from `mesh`.
+inline VplResult render_vpl_cli(const Scene<float>& scene, const AnyAccel& accel, std::span<const TriangleVertices<float>> mesh,
                                 const VplCliOptions& v, RenderSettings image, VplSettings st) {
-    using Accel = MeshBvh<MollerTrumbore<float>, 8>;
-    const Accel accel(scene.triangles);
     const auto roulette = Roulette<float, 3>::classic();
     image.spp = 1;
     image.pixel_jitter = false;
     st.vpl_walks = v.vpls;
     st.min_distance = v.clamp;
     if (v.visibility == "rays")
-        return render_vpl(scene, accel, roulette, ShadowRayVisibility<Accel>(accel, 1e-4f), image, st);
+        return render_vpl(scene, accel, roulette, ShadowRayVisibility<AnyAccel>(accel, 1e-4f), image, st);
     if (v.visibility != "spheres") throw Error("--visibility expects rays or spheres, not '" + v.visibility + "'");
     if (mesh.empty()) throw Error("--visibility spheres needs --insert-mesh or --mesh: the occluders are built from that mesh");
     const auto spheres = generate_occluders(mesh, v.spheres);

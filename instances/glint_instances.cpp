@@ -3,6 +3,7 @@
 
 namespace glint {
 
-template RenderResult render_named<DefaultAccel, float>(const Scene<float>&, const DefaultAccel&, const NamedRender<float>&);
+template RenderResult render_named<float>(const Scene<float>&, const AnyAccel&, const NamedRender<float>&);
+template FirstHitImages render_first_hit_named<float>(const Scene<float>&, const AnyAccel&, const NamedRender<float>&);
 
 }  // namespace glint

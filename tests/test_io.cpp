@@ -30,7 +30,7 @@
 #include <glint/io/scene_json_read.hpp>
 #include <glint/tracer/accelerator_choices.hpp>
 #include <glint/tracer/named_render.hpp>
-#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#include "glint_instances.hpp"  // render_named for AnyAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 
 using namespace glint;
@@ -160,7 +160,7 @@ RenderResult render(const Scene<float>& s, std::uint64_t seed, const std::string
     o.sampler = sampler;
     o.seed = seed;
     const DefaultAccel accel(s.triangles);
-    return render_named(s, accel, o);
+    return render_named(s, any_accel_view(accel), o);
 }
 
 /// The largest |mean_a - mean_b| / its standard error over the bands (independent renders).

@@ -32,7 +32,7 @@
 #include <glint/tracer/correlated_environment.hpp>
 #include <glint/tracer/first_hit_layers.hpp>
 #include <glint/tracer/named_render.hpp>
-#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#include "glint_instances.hpp"  // render_named for AnyAccel, compiled once (instances/)
 #include <glint/tracer/scenes.hpp>
 #include <glint/tracer/smooth_normals.hpp>
 #include <glint/intersection/ivm.hpp>
@@ -45,7 +45,7 @@ namespace {
 
 RenderResult render_scene(const Scene<float>& s, NamedRender<float> o) {
     const DefaultAccel accel(s.triangles);
-    return render_named(s, accel, o);
+    return render_named(s, any_accel_view(accel), o);
 }
 
 /// Image mean per band and its standard error from the per-pixel variances of the means.
@@ -150,7 +150,7 @@ TEST_CASE("accuracy: every roulette agrees with classic on the open Cornell box"
     o.image.pixel_jitter = false;
     o.roulette = "classic";
     o.seed = 501;
-    const RenderResult base = render_named(s, accel, o);
+    const RenderResult base = render_named(s, any_accel_view(accel), o);
     Rgb<double> base_mean, base_se;
     image_mean(base, base_mean, base_se);
     for (const std::string roulette : {"spectral", "estimate", "spectral+estimate", "throughput", "throughput+spectral",
@@ -160,7 +160,7 @@ TEST_CASE("accuracy: every roulette agrees with classic on the open Cornell box"
             o.roulette = roulette;
             o.estimate = estimate;
             ++o.seed;
-            const RenderResult r = render_named(s, accel, o);
+            const RenderResult r = render_named(s, any_accel_view(accel), o);
             Rgb<double> mean, se;
             image_mean(r, mean, se);
             for (std::size_t c = 0; c < 3; ++c) {
@@ -196,9 +196,9 @@ TEST_CASE("grey scenes: the spectral roulettes render classic's image, colour or
         const char* spectral = names.first;  // not a structured binding: clang 14 cannot capture one
         const char* classic = names.second;
         o.roulette = spectral;
-        const RenderResult a = render_named(s, accel, o);
+        const RenderResult a = render_named(s, any_accel_view(accel), o);
         o.roulette = classic;
-        const RenderResult b = render_named(s, accel, o);
+        const RenderResult b = render_named(s, any_accel_view(accel), o);
         CAPTURE(spectral);
         CHECK(a.image.pixels == b.image.pixels);
     }
@@ -629,14 +629,14 @@ TEST_CASE("convergence: the Cornell box's RMSE falls as 1/sqrt(spp)") {
     o.image.spp = 4096;
     o.seed = 1000;
     o.sampler = "random";  // Monte Carlo's rate (Halton walks converge faster at first)
-    const RenderResult ref = render_named(s, accel, o);
+    const RenderResult ref = render_named(s, any_accel_view(accel), o);
     double ref_var = 0;  // the reference's own error, subtracted from the measured MSE
     for (const auto& v : ref.variance.pixels) ref_var += double(v[0] + v[1] + v[2]) / (3.0 * double(ref.image.size()));
     std::vector<double> log_spp, log_rmse;
     for (int spp : {4, 16, 64}) {
         o.image.spp = spp;
         o.seed = std::uint64_t(spp);
-        const RenderResult r = render_named(s, accel, o);
+        const RenderResult r = render_named(s, any_accel_view(accel), o);
         double mse = 0;
         for (std::size_t i = 0; i < r.image.size(); ++i)
             for (std::size_t c = 0; c < 3; ++c) {
@@ -663,9 +663,9 @@ TEST_CASE("determinism: the image does not depend on the thread count") {
     o.image.width = o.image.height = 24;
     o.image.spp = 4;
     o.image.threads = 1;
-    const RenderResult a = render_named(s, accel, o);
+    const RenderResult a = render_named(s, any_accel_view(accel), o);
     o.image.threads = 3;
-    const RenderResult b = render_named(s, accel, o);
+    const RenderResult b = render_named(s, any_accel_view(accel), o);
     CHECK(a.image.pixels == b.image.pixels);
 }
 
@@ -737,9 +737,11 @@ TEST_CASE("the named LIE and sparse policies sample the view of the image they r
     image.width = 64;
     image.height = 32;
     const PathTracerSettings<float> ts;
+    const DefaultAccel accel(s.triangles);
     for (const char* name : {"lie", "lie-mask", "sparse-interp", "sparse-recon"}) {
         CAPTURE(name);
-        const DirectChoice<float> d = find_choice(direct_choices<float>(), "direct lighting", name).make(s, ts, image);
+        const DirectChoice<float> d =
+            find_choice(direct_choices<float>(), "direct lighting", name).make(s, any_accel_view(accel), ts, image);
         REQUIRE(std::holds_alternative<ManyLightDirect<float>>(d));
         const auto& system = std::get<ManyLightDirect<float>>(d).system();
         if (const auto* lie = std::get_if<LieDirect<float>>(&system)) CHECK(lie->lie().settings().aspect == 2.0);
@@ -1294,8 +1296,8 @@ TEST_CASE("first-hit layers: the beauty pass's pixel filter, unit normals inside
     o.seed = 3;
     // Jittered samples: each pixel's albedo is kd times the share of its rays that hit, the
     // share the beauty pass (radiance 1 on the square, 0 elsewhere) sees, to float rounding.
-    const RenderResult beauty = render_named(s, accel, o);
-    const FirstHitImages f = render_first_hit_named(s, accel, o);
+    const RenderResult beauty = render_named(s, any_accel_view(accel), o);
+    const FirstHitImages f = render_first_hit_named(s, any_accel_view(accel), o);
     int partial = 0, full = 0, empty = 0, bad = 0;
     for (std::size_t i = 0; i < beauty.image.pixels.size(); ++i) {
         const float cover = beauty.image.pixels[i][0];
@@ -1315,7 +1317,7 @@ TEST_CASE("first-hit layers: the beauty pass's pixel filter, unit normals inside
     CHECK(empty > 10);
     // Pixel centres: the depth is the distance to the plane along the centre ray.
     o.image.pixel_jitter = false;
-    const FirstHitImages c = render_first_hit_named(s, accel, o);
+    const FirstHitImages c = render_first_hit_named(s, any_accel_view(accel), o);
     int hits = 0, wrong = 0;
     for (int y = 0; y < o.image.height; ++y)
         for (int x = 0; x < o.image.width; ++x) {
@@ -1340,7 +1342,7 @@ TEST_CASE("first-hit layers: a diffuse Cornell wall's albedo is its reflectance"
     o.image.width = o.image.height = 32;
     o.image.spp = 2;
     o.image.pixel_jitter = false;
-    const FirstHitImages f = render_first_hit_named(s, accel, o);
+    const FirstHitImages f = render_first_hit_named(s, any_accel_view(accel), o);
     std::map<std::uint32_t, int> seen;  // material -> pixels showing it
     int differ = 0;
     for (int y = 0; y < 32; ++y)

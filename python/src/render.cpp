@@ -21,7 +21,7 @@
 
 #include "arrays.hpp"
 #ifdef GLINT_SHARED_INSTANCES
-#include "glint_instances.hpp"  // render_named for DefaultAccel, compiled once (instances/)
+#include "glint_instances.hpp"  // render_named for AnyAccel, compiled once (instances/)
 #endif
 
 namespace glint::python {
@@ -130,8 +130,8 @@ py::tuple render(const std::string& scene_name, int width, int height, int spp, 
             insert_mesh<float>(scene, load_obj(*insert).triangles,
                                Material<float>::lambertian(Rgb<float>(0.725f, 0.71f, 0.68f)), cornell_mesh_placement<float>());
         const DefaultAccel accel(std::span<const TriangleVertices<float>>(scene.triangles));
-        r = render_named(scene, accel, o);
-        if (extras.aov) layers = render_first_hit_named(scene, accel, o);
+        r = render_named(scene, any_accel_view(accel), o);
+        if (extras.aov) layers = render_first_hit_named(scene, any_accel_view(accel), o);
     }
     if (!extras.stats && !extras.aov) return py::make_tuple(to_array(r.image), to_array(r.variance));
     return py::make_tuple(to_array(r.image), to_array(r.variance), extras_dict(r, layers));

@@ -28,6 +28,7 @@
 #include <glint/core/math.hpp>
 #include <glint/core/offset.hpp>
 #include <glint/core/spectrum.hpp>
+#include <glint/tracer/any_accel.hpp>
 #include <glint/tracer/named_render.hpp>
 #include <glint/tracer/renderer.hpp>
 #include <glint/tracer/scene.hpp>
@@ -101,12 +102,12 @@ private:
 
 /// The first-hit layers of `scene` through accelerator `accel` with the image settings and
 /// the sampler that `o` names: the camera rays render_named(scene, accel, o) starts with.
-template <class Accel, Scalar T>
-FirstHitImages render_first_hit_named(const Scene<T>& scene, const Accel& accel, const NamedRender<T>& o) {
+template <Scalar T>
+FirstHitImages render_first_hit_named(const Scene<T>& scene, const AnyAccel& accel, const NamedRender<T>& o) {
     const NamedChoices<T> names = resolve_names(o);
     const SamplerChoice<T> sampler = names.sampler(o.image.width, o.image.height, o.seed);
     const RenderResult r = std::visit(
-        [&](const auto& s) { return render_image(scene, o.image, FirstHitLayers<Accel>(scene, accel), s); }, sampler);
+        [&](const auto& s) { return render_image(scene, o.image, FirstHitLayers<AnyAccel>(scene, accel), s); }, sampler);
     FirstHitImages out{r.image, r.layer("normal")->pixels, Image<float>(r.image.width, r.image.height)};
     const Image<Rgb<float>>& depth = r.layer("depth")->pixels;
     for (std::size_t i = 0; i < depth.pixels.size(); ++i) out.depth.pixels[i] = depth.pixels[i][0];

@@ -5,8 +5,9 @@
 //
 // Types are chosen only where they pay in the hot loop: the direct-lighting policy and the
 // sampler become a std::variant here and one std::visit picks the PathTracer instantiation
-// (4 x 2 per accelerator type: Fernandez 2004's systems share one type, ManyLightDirect); the
-// roulette rule, the BRDF selection and the scene's features are values. check_names() checks
+// (4 x 2: Fernandez 2004's systems share one type, ManyLightDirect); the accelerator
+// (AnyAccel, tracer/any_accel.hpp), the roulette rule, the BRDF selection and the scene's
+// features are values. check_names() checks
 // every name at once, so that a command line can reject an unknown one before it reads a file
 // or builds a tree.
 #pragma once
@@ -17,6 +18,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <variant>
 
@@ -25,6 +27,7 @@
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/roulette.hpp>
 #include <glint/sampling/sampler.hpp>
+#include <glint/tracer/any_accel.hpp>
 #include <glint/tracer/choice.hpp>
 #include <glint/tracer/correlated_direct.hpp>
 #include <glint/tracer/lighting.hpp>
@@ -112,42 +115,46 @@ inline SparseSettings factory_sparse_settings(SparseMode mode, const RenderSetti
 }
 }  // namespace detail
 
-/// The direct-lighting policies a name can choose.
+/// The direct-lighting policies a name can choose; the table's entries make one from the
+/// scene, the accelerator over its triangles (the rays of the LIE's and the sparse samples'
+/// construction), the tracer's and the image's settings.
 template <Scalar T>
 using DirectChoice = std::variant<BrdfOnlyDirect<T>, MisDirect<T>, CorrelatedDirect<T>, ManyLightDirect<T>>;
 
 template <Scalar T>
-std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const PathTracerSettings<T>&, const RenderSettings&)>> direct_choices() {
+std::span<const Choice<DirectChoice<T> (*)(const Scene<T>&, const AnyAccel&, const PathTracerSettings<T>&, const RenderSettings&)>>
+direct_choices() {
     using D = DirectChoice<T>;
     using Sc = const Scene<T>&;
+    using Ac = const AnyAccel&;
     using St = const PathTracerSettings<T>&;
     using Im = const RenderSettings&;
-    static constexpr Choice<D (*)(Sc, St, Im)> table[] = {
-        {"mis", "light and BRDF samples by the balance heuristic; lights by power", [](Sc s, St t, Im) { return D(MisDirect<T>(s, t)); }},
-        {"power", "the same as mis (Cycles 3.4's light selection)", [](Sc s, St t, Im) { return D(MisDirect<T>(s, t)); }},
+    static constexpr Choice<D (*)(Sc, Ac, St, Im)> table[] = {
+        {"mis", "light and BRDF samples by the balance heuristic; lights by power", [](Sc s, Ac, St t, Im) { return D(MisDirect<T>(s, t)); }},
+        {"power", "the same as mis (Cycles 3.4's light selection)", [](Sc s, Ac, St t, Im) { return D(MisDirect<T>(s, t)); }},
         {"tree", "the same, lights by the stochastic light tree (Conty Estevez and Kulla 2018)",
-         [](Sc s, St t, Im) { return D(MisDirect<T>(s, t, LightSelection::tree)); }},
+         [](Sc s, Ac, St t, Im) { return D(MisDirect<T>(s, t, LightSelection::tree)); }},
         {"brdf", "no light sampling: emission counts where the walk meets it",
-         [](Sc s, St t, Im) { return D(BrdfOnlyDirect<T>(s, t)); }},
+         [](Sc s, Ac, St t, Im) { return D(BrdfOnlyDirect<T>(s, t)); }},
         {"importance", "Szecsi 2009 3.2's light samples, lambda = 0",
-         [](Sc s, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::importance)); }},
+         [](Sc s, Ac, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::importance)); }},
         {"correlated", "Szecsi 2009 3.2's correlated estimator, lambda = 1",
-         [](Sc s, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::correlated)); }},
+         [](Sc s, Ac, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::correlated)); }},
         {"combined", "Szecsi 2009 3.2's combined estimator, lambda pooled",
-         [](Sc s, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
+         [](Sc s, Ac, St t, Im) { return D(CorrelatedDirect<T>(s, t, DirectEstimator::combined)); }},
         {"lie", "Fernandez 2004 ch. 3's local illumination environments (biased where unsampled)",
-         [](Sc s, St, Im i) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(i), false))); }},
+         [](Sc s, Ac a, St, Im i) { return D(ManyLightDirect<T>(LieDirect<T>(s, a, detail::factory_lie_settings(i), false))); }},
         {"lie-mask", "the same with Weber masking (drops up to 2% per cell)",
-         [](Sc s, St, Im i) { return D(ManyLightDirect<T>(LieDirect<T>(s, detail::factory_lie_settings(i), true))); }},
+         [](Sc s, Ac a, St, Im i) { return D(ManyLightDirect<T>(LieDirect<T>(s, a, detail::factory_lie_settings(i), true))); }},
         {"cuts", "Fernandez 2004 5.2's dense light cuts over every light, area lights as points (biased)",
-         [](Sc s, St t, Im) { return D(ManyLightDirect<T>(CutDirect<T>(s, t))); }},
+         [](Sc s, Ac, St t, Im) { return D(ManyLightDirect<T>(CutDirect<T>(s, t))); }},
         {"sparse-interp", "Fernandez 2004 5.3.1's interpolation of 5000 sample cuts at primary hits (blurs shadow edges)",
-         [](Sc s, St, Im i) {
-             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, detail::factory_sparse_settings(SparseMode::interpolate, i))));
+         [](Sc s, Ac a, St, Im i) {
+             return D(ManyLightDirect<T>(SparseDirect<T>(s, a, LightPointOptions<T>{}, detail::factory_sparse_settings(SparseMode::interpolate, i))));
          }},
         {"sparse-recon", "Fernandez 2004 5.3.2's reconstruction cuts from 5000 sample cuts at primary hits (biased)",
-         [](Sc s, St, Im i) {
-             return D(ManyLightDirect<T>(SparseDirect<T>(s, LightPointOptions<T>{}, detail::factory_sparse_settings(SparseMode::reconstruct, i))));
+         [](Sc s, Ac a, St, Im i) {
+             return D(ManyLightDirect<T>(SparseDirect<T>(s, a, LightPointOptions<T>{}, detail::factory_sparse_settings(SparseMode::reconstruct, i))));
          }},
     };
     return table;
@@ -235,8 +242,8 @@ struct NamedChoices {
     /// The roulette table's entry, which makes the Roulette from RouletteParams.
     const Choice<Roulette<T, 3> (*)(const RouletteParams<T>&)>* roulette;
     bool estimate;  ///< Whether the roulette name ends in "+estimate".
-    /// Makes the direct-lighting policy for a scene, tracer settings and image settings.
-    DirectChoice<T> (*direct)(const Scene<T>&, const PathTracerSettings<T>&, const RenderSettings&);
+    /// Makes the direct-lighting policy for a scene, its accelerator, tracer settings and image settings.
+    DirectChoice<T> (*direct)(const Scene<T>&, const AnyAccel&, const PathTracerSettings<T>&, const RenderSettings&);
     BrdfSelection selection;  ///< The BRDF-selection rule named.
     /// Makes the sampler from the image width and height in pixels and the seed.
     SamplerChoice<T> (*sampler)(int, int, std::uint64_t);
@@ -308,15 +315,17 @@ RenderResult render_policies(const Scene<T>& scene, const Accel& accel, const D&
 
 }  // namespace detail
 
-/// Renders `scene` with accelerator `accel` (built over scene.triangles) and the policies `o`
-/// names (every name looked up before anything is built).
-template <class Accel, Scalar T>
-RenderResult render_named(const Scene<T>& scene, const Accel& accel, const NamedRender<T>& o) {
+/// Renders `scene` with accelerator `accel` (built over scene.triangles; any tree through
+/// any_accel_view(), tracer/any_accel.hpp) and the policies `o` names (every name looked up
+/// before anything is built).
+template <Scalar T>
+RenderResult render_named(const Scene<T>& scene, const AnyAccel& accel, const NamedRender<T>& o) {
+    static_assert(std::is_same_v<T, float>, "glint::render_named: AnyAccel traces float rays");
     const NamedChoices<T> names = resolve_names(o);
     PathTracerSettings<T> ts = o.tracer;
     ts.selection = names.selection;
     ts.roulette = names.roulette->make({names.weights(), o.rr_depth, o.throughput_cutoff, scene.features().grey});
-    const DirectChoice<T> direct = names.direct(scene, ts, o.image);
+    const DirectChoice<T> direct = names.direct(scene, accel, ts, o.image);
     const SamplerChoice<T> sampler = names.sampler(o.image.width, o.image.height, o.seed);
     return std::visit(
         [&](const auto& d, const auto& s) { return detail::render_policies(scene, accel, d, s, ts, names, o); }, direct,
