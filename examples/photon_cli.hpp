@@ -14,7 +14,7 @@
 //   --radius R             sppm: initial gather radius; photons: largest kNN radius (scene
 //                          units, default 0.05)
 //   --camera-samples N     sppm: camera rays per pixel and pass for emission and direct light
-//                          (the last one's visible point gathers the photons; default 1)
+//                          (one of them, sample k mod N in pass k, gathers the photons; default 1)
 //   --knn K                photons: photons per radiance estimate (default 50)
 //   --final-gather N       photons: final gather rays per pixel sample (default 64)
 #pragma once

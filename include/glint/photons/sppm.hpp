@@ -3,7 +3,10 @@
 // method). Each pass:
 //   1. the camera pass, under the Renderer: one jittered camera ray per pixel, followed
 //      through mirrors and dielectrics to its first diffuse or glossy vertex, the pixel's
-//      visible point (photons/visible_points.hpp), with its own stream per pass;
+//      visible point (photons/visible_points.hpp); the passes continue one randomized Halton
+//      sequence per pixel (pass k draws the pixel's samples k c .. k c + c - 1 for c camera
+//      samples), as pbrt-v4's SPPMIntegrator continues its sampler, so that emission seen
+//      directly and direct light converge like the path tracer's progressive passes;
 //   2. a hash grid over the visible points and their current radii (photons/hash_grid.hpp);
 //   3. the photon pass: photons traced from the lights (photons/photon_tracing.hpp) without
 //      the first hits of direct light (PhotonSettings::store_direct off), every stored photon
@@ -16,13 +19,13 @@
 // heuristic), as pbrt-v4's SPPMIntegrator does, and photons bring the rest (caustics and
 // indirect light); emission the camera path meets counts whole. The image after K passes is
 // (emission + direct) / K + tau / (pi R^2 K). A pass may take several camera rays per pixel
-// for emission and direct light (SppmSettings::camera_samples), the last one's visible point
-// gathering the photons: the light's edges and direct light's noise then get more samples than
+// for emission and direct light (SppmSettings::camera_samples), the visible point of one of them
+// (sample k mod c in pass k) gathering the photons: the light's edges and direct light's noise then get more samples than
 // the photon pass's points, at the cost of a few rays (each part stays an unbiased pixel
 // average).
 //
 // Deterministic for a seed whatever the thread count: the camera pass draws from per-pixel
-// streams, photon tracing is deterministic, and the photon pass splits the photons into
+// sequences, photon tracing is deterministic, and the photon pass splits the photons into
 // fixed chunks whose contributions are summed per pixel in chunk order.
 #pragma once
 
@@ -40,6 +43,7 @@
 #include <glint/photons/photon_tracing.hpp>
 #include <glint/photons/sppm_statistics.hpp>
 #include <glint/photons/visible_points.hpp>
+#include <glint/sampling/halton.hpp>
 #include <glint/sampling/sampler.hpp>
 #include <glint/tracer/lighting.hpp>
 #include <glint/tracer/progressive.hpp>
@@ -162,7 +166,7 @@ std::size_t sppm_photon_pass(const Scene<T>& s, const A& accel, const VisiblePoi
 /// settings `image` (spp is ignored: st.camera_samples camera rays per pixel and pass), passes until
 /// `budget` says stop.
 template <RayAccelerator A, class D, Scalar T = typename A::scalar_type>
-    requires DirectLighting<D, T, RayQueries<A>, RandomSampler<T>>
+    requires DirectLighting<D, T, RayQueries<A>, HaltonSampler<T>>
 SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const RenderSettings& image,
                        const SppmSettings& st, const PassBudget& budget) {
     st.validate();
@@ -177,10 +181,15 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
     RenderSettings camera = image;
     camera.progress = nullptr;
     camera.spp = st.camera_samples;
+    // The pixel, the Fresnel choices and direct light's first samples from Halton, PCG after.
+    const HaltonSampler<T> sampler(image.width, image.height, 18, HaltonRandomization::digit_permutation,
+                                   detail::pass_seed(st.seed, 0, 1));
     for (int pass = 0;; ++pass) {
         VisiblePointFilm<T> film;
-        const RenderStats rs =
-            visible_points(s, accel, direct, camera, st.max_specular, RandomSampler<T>(detail::pass_seed(st.seed, pass, 1)), film);
+        camera.first_sample = image.first_sample + std::uint64_t(pass) * std::uint64_t(st.camera_samples);
+        // Pass k keeps sample k mod c's visible point: over the passes the kept points' leading
+        // Halton digits cycle (see VisiblePointIntegrator).
+        const RenderStats rs = visible_points(s, accel, direct, camera, st.max_specular, sampler, film, pass % st.camera_samples);
         out.rays += rs.rays;
         out.paths += rs.paths;
         const auto photon_start = clock::now();

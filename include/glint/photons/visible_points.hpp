@@ -112,7 +112,7 @@ template <Scalar T>
 struct VisiblePointFilm {
     /// Image width in pixels.
     int width = 0, height = 0;  ///< Image height in pixels.
-    std::vector<VisiblePoint<T>> points;  ///< Each pixel's visible point (its last sample's), row by row.
+    std::vector<VisiblePoint<T>> points;  ///< Each pixel's kept visible point, row by row.
     std::vector<Rgb<T>> radiance;  ///< Emission met and direct light at the point: the mean over the pixel's samples.
 
     /// Sizes the film to w x h pixels, every point invalid and every radiance 0.
@@ -131,34 +131,46 @@ struct VisiblePointFilm {
 
 /// The camera pass: per pixel sample, the emission met plus the direct light at its visible
 /// point by lighting policy D (the film's radiance: their mean over the pixel's samples); the
-/// pixel keeps its last sample's visible point (a uniformly jittered one, like any other).
+/// pixel keeps the visible point of its sample number `keep` (0-based, in this render's
+/// order; the last one where the pixel has fewer samples). Which one is kept matters to
+/// quasi-random samplers: passes that always kept sample c - 1 of c would keep the Halton
+/// points i = c - 1 mod c, whose leading digits are fixed (a c-th of the pixel in x for c a
+/// power of 2); a caller that cycles `keep` over the passes keeps a stratified sequence.
 template <RayAccelerator A, class D, Scalar T = typename A::scalar_type>
 class VisiblePointIntegrator {
 public:
-    using scalar_type = T;               ///< The scene's scalar type.
-    using pixel_state = VisiblePoint<T>;  ///< A pixel's visible point, its last sample's.
+    using scalar_type = T;  ///< The scene's scalar type.
+    /// A pixel's kept visible point and the samples it has taken so far.
+    struct pixel_state {
+        VisiblePoint<T> point;  ///< The visible point kept (sample `keep`'s, or the last one's).
+        int samples = 0;        ///< Samples taken so far.
+    };
 
     /// The camera pass over s through `accel` with direct-lighting policy `direct`, following
-    /// up to max_specular specular vertices; all three are kept by reference and must outlive it.
-    VisiblePointIntegrator(const Scene<T>& s, const A& accel, const D& direct, int max_specular)
-        : scene_(s), accel_(accel), direct_(direct), max_specular_(max_specular) {
+    /// up to max_specular specular vertices, keeping sample `keep`'s visible point; s, accel
+    /// and direct are kept by reference and must outlive it.
+    VisiblePointIntegrator(const Scene<T>& s, const A& accel, const D& direct, int max_specular, int keep = 0)
+        : scene_(s), accel_(accel), direct_(direct), max_specular_(max_specular), keep_(keep) {
         s.require_untextured("glint::VisiblePointIntegrator");
     }
 
-    /// One pixel sample: emission met plus direct light at the visible point, which is left in
-    /// `state`; with the rays traced.
+    /// One pixel sample: emission met plus direct light at its visible point, which `state`
+    /// keeps up to sample `keep`; with the rays traced.
     template <class S>
         requires Sampler<S, T> && DirectLighting<D, T, RayQueries<A>, S>
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state) const {
         RayQueries<A> rays(accel_);
-        Rgb<T> L = find_visible_point(scene_, rays, ray, max_specular_, [&sampler] { return sampler.get_1d(); }, state);
-        if (state.valid) L += direct_at(scene_, rays, direct_, state, sampler);
+        VisiblePoint<T> vp;
+        Rgb<T> L = find_visible_point(scene_, rays, ray, max_specular_, [&sampler] { return sampler.get_1d(); }, vp);
+        if (vp.valid) L += direct_at(scene_, rays, direct_, vp, sampler);
+        if (state.samples++ <= keep_) state.point = vp;
         return {L, rays.rays(), false};
     }
 
-    /// Copies every pixel's visible point onto the film.
+    /// Copies every pixel's kept visible point onto the film.
     void finish(VisiblePointFilm<T>& film, std::span<const pixel_state> states) const {
-        film.points.assign(states.begin(), states.end());
+        film.points.resize(states.size());
+        for (std::size_t i = 0; i < states.size(); ++i) film.points[i] = states[i].point;
     }
 
 private:
@@ -166,15 +178,16 @@ private:
     const A& accel_;
     const D& direct_;
     int max_specular_;
+    int keep_;
 };
 
 /// The visible points of one pass: the camera rays of `image` (image.spp per pixel) with the
-/// streams of `sampler`, direct light by `direct`.
+/// streams of `sampler`, direct light by `direct`, each pixel keeping sample `keep`'s point.
 template <RayAccelerator A, class D, class S, Scalar T = typename A::scalar_type>
     requires Sampler<S, T> && DirectLighting<D, T, RayQueries<A>, S>
 RenderStats visible_points(const Scene<T>& s, const A& accel, const D& direct, const RenderSettings& image,
-                           int max_specular, const S& sampler, VisiblePointFilm<T>& film) {
-    return render_image(s, image, VisiblePointIntegrator<A, D, T>(s, accel, direct, max_specular), sampler, film);
+                           int max_specular, const S& sampler, VisiblePointFilm<T>& film, int keep = 0) {
+    return render_image(s, image, VisiblePointIntegrator<A, D, T>(s, accel, direct, max_specular, keep), sampler, film);
 }
 
 }  // namespace glint
