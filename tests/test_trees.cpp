@@ -17,13 +17,14 @@
 // adversarial rays (axis-parallel through vertex coordinates) may have any number, but
 // every one must be an edge case. Nothing else is tolerated.
 //
-// CI runs 2 * 10^4 rays per scene and combination; -DGLINT_LONG_TESTS runs 10^6 (for the wide
-// BVH alone: test_trees -tc="agreement: wide*", or one kind of it, e.g. -tc="*spatial*").
-// Under the sanitizers (-DGLINT_SANITIZER_TESTS), which look for memory errors, not rare edge
-// cases: 4000 rays, and the trees' kinds and layouts times the intersectors pairwise instead
-// of as a product (every layout with Moller-Trumbore, every intersector in the pointer layout
-// and the 8-wide BVH): each traversal and each leaf test is still compiled and run, with
-// 23 tree types instead of 56 (the suite's instrumented build is the largest of them all).
+// CI runs 2 * 10^4 rays per scene and combination, and the trees' kinds and layouts times the
+// intersectors pairwise instead of as a product (every layout with Moller-Trumbore, every
+// intersector in the pointer layout and the 8-wide BVH): each traversal and each leaf test is
+// still compiled and run, with 23 tree types instead of 56 (the product was the largest
+// compile of the whole build). -DGLINT_LONG_TESTS runs the full product and 10^6 rays (for
+// the wide BVH alone: test_trees -tc="agreement: wide*", or one kind of it, e.g.
+// -tc="*spatial*"). Under the sanitizers (-DGLINT_SANITIZER_TESTS), which look for memory
+// errors, not rare edge cases: 4000 rays.
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
 
@@ -364,7 +365,7 @@ void check_intersector() {
         const Scene& sc = scenes()[s];
         const std::vector<StoreHit<float>>& ref = brute_reference<P>(s).hits;
         const std::vector<char>& found = brute_reference<P>(s).found;
-#if defined(GLINT_SANITIZER_TESTS)
+#if !defined(GLINT_LONG_TESTS)
         if constexpr (!std::is_same_v<P, MollerTrumbore<float>>) {  // the other intersectors in one layout each
             check_layouts<P, KdTree, PointerLayout>(sc, ref, found);
             check_layouts<P, Bih, PointerLayout>(sc, ref, found);
@@ -403,7 +404,7 @@ void check_wide() {
             check_agreement<Tree<P>, P>(scenes()[s], brute_reference<P>(s).hits, brute_reference<P>(s).found);
     };
     check.template operator()<MollerTrumbore<float>>();
-#if defined(GLINT_SANITIZER_TESTS)
+#if !defined(GLINT_LONG_TESTS)
     if constexpr (!std::is_same_v<Tree<Ivm<float>>, MeshBvh<Ivm<float>, 8>>) return;  // the others in the 8-wide BVH only
     else
 #endif

@@ -12,7 +12,9 @@ and of Cycles 3.4 (its time limit T, the same scene exported by tools/peer_cycle
 sharp, caustics on), every render on one thread pinned to --core.
 
 Errors: each renderer against its own long path-traced reference, rendered as two halves of
---ref-spp / 2 spp (glint's path tracer; Cycles), as tools/peer_cycles.py measures its rows:
+--ref-spp / 2 spp (glint's path tracer; Cycles), as tools/peer_cycles.py measures its rows
+(or, with --reference sppm, the default for scenes lit by a point light, whose caustics no path
+tracer samples: every renderer against two halves of --ref-seconds of glint's SPPM):
 RMSE = sqrt(MSE - mean((A - B)^2) / 4), the reference's own noise taken out; over the pixels
 away from the area light ("no light": its edge pixels' coverage error would swamp the rest) and
 over the whole image. glint's photon
@@ -81,6 +83,11 @@ def main():
     p.add_argument('--camera-samples', type=int, default=16, help='SPPM: camera rays per pixel and pass')
     p.add_argument('--pm-photons', type=int, default=20000, help='photon map: global map photons (4x for caustics)')
     p.add_argument('--gather', type=int, default=16, help='photon map: final gather rays')
+    p.add_argument('--reference', choices=('path', 'sppm'),
+                   help='path: each renderer against its own path-traced reference (default); sppm: every renderer '
+                        'against one long glint SPPM run (default for scenes lit by a point light, whose caustics no '
+                        'path tracer samples)')
+    p.add_argument('--ref-seconds', type=float, default=120, help='--reference sppm: seconds of SPPM per half')
     p.add_argument('--no-cycles', action='store_true', help='glint only')
     p.add_argument('--quick', action='store_true', help='32x32, budgets 1, reference 1024 spp')
     p.add_argument('--glint', default=os.path.join(pc.ROOT, 'build', 'examples', 'glint-render'))
@@ -93,7 +100,7 @@ def main():
         print('caustics_table: skipped: numpy is not installed (Debian: apt-get install python3-numpy)')
         return 0
     if a.quick:
-        a.size, a.budgets, a.ref_spp = 32, '1', 1024
+        a.size, a.budgets, a.ref_spp, a.ref_seconds = 32, '1', 1024, 4
     if a.scene not in pc.SCENES:
         sys.exit('caustics_table: unknown scene %r (known: %s)' % (a.scene, ', '.join(pc.SCENES)))
     cycles = not a.no_cycles and a.blender and os.path.exists(a.blender)
@@ -106,9 +113,12 @@ def main():
     os.makedirs(work, exist_ok=True)
     sj = os.path.join(work, 'scene.json')
     pc.run([a.glint] + pc.SCENES[a.scene] + ['--size', str(a.size), '--export-scene', sj])
-    print('%s %dx%d, one thread on core %d; references %d spp (two halves)%s'
-          % (a.scene, a.size, a.size, a.core, a.ref_spp, '' if cycles else '; no Cycles'), flush=True)
-    refs = references(rn, a, sj, work, cycles)
+    if a.reference is None:
+        a.reference = 'sppm' if a.scene.endswith('-point') else 'path'
+    print('%s %dx%d, one thread on core %d; references %s%s'
+          % (a.scene, a.size, a.size, a.core, '%d spp (two halves)' % a.ref_spp if a.reference == 'path'
+             else 'glint SPPM, two halves of %g s' % a.ref_seconds, '' if cycles else '; no Cycles'), flush=True)
+    refs = references(rn, a, sj, work, cycles) if a.reference == 'path' else sppm_reference(rn, a, work)
     keep = light_mask(json.load(open(sj)), a.size)
     rows = []
     for budget in [float(b) for b in a.budgets.split(',')]:
@@ -124,8 +134,9 @@ def main():
         if cycles:
             path = os.path.join(work, 'cycles_%g.exr' % budget)
             img, t = rn.cycles(sj, 1 << 20, 1, path, time_limit=budget)
-            rows.append({'budget': budget, 'method': 'Cycles 3.4 path', 'cpu': t['cpu'], 'rmse': rmse(img, refs['cycles'], keep),
-                         'rmse_image': rmse(img, refs['cycles'])})
+            ref = refs.get('cycles', refs['glint'])
+            rows.append({'budget': budget, 'method': 'Cycles 3.4 path', 'cpu': t['cpu'], 'rmse': rmse(img, ref, keep),
+                         'rmse_image': rmse(img, ref)})
             print_row(rows[-1])
     print('\n| budget s | method | CPU s | RMSE (no light) | / glint path | / Cycles | RMSE (image) |')
     print('|---|---|---|---|---|---|---|')
@@ -157,6 +168,22 @@ def references(rn, a, sj, work, cycles):
                   % (name, k, half, t['cpu'], '' if time.time() - t0 > 1 else ' (cached)'), flush=True)
         out[name] = ((halves[0] + halves[1]) / 2, halves)
     return out
+
+
+def sppm_reference(rn, a, work):
+    """One long glint SPPM run as two halves of --ref-seconds each (seeds apart), cached in `work`:
+    every renderer's reference. SPPM is consistent, not unbiased: what bias is left after the
+    halves' passes counts as the reference's error, not the methods'."""
+    flags = [f.format(photons=a.photons, radius=a.radius, camera=a.camera_samples) for f in GLINT_METHODS['sppm']]
+    halves = []
+    for k, seed in enumerate((1000001, 1000002)):
+        path = os.path.join(work, 'ref_sppm_%g_%d.exr' % (a.ref_seconds, k))
+        t0 = time.time()
+        img, t = pc.cached(path, lambda p, s=seed: rn.glint(a.scene, 1, s, p, flags + ['--time-budget', str(a.ref_seconds)]))
+        halves.append(img)
+        print('  reference glint SPPM half %d: %.0f s, %.1f s CPU%s'
+              % (k, a.ref_seconds, t['cpu'], '' if time.time() - t0 > 1 else ' (cached)'), flush=True)
+    return {'glint': ((halves[0] + halves[1]) / 2, halves)}
 
 
 def print_row(r):
