@@ -1,25 +1,26 @@
-// bench_cones: the hierarchical ray engine (000 chapter 6) against brute force and glint's
-// fastest tree, the wide BVH, on the refracted-ray passes of a glass torus knot, versus triangle count.
+// bench_cones: the hierarchical ray engine (Szécsi 2009, ch. 6) against brute force and
+// glint's fastest tree, the wide BVH, on the refracted-ray passes of a glass object, versus
+// triangle count.
 //
-// 000 section 6.4: 256 x 256 rays in 16 x 16 tiles, maximum path length 5;
-// the primary refracted rays come from rasterization (section 6.3.2), and the timed work is
-// the passes that trace them on. Here the primary hits are found once (untimed) with the
-// wide BVH, shaded into the primary refracted rays, and then every method runs the same
-// passes (trace, refract or reflect at the hit, drop the rays that leave) from the same
-// rays:
+// Szécsi 2009, §6.4: 256 x 256 rays in 16 x 16 tiles, maximum path length 5; the primary
+// refracted rays come from rasterization (§6.3.2), and the timed work is the passes that trace
+// them on. Here the primary hits are found once (untimed) with the wide BVH, shaded into the
+// primary refracted rays, and then every method runs the same passes (trace, refract or
+// reflect at the hit, drop the rays that leave) from the same rays:
 //   brute  BruteForce<Ivm<float>>: every ray against every triangle (the ray engine);
 //   tiles  RayTileEngine<Ivm<float>>: cones over 16 x 16 tiles, spheres per triangle;
 //   tree   MeshBvh<Ivm<float>, 8> (8-wide BVH, trees/mesh_bvh.hpp; the IVM as in the tiles): its build
 //          time is printed apart (dynamic geometry pays it every frame; not in `seconds`).
 // tests_per_ray = ray-triangle tests / ray segments traced; the tree's tests are counted in
 // a separate, untimed run with a counting copy of the IVM policy.
-// 000 reports 2x over brute force at 100 triangles and 15-20x at 5000 (sections 6.4-6.5).
+// Szécsi 2009 reports 2x over brute force at 100 triangles and 15-20x at 5000 (§6.4-6.5).
 // Every speed claim is a ratio measured in the same run; the program also checks that the
-// tiles' final rays are bit-identical to brute force's.
+// tiles' final rays are bit-identical to brute force's (exit status 1 if not).
 //
-// Usage: bench_cones [--csv FILE] [--plot FILE.png] [--quick] [--size N] [--tile N]
-//                    [--passes N] [--reps N] [--counts 100,1000,...]
-// --quick: 64 x 64 rays, 100 and 1000 triangles, one repetition (CI smoke test).
+//   bench_cones [--csv FILE] [--plot FILE.png] [--quick] [--scene sphere|knot] [--size N]
+//               [--tile N] [--passes N] [--reps N] [--counts 100,1000,...]     (see --help)
+// --quick: 64 x 64 rays, 100 and 1000 triangles, one repetition (CI smoke test); flags given
+// with it override its values.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -39,7 +40,7 @@
 #include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 
-#include "support/args.hpp"
+#include "flags.hpp"  // cli/: the command-line conventions on CLI11
 
 using namespace glint;
 
@@ -121,57 +122,31 @@ std::vector<Ray<float>> camera_rays(const AABB<float>& box, int size) {
     return rays;
 }
 
-[[noreturn]] void usage(const char* msg) {
-    std::fprintf(stderr,
-                 "bench_cones: %s\nusage: bench_cones [--csv FILE] [--plot FILE.png] [--quick] [--size N] [--tile N] "
-                 "[--passes N] [--reps N] [--counts 100,1000,...]\n",
-                 msg);
-    std::exit(2);
-}
-
-Options parse(int argc, char** argv) {
-    Options o;
-    bool counts_given = false, size_given = false;
-    bench::Args args(argc, argv);
-    while (args.next()) try {
-        const std::string& a = args.flag();
-        auto number = [&] { return args.number(1, 1 << 20); };
-        if (a == "--csv") o.csv = args.value();
-        else if (a == "--plot") o.plot = args.value();
-        else if (a == "--quick") o.quick = true;
-        else if (a == "--scene") {
-            o.scene = args.value();
-            if (o.scene != "sphere" && o.scene != "knot") usage("--scene is sphere or knot");
-        }
-        else if (a == "--size") o.size = number(), size_given = true;
-        else if (a == "--tile") o.tile = number();
-        else if (a == "--passes") o.passes = number();
-        else if (a == "--reps") o.reps = number();
-        else if (a == "--counts") {
-            o.counts.clear();
-            const std::string v = args.value();
-            for (std::size_t p = 0; p < v.size();) {
-                const std::size_t q = std::min(v.find(',', p), v.size());
-                const int c = std::atoi(v.substr(p, q - p).c_str());
-                if (c < 10) usage(("bad triangle count in '" + v + "'").c_str());
-                o.counts.push_back(c);
-                p = q + 1;
-            }
-            counts_given = true;
-        } else usage(("unknown argument " + a).c_str());
-    } catch (const Error& e) {
-        usage(e.what());
-    }
-    if (o.quick) {
-        if (!size_given) o.size = 64;
-        if (!counts_given) o.counts = {100, 1000};
+/// The command line (cli/flags.hpp): exits after --help, --version or a bad flag. --quick sets
+/// its sizes first, so that flags given explicitly override them.
+void parse(int argc, char** argv, Options& o) {
+    cli::App app("bench_cones: the ray-tile engine (Szecsi 2009, ch. 6) against brute force and the 8-wide BVH");
+    const auto quick = [&o] {
+        o.quick = true;
+        o.size = 64;
+        o.counts = {100, 1000};
         o.reps = 1;
-    }
+    };
+    app.flag("--quick", quick, "a smoke run: 64 x 64 rays, 100 and 1000 triangles, one repetition");
+    cli::output(app, "--csv", o.csv, "write the rows as CSV (and a gnuplot plot beside it)");
+    cli::output(app, "--plot", o.plot, "FILE.png: the plot (default: the CSV's name with .png)");
+    static constexpr Choice<const char*> scenes[] = {{"sphere", "a UV sphere", "sphere"}, {"knot", "a torus knot tube", "knot"}};
+    cli::choice(app, "--scene", o.scene, std::span<const Choice<const char*>>(scenes), "scene", "the glass object");
+    cli::number(app, "--size", o.size, 1, 1 << 14, "rays per image side");
+    cli::number(app, "--tile", o.tile, 1, 1 << 14, "tile side in rays");
+    cli::number(app, "--passes", o.passes, 1, 1 << 10, "refracted passes");
+    cli::number(app, "--reps", o.reps, 1, 1 << 10, "timed repetitions (the best is kept)");
+    cli::numbers(app, "--counts", o.counts, 10, 1 << 24, "triangle counts of the glass object");
+    cli::parse_or_exit(app, argc, argv, "bench_cones");
     if (o.plot.empty() && !o.csv.empty()) {
         const std::size_t dot = o.csv.rfind('.');
         o.plot = (dot == std::string::npos ? o.csv : o.csv.substr(0, dot)) + ".png";
     }
-    return o;
 }
 
 /// Best of `reps` runs of the passes from `start`; the rays after the last run are left in
@@ -224,7 +199,8 @@ void write_plot(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    const Options o = parse(argc, argv);
+    Options o;
+    parse(argc, argv, o);
     const TileGrid grid(o.size, o.size, o.tile);
     std::vector<Row> rows;
     std::printf("# bench_cones: %d x %d rays, %d x %d tiles, up to %d refracted passes, best of %d\n", o.size, o.size,

@@ -90,6 +90,23 @@ Vec3d choose_frame(std::span<const TriangleVertices<T>> tris, double& quality) {
     return best;
 }
 
+/// `x` rounded to T component by component, as a double. Each rounding goes through a
+/// volatile T: GCC 12 (-O2 and above) vectorizes `Vec3d(Vec3<float>(x))` into code that keeps
+/// two components unrounded (measured: OffsetFrames::choose returned -0x1.c5b048fb1c56ep-1
+/// for -0x1.c5b048p-1), so records were built in a frame a few ulps away from the rounded
+/// origin that rays are translated by, and the same triangle's record depended on where the
+/// compiler inlined the store's builder (the ray-tile engine and brute force disagreed in the
+/// last bits of some hits, tests/test_intersection.cpp).
+template <class T>
+Vec3d rounded_to(const Vec3d& x) {
+    Vec3d out;
+    for (int k = 0; k < 3; ++k) {
+        const volatile T r = static_cast<T>(x[k]);
+        out[k] = static_cast<double>(r);
+    }
+    return out;
+}
+
 /// Record slots of `n` records padded to whole batches.
 inline std::uint32_t padded(std::uint32_t n) {
     constexpr std::uint32_t w = std::uint32_t(batch_width);
@@ -148,7 +165,7 @@ struct OffsetFrames {
     template <class T>
     static Vec3d choose(std::span<const TriangleVertices<T>> tris, double& quality) {
         // Rounded to T: the origin exactly as rays will be translated by it.
-        return Vec3d(Vec3<T>(detail::choose_frame<T>(tris, quality)));
+        return detail::rounded_to<T>(detail::choose_frame<T>(tris, quality));
     }
     /// TriangleStore::add_each gives every triangle a group of its own, even where two
     /// neighbours chose the same origin: the reference that the trees and the ray-tile engine
