@@ -22,8 +22,8 @@
 #include <cstdio>
 
 #include <glint/photons/photon_integrator.hpp>
-#include <glint/tracer/any_accel.hpp>
 #include <glint/photons/sppm.hpp>
+#include <glint/tracer/any_accel.hpp>
 #include <glint/tracer/lighting.hpp>
 #include <glint/tracer/progressive.hpp>
 #include <glint/tracer/renderer.hpp>

@@ -370,7 +370,6 @@ std::vector<ExrLayer> first_hit_exr_layers(const Scene<float>& scene, const AnyA
             ExrLayer{"depth", {"Z"}, f.depth.pixels}};
 }
 
-/// The path tracer's render with the accelerator named --accel; prints what it did.
 /// The tree --accel names over the scene's triangles, and the seconds its build took.
 std::pair<AcceleratorChoice, double> build_accel(const Args& g, const Scene<float>& scene) {
     const auto start = std::chrono::steady_clock::now();
@@ -378,6 +377,7 @@ std::pair<AcceleratorChoice, double> build_accel(const Args& g, const Scene<floa
     return {std::move(accel), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
 }
 
+/// The path tracer's render through `accel` (built in build_seconds); prints what it did.
 int render_path(const Args& g, const NamedRender<float>& o, const Scene<float>& scene, const AnyAccel& accel,
                 double build_seconds) {
     std::fprintf(stderr, "%s: %zu triangles, %zu area lights%s; %dx%d, %d spp, roulette %s, direct %s\n", scene.name.c_str(),
@@ -429,8 +429,8 @@ int render_sppm_main(const Args& g, const NamedRender<float>& o, const Scene<flo
     write_images(g, r.image, exr_attributes(g, o, r.passes * g.photons.camera_samples, r.seconds));
     std::printf("rendered %s with SPPM in %.3f s (build %s %.3f s): %d passes of %zu photons (%zu emitted), mean radius "
                 "%.4g (from %.4g), photon passes %.3f s; wrote %s\n",
-                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, r.passes, g.photons.photons, r.photons_emitted, r.mean_radius,
-                g.photons.radius, r.photon_seconds, g.out.c_str());
+                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, r.passes, g.photons.photons,
+                r.photons_emitted, r.mean_radius, g.photons.radius, r.photon_seconds, g.out.c_str());
     std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
                 g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
     return 0;
@@ -444,8 +444,8 @@ int render_photons_main(const Args& g, const NamedRender<float>& o, const Scene<
     write_images(g, r.image, exr_attributes(g, o, r.passes * o.image.spp, r.seconds));
     std::printf("rendered %s with photon maps in %.3f s (build %s %.3f s): %zu + %zu photons per pass, k %d, radius "
                 "%.4g, %d gather rays, %d spp per pass; wrote %s\n",
-                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, g.photons.photons, 4 * g.photons.photons, g.photons.knn, g.photons.radius,
-                g.photons.gather_rays, o.image.spp, g.out.c_str());
+                scene.name.c_str(), r.seconds, g.accel.c_str(), build_seconds, g.photons.photons, 4 * g.photons.photons,
+                g.photons.knn, g.photons.radius, g.photons.gather_rays, o.image.spp, g.out.c_str());
     std::printf("passes: %d in %.3f s%s\n", r.passes, r.seconds,
                 g.time_budget > 0 ? (", budget " + std::to_string(g.time_budget) + " s").c_str() : "");
     return 0;

@@ -96,7 +96,7 @@ Vec3d choose_frame(std::span<const TriangleVertices<T>> tris, double& quality) {
 /// for -0x1.c5b048p-1), so records were built in a frame a few ulps away from the rounded
 /// origin that rays are translated by, and the same triangle's record depended on where the
 /// compiler inlined the store's builder (the ray-tile engine and brute force disagreed in the
-/// last bits of some hits, tests/test_intersection.cpp).
+/// last bits of some hits; tests/test_intersection.cpp and tests/test_cones.cpp check it).
 template <class T>
 Vec3d rounded_to(const Vec3d& x) {
     Vec3d out;

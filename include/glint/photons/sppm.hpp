@@ -19,10 +19,10 @@
 // heuristic), as pbrt-v4's SPPMIntegrator does, and photons bring the rest (caustics and
 // indirect light); emission the camera path meets counts whole. The image after K passes is
 // (emission + direct) / K + tau / (pi R^2 K). A pass may take several camera rays per pixel
-// for emission and direct light (SppmSettings::camera_samples), the visible point of one of them
-// (sample k mod c in pass k) gathering the photons: the light's edges and direct light's noise then get more samples than
-// the photon pass's points, at the cost of a few rays (each part stays an unbiased pixel
-// average).
+// for emission and direct light (SppmSettings::camera_samples), the visible point of one of
+// them (sample k mod c in pass k) gathering the photons: the light's edges and direct light's
+// noise then get more samples than the photon pass's points, at the cost of a few rays (each
+// part stays an unbiased pixel average).
 //
 // Deterministic for a seed whatever the thread count: the camera pass draws from per-pixel
 // sequences, photon tracing is deterministic, and the photon pass splits the photons into
@@ -189,7 +189,8 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
         camera.first_sample = image.first_sample + std::uint64_t(pass) * std::uint64_t(st.camera_samples);
         // Pass k keeps sample k mod c's visible point: over the passes the kept points' leading
         // Halton digits cycle (see VisiblePointIntegrator).
-        const RenderStats rs = visible_points(s, accel, direct, camera, st.max_specular, sampler, film, pass % st.camera_samples);
+        const RenderStats rs =
+            visible_points(s, accel, direct, camera, st.max_specular, sampler, film, pass % st.camera_samples);
         out.rays += rs.rays;
         out.paths += rs.paths;
         const auto photon_start = clock::now();
