@@ -80,8 +80,9 @@ std::vector<Ray<float>> axis_rays(const Mesh<float>& m, const UniformGrid<float>
         const Vec3f v = m[std::size_t(rng.uniform<float>() * float(m.size())) % m.size()][i % 3];
         Ray<float> r;
         for (int a = 0; a < 3; ++a) {
-            const int cell = int(rng.uniform<float>() * float(res[a] + 1));
-            r.origin[a] = i % 2 ? v[a] : b.lo[a] + (b.hi[a] - b.lo[a]) * float(cell) / float(res[a]);
+            const std::uint32_t cells = res[std::size_t(a)];
+            const int cell = int(rng.uniform<float>() * float(cells + 1));
+            r.origin[a] = i % 2 ? v[a] : b.lo[a] + (b.hi[a] - b.lo[a]) * float(cell) / float(cells);
         }
         const float span = b.hi[axis] - b.lo[axis] + 1.0f;
         r.origin[axis] = i % 4 < 2 ? (sign > 0 ? b.lo[axis] - span : b.hi[axis] + span) : b.lo[axis] + 0.5f * span;

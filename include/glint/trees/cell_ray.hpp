@@ -54,16 +54,11 @@ struct CellRay {
         for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(org[a]) && std::isfinite(dir[a]);
         return finite && (dir[0] != 0 || dir[1] != 0 || dir[2] != 0);
     }
-    /// Clips (t0, t1) to `box`, entry and exit planes chosen by the direction's sign (a ray
-    /// lying in a face, (face - o) * inf = NaN, keeps its interval); false when nothing is left.
-    bool clip(const AABB<T>& box, T& t0, T& t1) const {
-        for (int a = 0; a < 3; ++a) {
-            const T tl = (box.lo[a] - org[a]) * inv[a], th = (box.hi[a] - org[a]) * inv[a];
-            const T tn = neg[a] ? th : tl, tf = neg[a] ? tl : th;
-            t0 = tn > t0 ? tn : t0;
-            t1 = tf < t1 ? tf : t1;
-        }
-        return t0 <= t1;
+    /// (t0, t1) = ray's (tmin, tmax) clipped to `box` (AABB::intersect: entry and exit planes
+    /// by the direction's sign, so a ray lying in a face keeps its interval); false when
+    /// nothing is left.
+    bool clip(const AABB<T>& box, const Ray<T>& ray, T& t0, T& t1) const {
+        return box.intersect(ray, Vec3<T>(inv[0], inv[1], inv[2]), t0, t1);
     }
 };
 

@@ -88,8 +88,8 @@ public:
     template <bool Any, LeafTest Leaf, CellHook Hook = NoCellHook>
     bool intersect(Ray<T>& ray, Leaf&& leaf, Hook&& hook = {}) const {
         const detail::CellRay<T> r(ray);
-        T t0 = ray.tmin, t1 = ray.tmax;
-        if (nodes_.empty() || !r.valid() || !r.clip(bounds_, t0, t1)) return false;
+        T t0, t1;
+        if (nodes_.empty() || !r.valid() || !r.clip(bounds_, ray, t0, t1)) return false;
         Entry stack[max_stack];
         int sp = 0;
         stack[sp++] = {0, t0, t1};

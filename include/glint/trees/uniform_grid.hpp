@@ -79,8 +79,8 @@ public:
     template <bool Any, LeafTest Leaf, CellHook Hook = NoCellHook>
     bool intersect(Ray<T>& ray, Leaf&& leaf, Hook&& hook = {}) const {
         const detail::CellRay<T> r(ray);
-        T t0 = ray.tmin, t1 = ray.tmax;
-        if (cell_begin_.empty() || !r.valid() || !r.clip(bounds_, t0, t1)) return false;
+        T t0, t1;
+        if (cell_begin_.empty() || !r.valid() || !r.clip(bounds_, ray, t0, t1)) return false;
         int idx[3], step[3];
         T next[3];
         for (int a = 0; a < 3; ++a) {
@@ -113,7 +113,7 @@ public:
     const std::vector<std::uint32_t>& cell_begin() const { return cell_begin_; }
     const AABB<T>& bounds() const { return bounds_; }  ///< Box of the binned primitives (empty: no cells).
     /// Cells on each axis (0 0 0 for an empty grid).
-    std::array<std::uint32_t, 3> resolution() const { return res_; }
+    std::array<std::uint32_t, 3> resolution() const { return {res_[0], res_[1], res_[2]}; }
     /// Number of cells.
     std::size_t cell_count() const { return cell_begin_.empty() ? 0 : cell_begin_.size() - 1; }
     /// Bytes of the cell table and the primitive references.
@@ -150,7 +150,7 @@ private:
     }
 
     /// Cell (i, j, k)'s box; the last cell on an axis ends at the grid's box.
-    AABB<T> cell_box(const std::array<int, 3>& c) const {
+    AABB<T> cell_box(const int (&c)[3]) const {
         AABB<T> b;
         for (int a = 0; a < 3; ++a) {
             b.lo[a] = bounds_.lo[a] + T(c[a]) * size_[a];
@@ -195,7 +195,7 @@ private:
 
     std::vector<std::uint32_t> cell_begin_, prims_;
     AABB<T> bounds_;
-    std::array<std::uint32_t, 3> res_{0, 0, 0};
+    std::uint32_t res_[3] = {0, 0, 0};  // a plain array: indexed by int axes
     Vec3<T> size_{0}, inv_size_{0};
 };
 
