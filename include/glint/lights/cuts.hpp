@@ -180,6 +180,44 @@ struct CutRecord {
 
 namespace detail {
 
+/// A max-heap of (error, ...) entries on the caller's vector: std::push_heap / pop_heap's
+/// order with the larger child chosen by a select instead of a branch (a cut's errors make that
+/// branch a coin toss: half of its mispredictions, measured).
+template <class Entry>
+void heap_push(std::vector<Entry>& h, const Entry& e) {
+    std::size_t i = h.size();
+    h.push_back(e);
+    for (; i > 0; i = (i - 1) / 2) {
+        const std::size_t parent = (i - 1) / 2;
+        if (!(h[parent].error < e.error)) break;
+        h[i] = h[parent];
+    }
+    h[i] = e;
+}
+
+/// Removes and returns the largest entry of the non-empty heap h: the hole left at the top
+/// descends along the larger children to a leaf, where the last entry goes and climbs.
+template <class Entry>
+Entry heap_pop(std::vector<Entry>& h) {
+    const Entry top = h[0], last = h.back();
+    h.pop_back();
+    const std::size_t n = h.size();
+    if (n == 0) return top;
+    std::size_t i = 0;
+    for (std::size_t c = 1; c < n; c = 2 * i + 1) {
+        c += std::size_t(c + 1 < n && !(h[c + 1].error < h[c].error));  // ties: the right child, as libstdc++
+        h[i] = h[c];
+        i = c;
+    }
+    for (; i > 0; i = (i - 1) / 2) {
+        const std::size_t parent = (i - 1) / 2;
+        if (!(h[parent].error < last.error)) break;
+        h[i] = h[parent];
+    }
+    h[i] = last;
+    return top;
+}
+
 /// The nodes a cut has evaluated: each node's error and its slot in `evals`, the evaluations
 /// of representatives (f G V, and V), shared by a child with its parent's representative.
 template <Scalar T, class Visible, class Interpolate>
@@ -201,15 +239,18 @@ struct CutSearch {
     CutResult<T>& out;
     std::vector<Evaluation>& evals;
 
-    /// Node k's entry and its approximation's luminance; `parent`: the entry it refines.
-    std::pair<Entry, T> entry(std::uint32_t k, const Entry* parent) {
+    /// Node k's entry (into `made`; through a reference, not returned with the luminance as a
+    /// pair: that measured a store-forwarding stall per node) and its approximation's
+    /// luminance; `parent`: the entry it refines.
+    T entry(std::uint32_t k, const Entry* parent, Entry& made) {
         const LightNode<T>& n = tree.node(k);
         const T relative = interpolate(k, parent ? parent->node : LightNode<T>::none);
         std::uint32_t slot;
         if (relative >= T(0)) {  // interpolated: the representative's f G times the relative value, no ray
             slot = std::uint32_t(evals.size());
             evals.push_back({light_factor(tree.lights()[n.rep], r) * relative, true});
-            return {Entry{T(0), k, slot}, (evals[slot].factor * n.intensity).luminance()};
+            made = Entry{T(0), k, slot};
+            return (evals[slot].factor * n.intensity).luminance();
         }
         if (parent && tree.node(parent->node).rep == n.rep) {
             slot = parent->slot;
@@ -226,7 +267,8 @@ struct CutSearch {
         }
         const T est = (evals[slot].factor * n.intensity).luminance();
         const T error = n.leaf() ? T(0) : std::max(T(0.5) * node_bound(n, r).luminance(), est);
-        return {Entry{error, k, slot}, est};
+        made = Entry{error, k, slot};
+        return est;
     }
 
     /// Adds node e to the cut (and to `trace`).
@@ -261,21 +303,20 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
     Search search{tree, r, visible, interpolate, out, evals};
     T total = 0;  // the running total: the sum of the cut's approximations
     // A node of error 0 (a leaf, or one that cannot contribute) is accepted as it comes.
-    const auto add = [&](const std::pair<Entry, T>& en) {
-        total += en.second;
-        if (en.first.error > T(0)) {
-            heap.push_back(en.first);
-            std::push_heap(heap.begin(), heap.end());
+    // Node k (refining `parent`) into the cut's heap, or straight into the cut.
+    const auto add = [&](std::uint32_t k, const Entry* parent) {
+        Entry en;
+        total += search.entry(k, parent, en);
+        if (en.error > T(0)) {
+            detail::heap_push(heap, en);
             return;
         }
-        search.accept(en.first, T(s.threshold) * total, true, trace);
+        search.accept(en, T(s.threshold) * total, true, trace);
     };
-    add(search.entry(tree.root(), nullptr));
+    add(tree.root(), nullptr);
     const std::size_t cap = s.max_nodes > 0 ? std::size_t(s.max_nodes) : ~std::size_t(0);
     while (!heap.empty()) {
-        std::pop_heap(heap.begin(), heap.end());
-        const Entry e = heap.back();
-        heap.pop_back();
+        const Entry e = detail::heap_pop(heap);
         const LightNode<T>& n = tree.node(e.node);
         const T allowed = T(s.threshold) * total;
         if (e.error <= allowed) {  // the largest error is within the threshold: so is every other
@@ -288,8 +329,8 @@ CutResult<T> evaluate_cut(const LightClusterTree<T>& tree, const CutReceiver<T>&
             continue;
         }
         total -= (evals[e.slot].factor * n.intensity).luminance();
-        add(search.entry(n.left, &e));
-        add(search.entry(n.right, &e));
+        add(n.left, &e);
+        add(n.right, &e);
     }
     return out;
 }
