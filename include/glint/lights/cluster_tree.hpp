@@ -40,6 +40,13 @@
 
 namespace glint {
 
+/// Which lights the tree merges first. spatial: Fernandez 2004, §5.1.2's order, the closest
+/// pair of all. by_orientation: the closest pair among the lights whose axes point to the same
+/// face of the cube (isotropic lights apart), then the groups' roots: a node then mixes
+/// orientations only near the root, the role Walter et al. 2005's orientation term plays in
+/// its clustering metric.
+enum class ClusterGrouping : std::uint8_t { spatial, by_orientation };
+
 /// One node of the cluster tree; a leaf's representative is its light.
 template <Scalar T>
 struct LightNode {
@@ -74,7 +81,9 @@ public:
 
     LightClusterTree() = default;
     /// Builds the tree over `lights` (validated first); an empty set gives an empty tree.
-    explicit LightClusterTree(std::vector<PointLight<T>> lights) : lights_(std::move(lights)) {
+    /// ClusterGrouping::by_orientation merges within each orientation group first.
+    explicit LightClusterTree(std::vector<PointLight<T>> lights, ClusterGrouping grouping = ClusterGrouping::spatial)
+        : lights_(std::move(lights)), grouping_(grouping) {
         for (std::size_t i = 0; i < lights_.size(); ++i) lights_[i].validate(i);
         if (lights_.size() >= std::size_t(LightNode<T>::none / 2))
             throw Error("glint::LightClusterTree: " + std::to_string(lights_.size()) + " lights are too many");
@@ -162,16 +171,48 @@ private:
             weight_.push_back(lights_[i].power().luminance());
             moment_.push_back(lights_[i].position * weight_.back());
         }
-        SphereNeighbours<T> nn(spheres_, n);
-        std::priority_queue<Pair, std::vector<Pair>, std::greater<Pair>> heap;
         std::vector<char> merged_away(2 * std::size_t(n) - 1, 0);
+        std::vector<std::uint32_t> roots;
+        for (std::vector<std::uint32_t>& group : groups())
+            roots.push_back(merge_all(std::move(group), merged_away));
+        merge_all(std::move(roots), merged_away);
+        std::vector<BoundingSphere<T>>().swap(spheres_);
+        std::vector<T>().swap(weight_);
+        std::vector<Vec3<T>>().swap(moment_);
+        depth_first_layout();
+    }
+
+    /// The leaves' groups, each in light order: one group (ClusterGrouping::spatial), or one
+    /// per face of the cube the lights' axes point to and one of the isotropic lights.
+    std::vector<std::vector<std::uint32_t>> groups() const {
+        const std::uint32_t n = std::uint32_t(lights_.size());
+        std::vector<std::vector<std::uint32_t>> out(grouping_ == ClusterGrouping::spatial ? 1 : 7);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const PointLight<T>& l = lights_[i];
+            std::size_t g = 0;
+            if (grouping_ == ClusterGrouping::by_orientation) {
+                const Vec3<T> a = glm::abs(l.axis);
+                const int k = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
+                g = l.kind == PointLightKind::isotropic ? 6 : std::size_t(2 * k + (l.axis[k] < T(0)));
+            }
+            out[g].push_back(i);
+        }
+        std::erase_if(out, [](const auto& g) { return g.empty(); });
+        return out;
+    }
+
+    /// Merges the closest two parentless nodes among `ids` (and the nodes made of them) until
+    /// one is left; returns it.
+    std::uint32_t merge_all(std::vector<std::uint32_t> ids, std::vector<char>& merged_away) {
+        if (ids.size() == 1) return ids[0];
+        SphereNeighbours<T> nn(spheres_, ids);
+        std::priority_queue<Pair, std::vector<Pair>, std::greater<Pair>> heap;
         const auto push_nearest = [&](std::uint32_t i) {
             const auto near = nn.nearest(i);
             heap.push({near.distance, i, near.id});
         };
-        if (n > 1)
-            for (std::uint32_t i = 0; i < n; ++i) push_nearest(i);
-        for (std::uint32_t live = n; live > 1;) {
+        for (std::uint32_t i : ids) push_nearest(i);
+        for (std::size_t live = ids.size(); live > 1;) {
             const Pair p = heap.top();
             heap.pop();
             if (merged_away[p.a]) continue;
@@ -182,10 +223,7 @@ private:
             merge(p.a, p.b, nn, merged_away);
             if (--live > 1) push_nearest(std::uint32_t(nodes_.size() - 1));
         }
-        std::vector<BoundingSphere<T>>().swap(spheres_);
-        std::vector<T>().swap(weight_);
-        std::vector<Vec3<T>>().swap(moment_);
-        depth_first_layout();
+        return std::uint32_t(nodes_.size() - 1);
     }
 
     /// Nodes in depth-first order (the root first, a left child right after its parent) and the
@@ -231,6 +269,7 @@ private:
     }
 
     std::vector<PointLight<T>> lights_;
+    ClusterGrouping grouping_ = ClusterGrouping::spatial;
     std::vector<Node> nodes_;
     double build_seconds_ = 0;
     // Build scratch, released after the build.

@@ -62,11 +62,12 @@ public:
 
     /// A tree over spheres[0, n) (all live); `spheres` is the caller's array, indexed by id,
     /// which may grow (inserted ids) but must hold every live sphere.
-    SphereNeighbours(const std::vector<BoundingSphere<T>>& spheres, std::uint32_t n) : spheres_(&spheres) {
-        std::vector<std::uint32_t> ids(n);
-        std::iota(ids.begin(), ids.end(), 0u);
-        where_.assign(n, none);
-        if (n > 0) build(ids, 0, n, none);
+    SphereNeighbours(const std::vector<BoundingSphere<T>>& spheres, std::uint32_t n)
+        : SphereNeighbours(spheres, iota_ids(n)) {}
+    /// A tree over the spheres `ids` of the caller's array (all live, distinct).
+    SphereNeighbours(const std::vector<BoundingSphere<T>>& spheres, std::vector<std::uint32_t> ids) : spheres_(&spheres) {
+        where_.assign(ids.empty() ? 0 : std::size_t(*std::max_element(ids.begin(), ids.end())) + 1, none);
+        if (!ids.empty()) build(ids, 0, std::uint32_t(ids.size()), none);
     }
 
     /// Removes live sphere `id` from the set (precondition: it is live); O(depth).
@@ -116,6 +117,12 @@ public:
     }
 
 private:
+    static std::vector<std::uint32_t> iota_ids(std::uint32_t n) {
+        std::vector<std::uint32_t> ids(n);
+        std::iota(ids.begin(), ids.end(), 0u);
+        return ids;
+    }
+
     struct Item {  // a sphere and its id, kept in its leaf (no lookup while searching)
         BoundingSphere<T> sphere;
         std::uint32_t id;

@@ -59,6 +59,9 @@ struct VplSettings {
     int max_specular = 16;       ///< mirror/dielectric vertices followed from the camera (>= 0)
     VplGather gather = VplGather::all;  ///< Sum over every VPL or through a light cut.
     CutSettings cut{};           ///< gather = cuts: the cut's threshold and largest size
+    /// gather = cuts: the cluster tree's merge order. By orientation: a wall's VPLs share its
+    /// normal, and clusters that keep to one orientation have tight bounds (docs/lights.md).
+    ClusterGrouping grouping = ClusterGrouping::by_orientation;
 
     /// Throws Error for invalid cut settings, a negative or non-finite min_distance,
     /// light_samples < 1 or max_specular < 0.
@@ -189,13 +192,14 @@ class VplLights {
 public:
     /// Views `vpls` (not copied) and, for VplGather::cuts, builds their cluster tree (allocates,
     /// O(n log n)). Throws Error for invalid cut settings.
-    VplLights(std::span<const Vpl<T>> vpls, VplGather mode = VplGather::all, const CutSettings& cut = {})
+    VplLights(std::span<const Vpl<T>> vpls, VplGather mode = VplGather::all, const CutSettings& cut = {},
+              ClusterGrouping grouping = ClusterGrouping::by_orientation)
         : vpls_(vpls), cut_(cut), cuts_(mode == VplGather::cuts) {
         cut.validate();
-        if (cuts_) tree_ = std::make_shared<const LightClusterTree<T>>(vpl_light_points<T>(vpls));
+        if (cuts_) tree_ = std::make_shared<const LightClusterTree<T>>(vpl_light_points<T>(vpls), grouping);
     }
-    /// The same with the mode and cut settings of `st`.
-    VplLights(std::span<const Vpl<T>> vpls, const VplSettings& st) : VplLights(vpls, st.gather, st.cut) {}
+    /// The same with the mode, cut settings and grouping of `st`.
+    VplLights(std::span<const Vpl<T>> vpls, const VplSettings& st) : VplLights(vpls, st.gather, st.cut, st.grouping) {}
 
     /// The VPLs' illumination reflected at p towards the viewer (without p.weight).
     template <class V>
