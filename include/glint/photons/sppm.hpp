@@ -182,7 +182,7 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
     camera.progress = nullptr;
     camera.spp = st.camera_samples;
     // The pixel, the Fresnel choices and direct light's first samples from Halton, PCG after.
-    const HaltonSampler<T> sampler(image.width, image.height, 18, HaltonRandomization::digit_permutation,
+    const HaltonSampler<T> sampler(image.width, image.height, render_halton_dims, HaltonRandomization::digit_permutation,
                                    detail::pass_seed(st.seed, 0, 1));
     for (int pass = 0;; ++pass) {
         VisiblePointFilm<T> film;

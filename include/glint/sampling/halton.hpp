@@ -210,6 +210,10 @@ constexpr std::uint64_t multiplicative_inverse(std::int64_t x, std::int64_t n) {
 
 }  // namespace detail
 
+/// The Halton dimensions glint's renderers draw per sample (the pixel and the first two
+/// vertices of a walk); PCG numbers after them (HaltonSampler's dimension policy).
+inline constexpr std::size_t render_halton_dims = 18;
+
 /// Per-pixel enumeration of one global (randomized) Halton sequence; satisfies Sampler<T>.
 ///
 /// Dimension policy. Dimensions 0 and 1 (bases 2 and 3) place the point in the image and are

@@ -165,10 +165,10 @@ template <Scalar T>
 using SamplerChoice = std::variant<RandomSampler<T>, HaltonSampler<T>>;
 
 namespace detail {
-/// 18 Halton dimensions (the pixel and the first two vertices of a walk), PCG after them.
+/// A Halton sampler of render_halton_dims dimensions, PCG after them.
 template <Scalar T>
 SamplerChoice<T> halton_sampler(int w, int h, std::uint64_t seed, HaltonRandomization r) {
-    return SamplerChoice<T>(HaltonSampler<T>(w, h, 18, r, seed));
+    return SamplerChoice<T>(HaltonSampler<T>(w, h, render_halton_dims, r, seed));
 }
 }  // namespace detail
 
