@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""A build without -march flags against the -march=native build, mesh by mesh, interleaved.
+
+For every mesh of --scenes, --reps times: bench_trees (native) and bench_trees_portable (no
+-march flags: the run-time kernels of core/isa.hpp) on that mesh alone, in alternating order,
+each through MeshBvh's public calls against Embree HIGH in the same process. A run's glint
+throughput is divided by Embree's in that run (the same Embree library in both binaries: it
+takes out the machine's drift between runs); the printed ratio is portable over native, the
+median over the repetitions, per query (incoherent and primary closest hit, any hit) and the
+geometric mean over the meshes.
+
+    python3 tools/portable_native.py --build build --scenes ../shared/scenes --reps 3 --core 0
+"""
+import argparse
+import csv
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+QUERIES = ('incoherent', 'primary', 'shadow')
+
+
+def run(binary, stem, a, out):
+    cmd = ['taskset', '-c', str(a.core), binary, '--user-meshes', '--scenes', a.scenes, '--only', stem,
+           '--no-generated', '--reps', str(a.passes), '--csv', out]
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if p.returncode != 0:
+        sys.exit('portable_native: %s failed:\n%s' % (' '.join(cmd), p.stdout))
+    ratios = {}
+    with open(out) as f:
+        for r in csv.DictReader(f):
+            if r['embree_quality'].lower() == 'high' and r['rays'] in QUERIES:
+                ratios[r['rays']] = float(r['mrays_per_s']) / float(r['embree_mrays_per_s'])
+    if set(ratios) != set(QUERIES):
+        sys.exit('portable_native: %s gave rows for %s, not %s' % (binary, sorted(ratios), QUERIES))
+    return ratios
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    p.add_argument('--build', default='build', help='build folder with benchmarks/bench_trees and bench_trees_portable')
+    p.add_argument('--scenes', default=os.path.join(os.path.dirname(__file__), '..', '..', 'shared', 'scenes'))
+    p.add_argument('--reps', type=int, default=3, help='alternating runs of each binary per mesh')
+    p.add_argument('--passes', type=int, default=3, help="bench_trees' own alternating passes per run")
+    p.add_argument('--core', type=int, default=1, help='taskset core')
+    a = p.parse_args()
+    native = os.path.join(a.build, 'benchmarks', 'bench_trees')
+    portable = os.path.join(a.build, 'benchmarks', 'bench_trees_portable')
+    for b in (native, portable):
+        if not os.access(b, os.X_OK):
+            sys.exit('portable_native: %s not built (cmake --build %s --target bench_trees bench_trees_portable)' % (b, a.build))
+    stems = sorted(f[:-4] for f in os.listdir(a.scenes) if f.endswith('.obj'))
+    if not stems:
+        sys.exit('portable_native: no .obj in ' + a.scenes)
+    print('%-16s %s' % ('mesh', '  '.join('%-24s' % ('%s portable/native' % q) for q in QUERIES)))
+    per_query = {q: [] for q in QUERIES}
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, 'rows.csv')
+        for stem in stems:
+            ratios = {q: [] for q in QUERIES}
+            for rep in range(a.reps):
+                order = (native, portable) if rep % 2 == 0 else (portable, native)
+                got = {b: run(b, stem, a, out) for b in order}
+                for q in QUERIES:
+                    ratios[q].append(got[portable][q] / got[native][q])
+            cells = []
+            for q in QUERIES:
+                m = statistics.median(ratios[q])
+                per_query[q].append(m)
+                cells.append('%-24s' % ('%.3f (%.3f-%.3f)' % (m, min(ratios[q]), max(ratios[q]))))
+            print('%-16s %s' % (stem, '  '.join(cells)), flush=True)
+    print('%-16s %s' % ('geometric mean', '  '.join(
+        '%-24s' % ('%.3f' % math.exp(statistics.mean(math.log(x) for x in per_query[q]))) for q in QUERIES)))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
