@@ -180,19 +180,26 @@ struct CutRecord {
 
 namespace detail {
 
-/// A max-heap of (error, ...) entries on the caller's vector: std::push_heap / pop_heap's
-/// order with the larger child chosen by a select instead of a branch (a cut's errors make that
-/// branch a coin toss: half of its mispredictions, measured).
+// The cut's max-heap of (error, ...) entries on the caller's vector: std::push_heap /
+// pop_heap's order with the larger child chosen by a select instead of a branch (a cut's
+// errors make that branch a coin toss: half of its mispredictions, measured).
+
+/// Puts e into the hole at i, moving it up past every parent with a smaller error.
 template <class Entry>
-void heap_push(std::vector<Entry>& h, const Entry& e) {
-    std::size_t i = h.size();
-    h.push_back(e);
+void heap_sift_up(std::vector<Entry>& h, std::size_t i, const Entry& e) {
     for (; i > 0; i = (i - 1) / 2) {
         const std::size_t parent = (i - 1) / 2;
         if (!(h[parent].error < e.error)) break;
         h[i] = h[parent];
     }
     h[i] = e;
+}
+
+/// Adds e to heap h.
+template <class Entry>
+void heap_push(std::vector<Entry>& h, const Entry& e) {
+    h.push_back(e);
+    heap_sift_up(h, h.size() - 1, e);
 }
 
 /// Removes and returns the largest entry of the non-empty heap h: the hole left at the top
@@ -209,12 +216,7 @@ Entry heap_pop(std::vector<Entry>& h) {
         h[i] = h[c];
         i = c;
     }
-    for (; i > 0; i = (i - 1) / 2) {
-        const std::size_t parent = (i - 1) / 2;
-        if (!(h[parent].error < last.error)) break;
-        h[i] = h[parent];
-    }
-    h[i] = last;
+    heap_sift_up(h, i, last);
     return top;
 }
 

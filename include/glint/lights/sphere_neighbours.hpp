@@ -16,7 +16,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <utility>
 #include <vector>
 
@@ -60,11 +59,8 @@ public:
         std::uint32_t id = none;   ///< The nearest sphere's id (none: no other live sphere).
     };
 
-    /// A tree over spheres[0, n) (all live); `spheres` is the caller's array, indexed by id,
-    /// which may grow (inserted ids) but must hold every live sphere.
-    SphereNeighbours(const std::vector<BoundingSphere<T>>& spheres, std::uint32_t n)
-        : SphereNeighbours(spheres, iota_ids(n)) {}
-    /// A tree over the spheres `ids` of the caller's array (all live, distinct).
+    /// A tree over the spheres `ids` (all live, distinct) of `spheres`, the caller's array,
+    /// indexed by id, which may grow (inserted ids) but must hold every live sphere.
     SphereNeighbours(const std::vector<BoundingSphere<T>>& spheres, std::vector<std::uint32_t> ids) : spheres_(&spheres) {
         where_.assign(ids.empty() ? 0 : std::size_t(*std::max_element(ids.begin(), ids.end())) + 1, none);
         if (!ids.empty()) build(ids, 0, std::uint32_t(ids.size()), none);
@@ -117,12 +113,6 @@ public:
     }
 
 private:
-    static std::vector<std::uint32_t> iota_ids(std::uint32_t n) {
-        std::vector<std::uint32_t> ids(n);
-        std::iota(ids.begin(), ids.end(), 0u);
-        return ids;
-    }
-
     struct Item {  // a sphere and its id, kept in its leaf (no lookup while searching)
         BoundingSphere<T> sphere;
         std::uint32_t id;
