@@ -10,6 +10,8 @@
 // same code.
 #pragma once
 
+#include <optional>
+#include <string_view>
 #include <type_traits>
 
 namespace glint {
@@ -20,6 +22,9 @@ enum class Isa : unsigned char {
     sse2,      // 128-bit vectors (every x86-64 CPU)
     avx2,      // 256-bit vectors (x86-64 from 2013 on)
 };
+
+/// Every kernel set, in order (for tests and comparisons that try each one isa_supported()).
+inline constexpr Isa all_isas[] = {Isa::portable, Isa::sse2, Isa::avx2};
 
 /// An instruction set as a type, for the callables a dispatch hands the kernels to.
 template <Isa I>
@@ -32,6 +37,13 @@ inline const char* isa_name(Isa isa) {
         case Isa::avx2: return "avx2";
     }
     return "?";
+}
+
+/// The kernel set named `name` (as isa_name() writes it), or none.
+inline std::optional<Isa> isa_from_name(std::string_view name) {
+    for (Isa isa : all_isas)
+        if (name == isa_name(isa)) return isa;
+    return std::nullopt;
 }
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
