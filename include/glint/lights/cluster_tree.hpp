@@ -163,8 +163,11 @@ private:
     void build() {
         const std::uint32_t n = std::uint32_t(lights_.size());
         if (n == 0) return;
-        nodes_.reserve(2 * std::size_t(n) - 1);
-        spheres_.reserve(2 * std::size_t(n) - 1);
+        const std::size_t total = 2 * std::size_t(n) - 1;
+        nodes_.reserve(total);
+        spheres_.reserve(total);
+        weight_.reserve(total);
+        moment_.reserve(total);
         for (std::uint32_t i = 0; i < n; ++i) {
             nodes_.push_back(leaf_node(lights_[i], i));
             spheres_.push_back({lights_[i].position, T(0)});
@@ -228,33 +231,41 @@ private:
 
     /// Nodes in depth-first order (the root first, a left child right after its parent) and the
     /// lights in the order of their leaves, so that a subtree's nodes and lights are contiguous
-    /// in memory: a cut reads nearby nodes and representatives.
+    /// in memory: a cut reads nearby nodes and representatives. Both arrays are permuted in
+    /// place (no second copy of the tree to allocate and fault in).
     void depth_first_layout() {
-        std::vector<Node> nodes;
-        std::vector<PointLight<T>> lights;
         std::vector<std::uint32_t> node_at(nodes_.size()), light_at(lights_.size());
-        nodes.reserve(nodes_.size());
-        lights.reserve(lights_.size());
+        std::uint32_t next_node = 0, next_light = 0;
         std::vector<std::uint32_t> stack{std::uint32_t(nodes_.size() - 1)};
         while (!stack.empty()) {
             const std::uint32_t k = stack.back();
             stack.pop_back();
-            node_at[k] = std::uint32_t(nodes.size());
-            nodes.push_back(nodes_[k]);
+            node_at[k] = next_node++;
             if (nodes_[k].leaf()) {
-                light_at[nodes_[k].rep] = std::uint32_t(lights.size());
-                lights.push_back(lights_[nodes_[k].rep]);
+                light_at[nodes_[k].rep] = next_light++;
                 continue;
             }
             stack.push_back(nodes_[k].right);
             stack.push_back(nodes_[k].left);
         }
-        for (Node& n : nodes) {
+        for (Node& n : nodes_) {
             n.rep = light_at[n.rep];
             if (!n.leaf()) n.left = node_at[n.left], n.right = node_at[n.right];
         }
-        nodes_ = std::move(nodes);
-        lights_ = std::move(lights);
+        permute(nodes_, node_at);
+        permute(lights_, light_at);
+    }
+
+    /// Moves v[i] to v[to[i]] for every i, in place by following the permutation's cycles
+    /// (`to` is left as the identity).
+    template <class U>
+    static void permute(std::vector<U>& v, std::vector<std::uint32_t>& to) {
+        for (std::uint32_t i = 0; i < std::uint32_t(v.size()); ++i)
+            while (to[i] != i) {
+                const std::uint32_t j = to[i];
+                std::swap(v[i], v[j]);
+                std::swap(to[i], to[j]);
+            }
     }
 
     void merge(std::uint32_t a, std::uint32_t b, SphereNeighbours<T>& nn, std::vector<char>& merged_away) {

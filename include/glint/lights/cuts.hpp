@@ -180,15 +180,15 @@ struct CutRecord {
 
 namespace detail {
 
-// The cut's max-heap of (error, ...) entries on the caller's vector: std::push_heap /
-// pop_heap's order with the larger child chosen by a select instead of a branch (a cut's
-// errors make that branch a coin toss: half of its mispredictions, measured).
+// The cut's max-heap of (error, ...) entries on the caller's vector, 4-ary: half the levels
+// of a binary heap for the hole a pop sends down (the cut's heap holds ~100-300 entries), the
+// largest of up to four children chosen by selects (a cut's errors make a branch a coin toss).
 
 /// Puts e into the hole at i, moving it up past every parent with a smaller error.
 template <class Entry>
 void heap_sift_up(std::vector<Entry>& h, std::size_t i, const Entry& e) {
-    for (; i > 0; i = (i - 1) / 2) {
-        const std::size_t parent = (i - 1) / 2;
+    for (; i > 0; i = (i - 1) / 4) {
+        const std::size_t parent = (i - 1) / 4;
         if (!(h[parent].error < e.error)) break;
         h[i] = h[parent];
     }
@@ -203,7 +203,7 @@ void heap_push(std::vector<Entry>& h, const Entry& e) {
 }
 
 /// Removes and returns the largest entry of the non-empty heap h: the hole left at the top
-/// descends along the larger children to a leaf, where the last entry goes and climbs.
+/// descends along the largest children to a leaf, where the last entry goes and climbs.
 template <class Entry>
 Entry heap_pop(std::vector<Entry>& h) {
     const Entry top = h[0], last = h.back();
@@ -211,10 +211,11 @@ Entry heap_pop(std::vector<Entry>& h) {
     const std::size_t n = h.size();
     if (n == 0) return top;
     std::size_t i = 0;
-    for (std::size_t c = 1; c < n; c = 2 * i + 1) {
-        c += std::size_t(c + 1 < n && !(h[c + 1].error < h[c].error));  // ties: the right child, as libstdc++
-        h[i] = h[c];
-        i = c;
+    for (std::size_t c = 1; c < n; c = 4 * i + 1) {
+        std::size_t m = c;  // ties: the last of the largest
+        for (std::size_t k = c + 1; k < std::min(c + 4, n); ++k) m = !(h[k].error < h[m].error) ? k : m;
+        h[i] = h[m];
+        i = m;
     }
     heap_sift_up(h, i, last);
     return top;

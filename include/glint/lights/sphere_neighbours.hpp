@@ -84,24 +84,20 @@ public:
         refit(k);
     }
 
-    /// The live sphere nearest to sphere `id` (not itself), smallest id among equals.
+    /// The live sphere nearest to sphere `id` (not itself), smallest id among equals. A live
+    /// sphere's search starts in its own leaf and climbs, searching each sibling subtree on the
+    /// way up: the nearby spheres come first and the rest of the tree is mostly pruned.
     Nearest nearest(std::uint32_t id) const {
         const BoundingSphere<T>& q = (*spheres_)[id];
         Nearest best;
-        std::uint32_t stack[128];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0) {
-            const Node& node = nodes_[stack[--top]];
-            if (node.live == 0 || box_distance(node.box, q.centre) + q.radius + node.min_radius > best.distance) continue;
-            if (node.left == none) {
-                for (const Item& it : node.items) consider(q, id, it, best);
-                continue;
-            }
-            const bool near_left = q.centre[node.axis] < node.split;
-            stack[top++] = near_left ? node.left + 1 : node.left;  // the far child is searched last
-            stack[top++] = near_left ? node.left : node.left + 1;
+        std::uint32_t k = id < where_.size() ? where_[id] : none;
+        if (k == none) {  // not in the tree: search it all
+            search(0, q, id, best);
+            return best;
         }
+        search(k, q, id, best);
+        for (std::uint32_t p = nodes_[k].parent; p != none; k = p, p = nodes_[p].parent)
+            search(nodes_[p].left == k ? k + 1 : nodes_[p].left, q, id, best);
         return best;
     }
 
@@ -146,6 +142,25 @@ private:
             n.box.extend(b.box);
             n.min_radius = std::min(a.min_radius, b.min_radius);
             n.live = a.live + b.live;
+        }
+    }
+
+    /// Searches the subtree at `root` for spheres nearer to q than `best`, depth first, the
+    /// child on q's side of the split first; subtrees that cannot hold one are pruned.
+    void search(std::uint32_t root, const BoundingSphere<T>& q, std::uint32_t id, Nearest& best) const {
+        std::uint32_t stack[128];
+        int top = 0;
+        stack[top++] = root;
+        while (top > 0) {
+            const Node& node = nodes_[stack[--top]];
+            if (node.live == 0 || box_distance(node.box, q.centre) + q.radius + node.min_radius > best.distance) continue;
+            if (node.left == none) {
+                for (const Item& it : node.items) consider(q, id, it, best);
+                continue;
+            }
+            const bool near_left = q.centre[node.axis] < node.split;
+            stack[top++] = near_left ? node.left + 1 : node.left;  // the far child is searched last
+            stack[top++] = near_left ? node.left : node.left + 1;
         }
     }
 
