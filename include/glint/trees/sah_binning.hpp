@@ -1,0 +1,253 @@
+// glint/trees/sah_binning.hpp: the object binning of the binned SAH builder (bvh_builder.hpp).
+//
+// Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies" (IEEE RT 2007), §3:
+// a node's references are put in bins by their box centres on all three axes in one pass,
+// each bin growing its box and its count, and the node's references are then partitioned at
+// the chosen boundary in place. Here a reference's box is two 4-float vectors, so a bin
+// grows with one min and one max per corner (SSE2, every x86-64 CPU; plain loops elsewhere,
+// the same floats), and the partition returns the two sides' centre boxes, which are their
+// children's binning ranges: no node reads its references only to find their centres.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+
+#include <glint/core/aabb.hpp>
+#include <glint/core/math.hpp>
+#include <glint/trees/binary_bvh.hpp>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
+namespace glint {
+
+namespace detail {
+
+/// A reference: a primitive and the box of its part in the node that holds it (the whole
+/// primitive's box unless spatial splits chopped it). `left`: its side in a spatial split.
+struct BvhRef {
+    AABB<float> box;
+    std::uint32_t prim = 0;
+    std::uint32_t left = 0;
+};
+
+/// The cheapest bin boundary found at a node: axis (-1: none), the first bin of the right
+/// side, the normalized cost, the two sides' boxes and reference counts.
+struct SahSplit {
+    int axis = -1;
+    std::uint32_t bin = 0;
+    float cost = infinity<float>;
+    AABB<float> left, right;
+    std::uint32_t n_left = 0, n_right = 0;
+};
+
+/// Four floats, x, y, z and a lane nobody reads: a box corner or a centre. Minimum and
+/// maximum as SSE's minps / maxps (the second operand where either is NaN).
+struct Float4 {
+#if defined(__SSE2__)
+    __m128 v;
+    static Float4 load(const float* p) { return {_mm_loadu_ps(p)}; }
+    static Float4 splat(float s) { return {_mm_set1_ps(s)}; }
+    friend Float4 operator+(Float4 a, Float4 b) { return {_mm_add_ps(a.v, b.v)}; }
+    friend Float4 operator-(Float4 a, Float4 b) { return {_mm_sub_ps(a.v, b.v)}; }
+    friend Float4 operator*(Float4 a, Float4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+    friend Float4 min(Float4 a, Float4 b) { return {_mm_min_ps(a.v, b.v)}; }
+    friend Float4 max(Float4 a, Float4 b) { return {_mm_max_ps(a.v, b.v)}; }
+    void store(float* p) const { _mm_storeu_ps(p, v); }
+    /// Each lane truncated to an integer (lanes in 0 ... 2^31).
+    void truncate(std::int32_t* out) const { _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(v)); }
+#else
+    float v[4];
+    static Float4 load(const float* p) {
+        Float4 r;
+        std::memcpy(r.v, p, sizeof r.v);
+        return r;
+    }
+    static Float4 splat(float s) { return {{s, s, s, s}}; }
+    template <class F>
+    static Float4 map(Float4 a, Float4 b, F f) { return {{f(a.v[0], b.v[0]), f(a.v[1], b.v[1]), f(a.v[2], b.v[2]), f(a.v[3], b.v[3])}}; }
+    friend Float4 operator+(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x + y; }); }
+    friend Float4 operator-(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x - y; }); }
+    friend Float4 operator*(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x * y; }); }
+    friend Float4 min(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x < y ? x : y; }); }
+    friend Float4 max(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x > y ? x : y; }); }
+    void store(float* p) const { std::memcpy(p, v, sizeof v); }
+    void truncate(std::int32_t* out) const {
+        for (int i = 0; i < 4; ++i) out[i] = std::int32_t(v[i]);
+    }
+#endif
+    /// The box's low corner, its high corner (the fourth lane: the next float in memory).
+    static Float4 lo(const BvhRef& r) { return load(&r.box.lo.x); }
+    static Float4 hi(const BvhRef& r) { return load(&r.box.hi.x); }
+    /// x, y, z of p, 0 in the fourth lane.
+    static Float4 load3(const Vec3f& p) {
+        const float f[4] = {p.x, p.y, p.z, 0.0f};
+        return load(f);
+    }
+    Vec3f xyz() const {
+        float f[4];
+        store(f);
+        return {f[0], f[1], f[2]};
+    }
+};
+
+/// How a node's centres map to bins: bin = min(bins - 1, max(0, (c - lo) k)) per axis, the
+/// centre c = (box.lo + box.hi) / 2, in the same float operations as a scalar loop would do.
+struct BinMap {
+    Float4 lo, k, last;  // the centre box's low corner, bins per unit, bins - 1
+    BinMap(const AABB<float>& cbox, const Vec3f& scale, std::uint32_t bins)
+        : lo(Float4::load3(cbox.lo)), k(Float4::load3(scale)), last(Float4::splat(float(bins - 1))) {}
+    static Float4 centre(const BvhRef& r) { return (Float4::lo(r) + Float4::hi(r)) * Float4::splat(0.5f); }
+    /// The bins of centre c on the three axes (lane 3 is not meaningful).
+    void bins(Float4 c, std::int32_t* out) const { min(max((c - lo) * k, Float4::splat(0.0f)), last).truncate(out); }
+};
+
+/// The object bins of one node on three axes (Wald 2007, §3.1): per bin, the box of the
+/// references whose centre falls in it and their count.
+class SahBins {
+public:
+    static constexpr int max_bins = 64;  ///< BvhBuildOptions::bins at most.
+
+    /// Bins refs[b, e) with `map`, over `bins` bins per axis. Large ranges fill two sets of
+    /// bins, even and odd references, merged at the end: neighbouring references, which
+    /// often share a bin, then do not wait for each other's update.
+    SahBins(const BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map, std::uint32_t bins) : bins_(bins) {
+        const bool two = e - b >= 4 * bins;
+        clear(0);
+        if (!two) {
+            for (std::uint32_t i = b; i < e; ++i) add(0, refs[i], map);
+            return;
+        }
+        clear(1);
+        std::uint32_t i = b;
+        for (; i + 1 < e; i += 2) {
+            add(0, refs[i], map);
+            add(1, refs[i + 1], map);
+        }
+        if (i < e) add(0, refs[i], map);
+        for (int a = 0; a < 3; ++a)
+            for (std::uint32_t j = 0; j < bins; ++j) {
+                lo_[0][a][j] = min(lo_[0][a][j], lo_[1][a][j]);
+                hi_[0][a][j] = max(hi_[0][a][j], hi_[1][a][j]);
+                n_[0][a][j] += n_[1][a][j];
+            }
+    }
+    /// The bins of axis a that hold references, in order, as boxes, counts and bin numbers
+    /// (sweep_bins' input); returns how many.
+    std::uint32_t axis(int a, AABB<float>* box, std::uint32_t* n, std::uint32_t* bin) const {
+        std::uint32_t m = 0;
+        for (std::uint32_t j = 0; j < bins_; ++j) {  // written always, kept where not empty
+            box[m] = {lo_[0][a][j].xyz(), hi_[0][a][j].xyz()};
+            n[m] = n_[0][a][j];
+            bin[m] = j;
+            m += n_[0][a][j] != 0;
+        }
+        return m;
+    }
+
+private:
+    void clear(int set) {
+        const Float4 empty_lo = Float4::splat(infinity<float>), empty_hi = Float4::splat(-infinity<float>);
+        for (int a = 0; a < 3; ++a)
+            for (std::uint32_t j = 0; j < bins_; ++j) lo_[set][a][j] = empty_lo, hi_[set][a][j] = empty_hi, n_[set][a][j] = 0;
+    }
+    void add(int set, const BvhRef& r, const BinMap& map) {
+        const Float4 lo = Float4::lo(r), hi = Float4::hi(r);
+        std::int32_t bin[4];
+        map.bins((lo + hi) * Float4::splat(0.5f), bin);
+        for (int a = 0; a < 3; ++a) {
+            const auto j = std::uint32_t(bin[a]);
+            lo_[set][a][j] = min(lo_[set][a][j], lo);
+            hi_[set][a][j] = max(hi_[set][a][j], hi);
+            ++n_[set][a][j];
+        }
+    }
+
+    std::uint32_t bins_;
+    Float4 lo_[2][3][max_bins], hi_[2][3][max_bins];
+    std::uint32_t n_[2][3][max_bins];
+};
+
+/// The SAH's constants as the sweeps use them (BvhBuildOptions): C_T, C_I, and leaf blocks.
+struct SahCosts {
+    float traversal, intersection;
+    std::uint32_t leaf_block;
+    int shift;  // log2(leaf_block), -1 where it is no power of 2
+    explicit SahCosts(const BvhBuildOptions& opt)
+        : traversal(opt.traversal_cost), intersection(opt.intersection_cost), leaf_block(opt.leaf_block),
+          shift(std::has_single_bit(opt.leaf_block) ? std::countr_zero(opt.leaf_block) : -1) {}
+    /// Leaf blocks started by n references (BvhBuildOptions::blocks, a shift where it can be).
+    std::uint32_t blocks(std::uint32_t n) const {
+        return shift >= 0 ? (n + leaf_block - 1) >> shift : (n + leaf_block - 1) / leaf_block;
+    }
+};
+
+/// The cheapest object split on axis a, if cheaper than `best` (Wald 2007, §3.2: suffix
+/// costs right to left, then prefixes left to right), over the m bins that hold references
+/// (SahBins::axis): a boundary next to an empty bin costs what the one before it does, and
+/// the first of equal costs is kept, as a sweep over every boundary (BinnedSah::sweep) keeps it.
+inline void sweep_bins(const SahCosts& cost, int a, const AABB<float>* box, const std::uint32_t* count,
+                       const std::uint32_t* bin, std::uint32_t m, float inv_area, SahSplit& best) {
+    if (m < 2) return;
+    float right_cost[SahBins::max_bins];
+    std::uint32_t right_n[SahBins::max_bins];
+    AABB<float> acc;
+    std::uint32_t cnt = 0;
+    for (std::uint32_t t = m - 1; t > 0; --t) {
+        acc.extend(box[t]);
+        cnt += count[t];
+        right_n[t] = cnt;
+        right_cost[t] = acc.surface_area() * float(cost.blocks(cnt));
+    }
+    acc = AABB<float>{};
+    cnt = 0;
+    std::uint32_t won = 0;
+    for (std::uint32_t t = 1; t < m; ++t) {
+        acc.extend(box[t - 1]);
+        cnt += count[t - 1];
+        const float c = cost.traversal +
+                        cost.intersection * (acc.surface_area() * float(cost.blocks(cnt)) + right_cost[t]) * inv_area;
+        if (c < best.cost) best = SahSplit{a, bin[t - 1] + 1, c, acc, {}, cnt, right_n[t]}, won = t;
+    }
+    for (std::uint32_t t = won; won && t < m; ++t) best.right.extend(box[t]);
+}
+
+/// Partitions refs[b, e) in place: those whose centre's bin on `axis` is below `bin` first
+/// (the element order of libstdc++'s std::partition: Hoare's scheme from both ends), and
+/// gives the centre boxes of both sides. Returns the first reference of the right side.
+inline std::uint32_t partition_by_bin(BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map, int axis,
+                                      std::uint32_t bin, AABB<float>& left_cbox, AABB<float>& right_cbox) {
+    Float4 llo = Float4::splat(infinity<float>), lhi = Float4::splat(-infinity<float>);
+    Float4 rlo = llo, rhi = lhi;
+    std::int32_t bins[4];
+    auto left = [&](const BvhRef& r) {
+        const Float4 c = BinMap::centre(r);
+        map.bins(c, bins);
+        if (std::uint32_t(bins[axis]) < bin) {
+            llo = min(llo, c), lhi = max(lhi, c);
+            return true;
+        }
+        rlo = min(rlo, c), rhi = max(rhi, c);
+        return false;
+    };
+    std::uint32_t first = b, last = e;
+    for (;;) {
+        while (first != last && left(refs[first])) ++first;
+        if (first == last) break;
+        --last;
+        while (first != last && !left(refs[last])) --last;
+        if (first == last) break;
+        std::swap(refs[first], refs[last]);
+        ++first;
+    }
+    left_cbox = {llo.xyz(), lhi.xyz()};
+    right_cbox = {rlo.xyz(), rhi.xyz()};
+    return first;
+}
+
+}  // namespace detail
+
+}  // namespace glint
