@@ -309,12 +309,12 @@ private:
             const TriangleVertices<float> t = tri(j);
             return clip_triangle(t[0], t[1], t[2], axis, region);
         });
-        std::vector<TriangleVertices<float>> leaf_tris;
+        // The triangles in leaf order, gathered in one loop whose reads do not wait on each other.
+        const std::vector<std::uint32_t>& prims = bvh_.prims();
+        std::vector<TriangleVertices<float>> ordered(prims.size());
+        for (std::size_t k = 0; k < prims.size(); ++k) ordered[k] = tri(prims[k]);
         bvh_.remap_leaves([&](std::uint32_t first, std::uint32_t count) {
-            const std::span<const std::uint32_t> ids(bvh_.prims().data() + first, count);
-            leaf_tris.clear();
-            for (std::uint32_t id : ids) leaf_tris.push_back(tri(id));
-            return leaves_.add(leaf_tris, ids);
+            return leaves_.add(std::span(ordered).subspan(first, count), std::span(prims).subspan(first, count));
         });
     }
 
