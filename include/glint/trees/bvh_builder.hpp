@@ -53,7 +53,7 @@ template <PrimitiveClipper Clip>
 class BinnedSah {
 public:
     BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, BinaryBvh& out)
-        : refs_(refs), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
+        : refs_(refs), scratch_(refs.size()), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
           spatial_(opt.spatial_splits),
           min_overlap_(opt.spatial_alpha * root_area), cost_(opt) {}
 
@@ -87,7 +87,7 @@ public:
         }
         if (s.axis >= 0) {
             Bounds l{s.left, {}}, r{s.right, {}};
-            const std::uint32_t m = partition_by_bin(refs_.data(), b, e, map, s.axis, s.bin, l.cbox, r.cbox);
+            const std::uint32_t m = partition_by_bin(refs_.data(), scratch_.data(), b, e, map, s.axis, s.bin, l.cbox, r.cbox);
             return children(slot, b, m, e, cap, l, r);
         }
         const std::uint32_t m = b + n / 2;  // every centre is the same point: any halving is as good
@@ -315,6 +315,7 @@ private:
     }
 
     std::vector<BvhRef>& refs_;
+    std::vector<BvhRef> scratch_;  // the partition's, each node's range its own
     const BvhBuildOptions& opt_;
     const Clip& clip_;
     BinaryBvh& out_;

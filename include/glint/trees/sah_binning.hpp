@@ -57,8 +57,20 @@ struct Float4 {
     friend Float4 min(Float4 a, Float4 b) { return {_mm_min_ps(a.v, b.v)}; }
     friend Float4 max(Float4 a, Float4 b) { return {_mm_max_ps(a.v, b.v)}; }
     void store(float* p) const { _mm_storeu_ps(p, v); }
+    /// The fourth lane set to 0.
+    Float4 xyz0() const { return {_mm_and_ps(v, _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)))}; }
     /// Each lane truncated to an integer (lanes in 0 ... 2^31).
     void truncate(std::int32_t* out) const { _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(v)); }
+    /// Whether lane i truncated to an integer is below x (lanes in 0 ... 2^31).
+    bool truncated_below(int i, std::int32_t x) const {
+        const __m128i below = _mm_cmplt_epi32(_mm_cvttps_epi32(v), _mm_set1_epi32(x));
+        return (_mm_movemask_ps(_mm_castsi128_ps(below)) >> i) & 1;
+    }
+    /// a where f, else b, without a branch.
+    static Float4 select(bool f, Float4 a, Float4 b) {
+        const __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-std::int32_t(f)));
+        return {_mm_or_ps(_mm_and_ps(m, a.v), _mm_andnot_ps(m, b.v))};
+    }
 #else
     float v[4];
     static Float4 load(const float* p) {
@@ -75,18 +87,19 @@ struct Float4 {
     friend Float4 min(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x < y ? x : y; }); }
     friend Float4 max(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x > y ? x : y; }); }
     void store(float* p) const { std::memcpy(p, v, sizeof v); }
+    Float4 xyz0() const { return {{v[0], v[1], v[2], 0.0f}}; }
     void truncate(std::int32_t* out) const {
         for (int i = 0; i < 4; ++i) out[i] = std::int32_t(v[i]);
     }
+    bool truncated_below(int i, std::int32_t x) const { return std::int32_t(v[i]) < x; }
+    static Float4 select(bool f, Float4 a, Float4 b) { return f ? a : b; }
 #endif
-    /// The box's low corner, its high corner (the fourth lane: the next float in memory).
+    /// The box's low corner (the fourth lane: hi.x), its high corner (the fourth lane: 0, not
+    /// the bits of `prim`, which would make a denormal float).
     static Float4 lo(const BvhRef& r) { return load(&r.box.lo.x); }
-    static Float4 hi(const BvhRef& r) { return load(&r.box.hi.x); }
+    static Float4 hi(const BvhRef& r) { return load(&r.box.hi.x).xyz0(); }
     /// x, y, z of p, 0 in the fourth lane.
-    static Float4 load3(const Vec3f& p) {
-        const float f[4] = {p.x, p.y, p.z, 0.0f};
-        return load(f);
-    }
+    static Float4 load3(const Vec3f& p) { return Float4{{p.x, p.y, p.z, 0.0f}}; }
     Vec3f xyz() const {
         float f[4];
         store(f);
@@ -102,7 +115,12 @@ struct BinMap {
         : lo(Float4::load3(cbox.lo)), k(Float4::load3(scale)), last(Float4::splat(float(bins - 1))) {}
     static Float4 centre(const BvhRef& r) { return (Float4::lo(r) + Float4::hi(r)) * Float4::splat(0.5f); }
     /// The bins of centre c on the three axes (lane 3 is not meaningful).
-    void bins(Float4 c, std::int32_t* out) const { min(max((c - lo) * k, Float4::splat(0.0f)), last).truncate(out); }
+    void bins(Float4 c, std::int32_t* out) const { scaled(c).truncate(out); }
+    /// Whether centre c's bin on `axis` is below `bin`.
+    bool below(Float4 c, int axis, std::uint32_t bin) const { return scaled(c).truncated_below(axis, std::int32_t(bin)); }
+
+private:
+    Float4 scaled(Float4 c) const { return min(max((c - lo) * k, Float4::splat(0.0f)), last); }
 };
 
 /// The object bins of one node on three axes (Wald 2007, §3.1): per bin, the box of the
@@ -215,37 +233,32 @@ inline void sweep_bins(const SahCosts& cost, int a, const AABB<float>* box, cons
     for (std::uint32_t t = won; won && t < m; ++t) best.right.extend(box[t]);
 }
 
-/// Partitions refs[b, e) in place: those whose centre's bin on `axis` is below `bin` first
-/// (the element order of libstdc++'s std::partition: Hoare's scheme from both ends), and
-/// gives the centre boxes of both sides. Returns the first reference of the right side.
-inline std::uint32_t partition_by_bin(BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map, int axis,
-                                      std::uint32_t bin, AABB<float>& left_cbox, AABB<float>& right_cbox) {
-    Float4 llo = Float4::splat(infinity<float>), lhi = Float4::splat(-infinity<float>);
-    Float4 rlo = llo, rhi = lhi;
-    std::int32_t bins[4];
-    auto left = [&](const BvhRef& r) {
-        const Float4 c = BinMap::centre(r);
-        map.bins(c, bins);
-        if (std::uint32_t(bins[axis]) < bin) {
-            llo = min(llo, c), lhi = max(lhi, c);
-            return true;
-        }
-        rlo = min(rlo, c), rhi = max(rhi, c);
-        return false;
-    };
-    std::uint32_t first = b, last = e;
-    for (;;) {
-        while (first != last && left(refs[first])) ++first;
-        if (first == last) break;
-        --last;
-        while (first != last && !left(refs[last])) --last;
-        if (first == last) break;
-        std::swap(refs[first], refs[last]);
-        ++first;
+/// Partitions refs[b, e): those whose centre's bin on `axis` is below `bin` first, each side
+/// in its order, through scratch[b, e) (a side per reference chosen without a branch: which
+/// side is as good as random), and gives the centre boxes of both sides. Returns the first
+/// reference of the right side.
+inline std::uint32_t partition_by_bin(BvhRef* refs, BvhRef* scratch, std::uint32_t b, std::uint32_t e,
+                                      const BinMap& map, int axis, std::uint32_t bin, AABB<float>& left_cbox,
+                                      AABB<float>& right_cbox) {
+    const Float4 up = Float4::splat(infinity<float>), down = Float4::splat(-infinity<float>);
+    Float4 llo = up, lhi = down, rlo = up, rhi = down;
+    BvhRef* l = scratch + b;
+    BvhRef* r = scratch + e;  // the right side, written from the end backwards
+    for (std::uint32_t i = b; i < e; ++i) {
+        const Float4 c = BinMap::centre(refs[i]);
+        const bool f = map.below(c, axis, bin);
+        *(f ? l : r - 1) = refs[i];
+        l += f;
+        r -= !f;
+        llo = min(llo, Float4::select(f, c, up)), lhi = max(lhi, Float4::select(f, c, down));
+        rlo = min(rlo, Float4::select(f, up, c)), rhi = max(rhi, Float4::select(f, down, c));
     }
+    const auto m = std::uint32_t(l - scratch);
+    std::copy(scratch + b, l, refs + b);
+    std::reverse_copy(r, scratch + e, refs + m);
     left_cbox = {llo.xyz(), lhi.xyz()};
     right_cbox = {rlo.xyz(), rhi.xyz()};
-    return first;
+    return m;
 }
 
 }  // namespace detail
