@@ -165,7 +165,7 @@ private:
     /// Bins every reference of the range on the three axes in one pass (sah_binning.hpp),
     /// then sweeps each axis for its cheapest boundary (Wald 2007).
     SahSplit find_split(std::uint32_t b, std::uint32_t e, const BinMap& map, const Vec3f& k, float inv_area) const {
-        const SahBins bins(refs_.data(), b, e, map, opt_.bins);
+        const SahBins bins(refs_.data(), b, e, map, opt_.bins, avx2_);
         SahSplit best;
         AABB<float> box[SahBins::max_bins];
         std::uint32_t count[SahBins::max_bins], bin[SahBins::max_bins];
@@ -323,6 +323,7 @@ private:
     const bool spatial_;
     const float min_overlap_;
     const SahCosts cost_;
+    const bool avx2_ = best_isa() >= Isa::avx2;  // bin with AVX2 (sah_binning.hpp)
 };
 
 /// The leaves' references, in tree order, become `prims`; every node's range is renumbered

@@ -15,6 +15,7 @@
 #include <cstring>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/isa.hpp>
 #include <glint/core/math.hpp>
 #include <glint/trees/binary_bvh.hpp>
 
@@ -54,6 +55,7 @@ struct Float4 {
     friend Float4 operator+(Float4 a, Float4 b) { return {_mm_add_ps(a.v, b.v)}; }
     friend Float4 operator-(Float4 a, Float4 b) { return {_mm_sub_ps(a.v, b.v)}; }
     friend Float4 operator*(Float4 a, Float4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+    Float4 operator-() const { return {_mm_xor_ps(v, _mm_set1_ps(-0.0f))}; }
     friend Float4 min(Float4 a, Float4 b) { return {_mm_min_ps(a.v, b.v)}; }
     friend Float4 max(Float4 a, Float4 b) { return {_mm_max_ps(a.v, b.v)}; }
     void store(float* p) const { _mm_storeu_ps(p, v); }
@@ -84,6 +86,7 @@ struct Float4 {
     friend Float4 operator+(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x + y; }); }
     friend Float4 operator-(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x - y; }); }
     friend Float4 operator*(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x * y; }); }
+    Float4 operator-() const { return {{-v[0], -v[1], -v[2], -v[3]}}; }
     friend Float4 min(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x < y ? x : y; }); }
     friend Float4 max(Float4 a, Float4 b) { return map(a, b, [](float x, float y) { return x > y ? x : y; }); }
     void store(float* p) const { std::memcpy(p, v, sizeof v); }
@@ -124,32 +127,39 @@ private:
 };
 
 /// The object bins of one node on three axes (Wald 2007, §3.1): per bin, the box of the
-/// references whose centre falls in it and their count.
+/// references whose centre falls in it and their count. A bin's box is 8 floats, the low
+/// corner and the negated high corner (each with a lane nobody reads), so that growing it is
+/// a minimum of all 8: one AVX2 instruction where the CPU has AVX2 (chosen at run time, as
+/// core/isa.hpp's kernels are), two SSE2 ones elsewhere, the same floats either way.
 class SahBins {
 public:
     static constexpr int max_bins = 64;  ///< BvhBuildOptions::bins at most.
 
-    /// Bins refs[b, e) with `map`, over `bins` bins per axis. Large ranges fill two sets of
-    /// bins, even and odd references, merged at the end: neighbouring references, which
-    /// often share a bin, then do not wait for each other's update.
-    SahBins(const BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map, std::uint32_t bins) : bins_(bins) {
-        const bool two = e - b >= 4 * bins;
-        clear(0);
-        if (!two) {
-            for (std::uint32_t i = b; i < e; ++i) add(0, refs[i], map);
-            return;
-        }
-        clear(1);
-        std::uint32_t i = b;
-        for (; i + 1 < e; i += 2) {
-            add(0, refs[i], map);
-            add(1, refs[i + 1], map);
-        }
-        if (i < e) add(0, refs[i], map);
+    /// Bins refs[b, e) with `map`, over `bins` bins per axis, with AVX2 if `avx2`. Large
+    /// ranges fill two sets of bins, even and odd references, merged at the end: neighbouring
+    /// references, which often share a bin, then do not wait for each other's update.
+    SahBins(const BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map, std::uint32_t bins, bool avx2)
+        : bins_(bins) {
+        const std::uint32_t sets = e - b >= 4 * bins ? 2 : 1;
+        for (std::uint32_t set = 0; set < sets; ++set)
+            for (int a = 0; a < 3; ++a)
+                for (std::uint32_t j = 0; j < bins; ++j) {
+                    std::fill(box_[set][a][j], box_[set][a][j] + 8, infinity<float>);
+                    n_[set][a][j] = 0;
+                }
+#if GLINT_X86 && defined(__SSE2__)
+        if (avx2)
+            fill_avx2(refs, b, e, map, sets);
+        else
+#endif
+            fill(refs, b, e, map, sets);
+        if (sets == 1) return;
         for (int a = 0; a < 3; ++a)
             for (std::uint32_t j = 0; j < bins; ++j) {
-                lo_[0][a][j] = min(lo_[0][a][j], lo_[1][a][j]);
-                hi_[0][a][j] = max(hi_[0][a][j], hi_[1][a][j]);
+                float* p = box_[0][a][j];
+                const float* q = box_[1][a][j];
+                (min(Float4::load(p), Float4::load(q))).store(p);
+                (min(Float4::load(p + 4), Float4::load(q + 4))).store(p + 4);
                 n_[0][a][j] += n_[1][a][j];
             }
     }
@@ -158,7 +168,8 @@ public:
     std::uint32_t axis(int a, AABB<float>* box, std::uint32_t* n, std::uint32_t* bin) const {
         std::uint32_t m = 0;
         for (std::uint32_t j = 0; j < bins_; ++j) {  // written always, kept where not empty
-            box[m] = {lo_[0][a][j].xyz(), hi_[0][a][j].xyz()};
+            const float* p = box_[0][a][j];
+            box[m] = {{p[0], p[1], p[2]}, {-p[4], -p[5], -p[6]}};
             n[m] = n_[0][a][j];
             bin[m] = j;
             m += n_[0][a][j] != 0;
@@ -167,25 +178,41 @@ public:
     }
 
 private:
-    void clear(int set) {
-        const Float4 empty_lo = Float4::splat(infinity<float>), empty_hi = Float4::splat(-infinity<float>);
-        for (int a = 0; a < 3; ++a)
-            for (std::uint32_t j = 0; j < bins_; ++j) lo_[set][a][j] = empty_lo, hi_[set][a][j] = empty_hi, n_[set][a][j] = 0;
-    }
-    void add(int set, const BvhRef& r, const BinMap& map) {
-        const Float4 lo = Float4::lo(r), hi = Float4::hi(r);
+    void fill(const BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map, std::uint32_t sets) {
         std::int32_t bin[4];
-        map.bins((lo + hi) * Float4::splat(0.5f), bin);
-        for (int a = 0; a < 3; ++a) {
-            const auto j = std::uint32_t(bin[a]);
-            lo_[set][a][j] = min(lo_[set][a][j], lo);
-            hi_[set][a][j] = max(hi_[set][a][j], hi);
-            ++n_[set][a][j];
+        for (std::uint32_t i = b; i < e; ++i) {
+            const Float4 lo = Float4::lo(refs[i]), hi = Float4::hi(refs[i]), neg = -hi;
+            map.bins((lo + hi) * Float4::splat(0.5f), bin);
+            const std::uint32_t set = (i - b) & (sets - 1);
+            for (int a = 0; a < 3; ++a) {
+                float* p = box_[set][a][bin[a]];
+                min(Float4::load(p), lo).store(p);
+                min(Float4::load(p + 4), neg).store(p + 4);
+                ++n_[set][a][bin[a]];
+            }
         }
     }
+#if GLINT_X86 && defined(__SSE2__)
+    GLINT_TARGET_AVX2 void fill_avx2(const BvhRef* refs, std::uint32_t b, std::uint32_t e, const BinMap& map,
+                                     std::uint32_t sets) {
+        const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
+        std::int32_t bin[4];
+        for (std::uint32_t i = b; i < e; ++i) {
+            const Float4 lo = Float4::lo(refs[i]), hi = Float4::hi(refs[i]);
+            map.bins((lo + hi) * Float4::splat(0.5f), bin);
+            const __m256 box = _mm256_xor_ps(_mm256_set_m128(hi.v, lo.v), negate_hi);
+            const std::uint32_t set = (i - b) & (sets - 1);
+            for (int a = 0; a < 3; ++a) {
+                float* p = box_[set][a][bin[a]];
+                _mm256_store_ps(p, _mm256_min_ps(_mm256_load_ps(p), box));
+                ++n_[set][a][bin[a]];
+            }
+        }
+    }
+#endif
 
     std::uint32_t bins_;
-    Float4 lo_[2][3][max_bins], hi_[2][3][max_bins];
+    alignas(32) float box_[2][3][max_bins][8];  // low corner, lane, negated high corner, lane
     std::uint32_t n_[2][3][max_bins];
 };
 
