@@ -257,6 +257,7 @@ struct Options {
     bool user_meshes = false;  // --user-meshes: support/user_meshes.hpp's mode
     std::string scenes_dir = GLINT_BENCH_SCENES;  // --scenes DIR
     int primary = 384;                            // --primary N: N x N primary rays (--user-meshes)
+    int builds = 3;                               // --builds N: alternating builds per mesh (--user-meshes)
     bool rays_set = false, reps_set = false;
 };
 
@@ -568,6 +569,8 @@ void add_run_flags(cli::App& app, Options& o) {
         ->group("Run");
     cli::text(app, "--scenes", o.scenes_dir, "--user-meshes: the folder of OBJ meshes", "DIR")->group("Run");
     cli::number(app, "--primary", o.primary, 1, 8192, "--user-meshes: N x N primary rays")->group("Run");
+    cli::number(app, "--builds", o.builds, 1, 1000, "--user-meshes: alternating builds per mesh (median; default 3)")
+        ->group("Run");
 }
 
 /// The trees' build settings.
@@ -610,6 +613,7 @@ int user_meshes_main(const Options& opt) {
     u.only = opt.only;
     u.generated = opt.generated;
     u.primary = opt.primary;
+    u.builds = opt.builds;
     u.rays = opt.rays_set ? opt.rays : 200'000;
     u.reps = opt.reps_set ? opt.reps : 5;
     const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return read_obj(f); });
