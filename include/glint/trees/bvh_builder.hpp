@@ -82,7 +82,8 @@ public:
             sp = find_spatial(b, e, cap - e, box, inv_area);
         if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(blocks(n)))) return;
         if (sp.cost < s.cost) {
-            if (!split_spatial(slot, b, e, cap, box, sp)) node(slot, b, e, cap, in, false);  // a side came out empty
+            // A side came out empty: boxes may have been clipped closer, so their centres again.
+            if (!split_spatial(slot, b, e, cap, box, sp)) node(slot, b, e, cap, {box, bounds(b, e).cbox}, false);
             return;
         }
         if (s.axis >= 0) {
