@@ -3,9 +3,10 @@
 // Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies" (IEEE RT 2007), §3:
 // a node's references are put in bins by their box centres on all three axes in one pass,
 // each bin growing its box and its count, and the node's references are then partitioned at
-// the chosen boundary in place. Here a reference's box is two 4-float vectors, so a bin
-// grows with one min and one max per corner (SSE2, every x86-64 CPU; plain loops elsewhere,
-// the same floats), and the partition returns the two sides' centre boxes, which are their
+// the chosen boundary. Here a reference's box is read as two 4-float vectors (SSE2, every
+// x86-64 CPU; plain loops elsewhere, the same floats), a bin's box grows by one minimum of 8
+// floats (SahBins: AVX2 where the CPU has it), the sweep skips empty bins, and the partition,
+// without a branch per reference, returns the two sides' centre boxes, which are their
 // children's binning ranges: no node reads its references only to find their centres.
 #pragma once
 
