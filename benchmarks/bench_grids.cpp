@@ -58,7 +58,7 @@ struct Options {
     std::string scenes = GLINT_BENCH_SCENES, only;
     std::size_t rays = 200'000;
     int primary = 384, reps = 5;
-    bool quick = false, generated = true;
+    bool quick = false, no_generated = false;
     UniformGridOptions grid{};
     OctreeOptions octree{};
 };
@@ -298,7 +298,7 @@ Options parse(int argc, char** argv) {
     cli::number(app, "--primary", o.primary, 1, 8192, "N x N primary rays per scene");
     cli::number(app, "--reps", o.reps, 1, 1000, "timed passes of every accelerator");
     cli::flag(app, "--quick", o.quick, "the torus knot only, 2000 rays, 32 x 32 primary rays, one pass");
-    cli::flag(app, "--no-generated", o.generated, "leave out the generated torus knot");
+    cli::flag(app, "--no-generated", o.no_generated, "leave out the generated torus knot");
     cli::number(app, "--grid-density", o.grid.cells_per_primitive, 1e-3, 1e3, "grid cells per triangle");
     cli::number(app, "--octree-leaf", o.octree.max_leaf, 1u, 1024u, "octree: most triangles in a leaf");
     cli::number(app, "--octree-depth", o.octree.max_depth, 0u, 20u, "octree: deepest level");
@@ -318,7 +318,7 @@ std::vector<Scene> load_scenes(const Options& opt) {
         std::sort(files.begin(), files.end());
         for (const auto& f : files) scenes.push_back({f.stem().string(), load_obj(f.string()).triangles, false});
     }
-    if (opt.generated && (opt.only.empty() || opt.only == "torus-knot"))
+    if (!opt.no_generated && (opt.only.empty() || opt.only == "torus-knot"))
         scenes.push_back({"torus-knot", make_torus_knot<float>(), true});
     if (scenes.empty()) throw Error("no scene to run (--scenes '" + opt.scenes + "', --only '" + opt.only + "')");
     return scenes;

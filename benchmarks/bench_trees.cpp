@@ -250,7 +250,7 @@ struct Options {
     bool quantized = false;      // --quantized: with --wide --few, also bvh8 with quantized boxes
     bool sbvh = false;           // --sbvh: also bvh8 with spatial splits (tree sbvh8)
     bool compact = false;        // --compact-subtrees: also the wide BVH in compact subtrees
-    bool quick = false, generated = true, all = false, memory = false, few = false, wide = false, big = false;
+    bool quick = false, no_generated = false, all = false, memory = false, few = false, wide = false, big = false;
     BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
     std::size_t rays = 1'000'000;
     int reps = 3;
@@ -553,7 +553,7 @@ void add_run_flags(cli::App& app, Options& o) {
                                 "rays per set (default 1000000; --user-meshes: 200000)")->group("Run");
     cli::number_to<int>(app, "--reps", [&o](int n) { o.reps = n, o.reps_set = true; }, 1, 1000,
                         "timed repetitions (default 3; --user-meshes: 5)")->group("Run");
-    cli::flag(app, "--no-generated", o.generated, "leave out the generated scenes")->group("Run");
+    cli::flag(app, "--no-generated", o.no_generated, "leave out the generated scenes")->group("Run");
     cli::text(app, "--only", o.only, "time only this scene", "SCENE")->group("Run");
     cli::flag(app, "--all", o.all, "every tree, layout and intersector")->group("Run");
     cli::flag(app, "--few", o.few, "the main rows only")->group("Run");
@@ -622,7 +622,7 @@ int user_meshes_main(const Options& opt) {
     bench::UserMeshOptions u;
     u.scenes = opt.scenes_dir;
     u.only = opt.only;
-    u.generated = opt.generated;
+    u.generated = !opt.no_generated;
     u.primary = opt.primary;
     u.isa = opt.isa;
     u.builds = opt.builds;
@@ -654,7 +654,7 @@ int main(int argc, char** argv) try {
     const Options opt = parse(argc, argv);
     if (opt.user_meshes) return user_meshes_main(opt);
     std::vector<Scene> scenes;
-    if (opt.generated) {
+    if (!opt.no_generated) {
         scenes.push_back({"torus-knot", make_torus_knot<float>(), {}});
         if (!opt.quick) {
             scenes.push_back({"stadium", make_teapot_in_stadium<float>(), {}});
