@@ -50,6 +50,7 @@
 #include <sys/resource.h>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -257,6 +258,7 @@ struct Options {
     bool user_meshes = false;  // --user-meshes: support/user_meshes.hpp's mode
     std::string scenes_dir = GLINT_BENCH_SCENES;  // --scenes DIR
     int primary = 384;                            // --primary N: N x N primary rays (--user-meshes)
+    std::optional<Isa> isa;                       // --isa NAME: glint's kernels (--user-meshes)
     bool rays_set = false, reps_set = false;
 };
 
@@ -568,6 +570,15 @@ void add_run_flags(cli::App& app, Options& o) {
         ->group("Run");
     cli::text(app, "--scenes", o.scenes_dir, "--user-meshes: the folder of OBJ meshes", "DIR")->group("Run");
     cli::number(app, "--primary", o.primary, 1, 8192, "--user-meshes: N x N primary rays")->group("Run");
+    const auto set_isa = [&o](const std::string& name) {
+        o.isa = isa_from_name(name);
+        if (!o.isa) return "unknown kernels '" + name + "' (portable, sse2, avx2, avx512)";
+        if (!isa_supported(*o.isa)) return "this build and CPU cannot run the " + name + " kernels";
+        return std::string();
+    };
+    app.value("--isa", set_isa, "--user-meshes: glint's kernels (default: the best this CPU runs)", "NAME",
+              isa_name(best_isa()))
+        ->group("Run");
 }
 
 /// The trees' build settings.
@@ -610,6 +621,7 @@ int user_meshes_main(const Options& opt) {
     u.only = opt.only;
     u.generated = opt.generated;
     u.primary = opt.primary;
+    u.isa = opt.isa;
     u.rays = opt.rays_set ? opt.rays : 200'000;
     u.reps = opt.reps_set ? opt.reps : 5;
     const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return read_obj(f); });

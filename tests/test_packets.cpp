@@ -122,7 +122,7 @@ TEST_CASE("packets: streams give the single-ray hits, bit for bit, with every ke
             {"incoherent", make_incoherent_rays<float>(mesh, n)},
             {"mixed", mixed(mesh, n)},
         };
-        for (Isa isa : {Isa::portable, Isa::sse2, Isa::avx2}) {
+        for (Isa isa : all_isas) {
             if (!isa_supported(isa)) continue;
             bvh.set_isa(isa);
             for (const auto& [kind, rays] : kinds) {

@@ -836,8 +836,8 @@ void check_portable_and_user_leaf(const Scene& sc) {
     WideBvh<N, B> bvh(triangle_boxes(sc.mesh)), portable = bvh;
     portable.set_isa(Isa::portable);
     std::vector<WideBvh<N, B>> others;
-    for (Isa isa : {Isa::sse2, Isa::avx2})
-        if (isa_supported(isa) && isa != bvh.isa()) others.push_back(bvh), others.back().set_isa(isa);
+    for (Isa isa : all_isas)
+        if (isa_supported(isa) && isa != bvh.isa() && isa != Isa::portable) others.push_back(bvh), others.back().set_isa(isa);
     std::vector<Triangle<MollerTrumbore<float>>> tris;
     for (const auto& t : sc.mesh) tris.emplace_back(t[0], t[1], t[2]);
     const BruteForce<MollerTrumbore<float>> bf(sc.mesh);
@@ -884,7 +884,7 @@ template <class Bvh>
 void check_kernels(const Scene& sc) {
     Bvh best(std::span<const TriangleVertices<float>>(sc.mesh));
     std::size_t differ = 0, kernels = 0;
-    for (Isa isa : {Isa::portable, Isa::sse2, Isa::avx2}) {
+    for (Isa isa : all_isas) {
         if (!isa_supported(isa) || isa == best.isa()) continue;
         Bvh other = best;
         other.set_isa(isa);
@@ -922,7 +922,8 @@ TEST_CASE("MeshBvh: every kernel this CPU runs gives the same hits as the one ch
         check_kernels<MeshBvh<Watertight<float>, 8, WideBoxes::quantized>>(sc);
     }
     MeshBvh<MollerTrumbore<float>, 8> bvh(std::span<const TriangleVertices<float>>(scenes().front().mesh));
-    if (!isa_supported(Isa::avx2)) CHECK_THROWS_AS(bvh.set_isa(Isa::avx2), Error);
+    for (Isa isa : all_isas)
+        if (!isa_supported(isa)) CHECK_THROWS_AS(bvh.set_isa(isa), Error);
 }
 
 TEST_CASE("wide BVH: quantized child boxes contain the float boxes, extreme ranges included") {

@@ -10,6 +10,12 @@ median over the repetitions, per query (incoherent and primary closest hit, any 
 geometric mean over the meshes.
 
     python3 tools/portable_native.py --build build --scenes ../shared/scenes --reps 3 --core 0
+
+As on a CPU without AVX-512: the portable binary with its AVX2 kernels against a native build
+without AVX-512 (configured with CMAKE_CXX_FLAGS=-mno-avx512f):
+
+    python3 tools/portable_native.py --native build-avx2/benchmarks/bench_trees \
+        --native-args='--isa avx2' --portable-args='--isa avx2'
 """
 import argparse
 import csv
@@ -23,8 +29,8 @@ import tempfile
 QUERIES = ('incoherent', 'primary', 'shadow')
 
 
-def run(binary, stem, a, out):
-    cmd = ['taskset', '-c', str(a.core), binary, '--user-meshes', '--scenes', a.scenes, '--only', stem,
+def run(binary, extra, stem, a, out):
+    cmd = ['taskset', '-c', str(a.core), binary] + extra + ['--user-meshes', '--scenes', a.scenes, '--only', stem,
            '--no-generated', '--reps', str(a.passes), '--csv', out]
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if p.returncode != 0:
@@ -46,9 +52,14 @@ def main():
     p.add_argument('--reps', type=int, default=3, help='alternating runs of each binary per mesh')
     p.add_argument('--passes', type=int, default=3, help="bench_trees' own alternating passes per run")
     p.add_argument('--core', type=int, default=1, help='taskset core')
+    p.add_argument('--native', help='the native binary (default: BUILD/benchmarks/bench_trees)')
+    p.add_argument('--portable', help='the portable binary (default: BUILD/benchmarks/bench_trees_portable)')
+    p.add_argument('--native-args', default='', help="extra arguments of the native binary, e.g. '--isa avx2'")
+    p.add_argument('--portable-args', default='', help="extra arguments of the portable binary, e.g. '--isa avx2'")
     a = p.parse_args()
-    native = os.path.join(a.build, 'benchmarks', 'bench_trees')
-    portable = os.path.join(a.build, 'benchmarks', 'bench_trees_portable')
+    native = a.native or os.path.join(a.build, 'benchmarks', 'bench_trees')
+    portable = a.portable or os.path.join(a.build, 'benchmarks', 'bench_trees_portable')
+    extra = {native: a.native_args.split(), portable: a.portable_args.split()}
     for b in (native, portable):
         if not os.access(b, os.X_OK):
             sys.exit('portable_native: %s not built (cmake --build %s --target bench_trees bench_trees_portable)' % (b, a.build))
@@ -63,7 +74,7 @@ def main():
             ratios = {q: [] for q in QUERIES}
             for rep in range(a.reps):
                 order = (native, portable) if rep % 2 == 0 else (portable, native)
-                got = {b: run(b, stem, a, out) for b in order}
+                got = {b: run(b, extra[b], stem, a, out) for b in order}
                 for q in QUERIES:
                     ratios[q].append(got[portable][q] / got[native][q])
             cells = []

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@
 #include <xmmintrin.h>
 
 #include <glint/core/error.hpp>
+#include <glint/core/isa.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
@@ -116,6 +118,7 @@ struct UserMeshOptions {
     int primary = 384;             // primary rays: primary x primary
     int reps = 5;                  // alternating passes
     bool generated = true;         // also the generated scenes, reported apart
+    std::optional<Isa> isa;        // --isa NAME: glint's kernels (default: best_isa())
 };
 
 /// One CSV row of the mode (bench_trees' columns plus api, embree_quality, query).
@@ -257,7 +260,8 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
         bh.push_back(EmbreeQ(soup, RTC_BUILD_QUALITY_HIGH).build_s);
         bm.push_back(EmbreeQ(soup, RTC_BUILD_QUALITY_MEDIUM).build_s);
     }
-    const MeshBvh<MollerTrumbore<float>, 8> bvh(mesh, {.threads = 1});
+    MeshBvh<MollerTrumbore<float>, 8> bvh(mesh, {.threads = 1});
+    if (opt.isa) bvh.set_isa(*opt.isa);
     const EmbreeQ high(soup, RTC_BUILD_QUALITY_HIGH), medium(soup, RTC_BUILD_QUALITY_MEDIUM);
     std::printf("# %s build: glint %.4f s (SAH %.2f), Embree HIGH %.4f s, MEDIUM %.4f s (Embree SAH n/a); "
                 "glint / HIGH %.2f, glint / MEDIUM %.2f\n",
@@ -339,9 +343,10 @@ inline std::vector<UserRow> run_user_meshes(
     if (files.empty()) throw Error("--user-meshes: no .obj in '" + opt.scenes + "'");
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);  // as Embree's documentation asks
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-    std::printf("# Embree %d.%d.%d, FTZ/DAZ on, threads=1; ratio = Embree time / glint time, median of %d "
-                "alternating passes\n",
-                RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, opt.reps);
+    std::printf("# Embree %d.%d.%d, FTZ/DAZ on, threads=1; glint kernels %s (flags: %s); ratio = Embree time / "
+                "glint time, median of %d alternating passes\n",
+                RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, isa_name(opt.isa.value_or(best_isa())),
+                isa_name(compiled_isa), opt.reps);
     std::puts("| mesh | query | triangles | glint Mrays/s | x Embree HIGH | x Embree MEDIUM | hits glint / HIGH / MEDIUM |");
     std::puts("|---|---|---|---|---|---|---|");
     std::vector<UserRow> rows;
