@@ -202,7 +202,7 @@ private:
         check_stream(query, rays.size(), out.size());
         std::size_t n = 0;
         detail::PacketEntry stack[WideBvh<N, B, L>::max_stack];
-        bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
+        bvh_.dispatch_compiled([&](auto kernels) __attribute__((always_inline)) {
             for (std::size_t i = 0; i < rays.size(); i += detail::packet_lanes) {
                 const int k = int(std::min<std::size_t>(detail::packet_lanes, rays.size() - i));
                 n += packet(kernels, rays.data() + i, out.data() + i, k, stack);
@@ -278,8 +278,8 @@ private:
             return wrap(q)(first, count);
         };
         const detail::PacketRays packet(r, shape);
-        const detail::PacketBoxTest<I> box(packet);
-        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
+        const detail::PacketBoxTest<kernels_of(I)> box(packet);
+        return detail::packet_traverse<Any, N, kernels_of(I)>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
     }
     /// Counts a packet's node visit and its ray-node tests into `c`.
     static auto packet_counting(WideBvhCounters& c) {

@@ -97,7 +97,7 @@ struct WideBoxTest<8, Isa::avx2, Signed> {
     __m256 o[3], inv[3];
     std::size_t near[3], far[3];  // byte offsets of the rows in a node
 
-    GLINT_KERNEL_AVX2 explicit WideBoxTest(const Ray<float>& r) {
+    GLINT_KERNEL_AVX2_INLINE explicit WideBoxTest(const Ray<float>& r) {
         // 1 / d for the three axes with one division (the same correctly rounded quotients).
         alignas(16) float q[4];
         _mm_store_ps(q, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(r.direction.x, r.direction.y, r.direction.z, 1.0f)));
@@ -109,7 +109,7 @@ struct WideBoxTest<8, Isa::avx2, Signed> {
             far[a] = (2 * std::size_t(a) + 1 - neg) * sizeof(__m256);
         }
     }
-    GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
+    GLINT_KERNEL_AVX2_INLINE unsigned test(const WideBvhNode<8>& n, float tmin, float tmax, float* tn) const {
         __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
         const char* rows = reinterpret_cast<const char*>(n.bounds);
         for (int a = 0; a < 3; ++a) {
@@ -120,7 +120,7 @@ struct WideBoxTest<8, Isa::avx2, Signed> {
         }
         return finish(t0, t1, tn);
     }
-    GLINT_KERNEL_AVX2 unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
+    GLINT_KERNEL_AVX2_INLINE unsigned test(const WideBvhQNode<8>& n, float tmin, float tmax, float* tn) const {
         __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
         const char* rows = reinterpret_cast<const char*>(n.q);
         for (int a = 0; a < 3; ++a) {
@@ -136,12 +136,12 @@ struct WideBoxTest<8, Isa::avx2, Signed> {
 
 private:
     /// A quantized node's 8 planes of one row (its byte offset is the float row's / 4), decoded.
-    GLINT_KERNEL_AVX2 static __m256 plane(const char* rows, std::size_t row_offset, __m256 origin, __m256 scale) {
+    GLINT_KERNEL_AVX2_INLINE static __m256 plane(const char* rows, std::size_t row_offset, __m256 origin, __m256 scale) {
         const __m128i q = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows + row_offset / 4));
         return _mm256_add_ps(origin, _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(q)), scale));
     }
     /// Entry distances to tn, and the mask of children entered (the portable test's ends).
-    GLINT_KERNEL_AVX2 unsigned finish(__m256 t0, __m256 t1, float* tn) const {
+    GLINT_KERNEL_AVX2_INLINE unsigned finish(__m256 t0, __m256 t1, float* tn) const {
         const __m256 up = _mm256_set1_ps(wide_exit_scale), down = _mm256_set1_ps(wide_entry_scale);
         if constexpr (Signed) {  // blendv picks its second operand where the sign bit is set
             t0 = _mm256_mul_ps(t0, _mm256_blendv_ps(down, up, t0));

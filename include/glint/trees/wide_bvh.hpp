@@ -36,6 +36,7 @@
 #include <glint/trees/wide_collapse.hpp>
 #include <glint/trees/wide_layouts.hpp>
 #include <glint/trees/wide_node.hpp>
+#include <glint/trees/wide_traverse.hpp>
 
 namespace glint {
 
@@ -71,7 +72,7 @@ public:
     static constexpr WideBoxes box_format = B;  ///< How child boxes are stored.
     /// Stack entries: a step pushes at most N - 1 more than it pops, so a tree of depth D
     /// needs (N - 1) D + 1; build() refuses deeper trees.
-    static constexpr int max_stack = 512;
+    static constexpr int max_stack = detail::wide_max_stack;
 
     WideBvh() = default;
     /// Over boxes[i] for every i whose box is not empty and finite; `clip` chops primitives
@@ -126,25 +127,41 @@ public:
         // Intervals starting below 0 take the box test that widens both ends (see
         // wide_box_test.hpp); the usual ones keep the cheaper test, with no per-node check.
         if (ray.tmin < 0.0f) [[unlikely]]
-            return traverse<Any, I, true>(ray, leaf, node_hook);
-        return traverse<Any, I, false>(ray, leaf, node_hook);
+            return detail::wide_traverse_with<Any, I, true, N>(nodes_.data(), ray, leaf, node_hook);
+        return detail::wide_traverse_with<Any, I, false, N>(nodes_.data(), ray, leaf, node_hook);
     }
-    /// Runs `query(IsaTag<isa()>{})`, compiled with isa()'s kernels: the AVX2 call compiled
-    /// for AVX2 whatever the flags, with what it calls inlined. A query keeps its ray and
-    /// hit in locals of its own (a dispatch around a traversal whose ray the caller holds
-    /// would make the compiler keep that ray in memory).
+    /// Runs `query(IsaTag<I>{})` with isa()'s kernels, inlined where it is called: the
+    /// traversal inside it is compiled for I (trees/wide_traverse.hpp) whatever the flags. A
+    /// query keeps its ray and hit in locals of its own (a dispatch around a traversal whose
+    /// ray the caller holds would make the compiler keep that ray in memory).
     template <class Query>
     [[gnu::always_inline]] bool dispatch(Query&& query) const {
 #if GLINT_X86
-        if constexpr (compiled_isa != Isa::avx2) {  // the caller stays small: every kernel out of line
-            if (isa_ == Isa::avx2) [[likely]] return dispatch_avx2(query);
-            return dispatch_other(query);
-        } else
+#if GLINT_AVX512_KERNELS
+        if constexpr (compiled_isa < Isa::avx512)
+            if (isa_ == Isa::avx512) [[likely]] return query(IsaTag<Isa::avx512>{});
 #endif
-        {
-            if (isa_ == compiled_isa) [[likely]] return query(IsaTag<compiled_isa>{});
-            return dispatch_other(query);
+        if (isa_ >= Isa::avx2) [[likely]] return query(IsaTag<Isa::avx2>{});
+#endif
+        return dispatch_other(query);
+    }
+    /// dispatch() for queries with kernels of their own besides the traversal (the ray
+    /// packets' box test): the whole query compiled for isa()'s instruction set, in a function
+    /// of its own, where the flags do not give it.
+    template <class Query>
+    [[gnu::always_inline]] bool dispatch_compiled(Query&& query) const {
+#if GLINT_X86
+#if GLINT_AVX512_KERNELS
+        if constexpr (compiled_isa < Isa::avx512)
+            if (isa_ == Isa::avx512) [[likely]] return dispatch_avx512(query);
+#endif
+        if constexpr (compiled_isa < Isa::avx2) {  // the caller stays small: every kernel out of line
+            if (isa_ == Isa::avx2) [[likely]] return dispatch_avx2(query);
+        } else if (isa_ >= Isa::avx2) [[likely]] {
+            return query(IsaTag<Isa::avx2>{});
         }
+#endif
+        return dispatch_other(query);
     }
 
     /// The kernels queries run (core/isa.hpp): best_isa() from construction on.
@@ -161,85 +178,19 @@ private:
     [[gnu::noinline, gnu::flatten]] GLINT_TARGET_AVX2 bool dispatch_avx2(Query& query) const {
         return query(IsaTag<Isa::avx2>{});
     }
-    /// The kernels other than AVX2 where the flags do not give AVX2, and those below what the
-    /// flags give where they do (for tests and comparisons).
+#if GLINT_AVX512_KERNELS
+    template <class Query>
+    [[gnu::noinline, gnu::flatten]] GLINT_TARGET_AVX512 bool dispatch_avx512(Query& query) const {
+        return query(IsaTag<Isa::avx512>{});
+    }
+#endif
+    /// The kernels below AVX2 (for tests and comparisons where the flags give more).
     template <class Query>
     [[gnu::noinline, gnu::flatten]] bool dispatch_other(Query& query) const {
 #if GLINT_X86
         if (isa_ == Isa::sse2) return query(IsaTag<Isa::sse2>{});
 #endif
         return query(IsaTag<Isa::portable>{});
-    }
-
-    /// intersect() for a valid ray, with the box test for intervals starting below 0 or not.
-    template <bool Any, Isa I, bool Signed, class Leaf, class Hook>
-    [[gnu::always_inline]] bool traverse(Ray<float>& ray, Leaf& leaf, Hook& node_hook) const {
-        const detail::WideBoxTest<N, I, Signed> box(ray);
-        struct Entry {
-            std::uint32_t ref;
-            float t;
-        };
-        Entry stack[max_stack];
-        int sp = 0;
-        bool found = false;
-        std::uint32_t ref = 0;
-        for (;;) {
-            if (!detail::wide_is_leaf(ref)) {
-                alignas(32) float tn[N];
-                const Node& n = nodes_[ref];
-                node_hook();
-                unsigned mask = box.test(n, ray.tmin, ray.tmax, tn);
-                if (mask != 0) {
-                    // The nearest child is visited next without a trip through the stack (as
-                    // Embree's BVH-N traversal does); on equal distances the later child first.
-                    const int i0 = std::countr_zero(mask);
-                    mask &= mask - 1;
-                    if (mask == 0) {  // one child
-                        ref = n.child[i0];
-                        continue;
-                    }
-                    const int i1 = std::countr_zero(mask);
-                    mask &= mask - 1;
-                    const bool later = !(tn[i0] < tn[i1]);
-                    Entry near{n.child[later ? i1 : i0], tn[later ? i1 : i0]};
-                    stack[sp++] = Entry{n.child[later ? i0 : i1], tn[later ? i0 : i1]};
-                    prefetch(stack[sp - 1].ref);
-                    if (mask == 0) {  // two children: the nearer is read next, without a prefetch
-                        ref = near.ref;
-                        continue;
-                    }
-                    const int first = sp - 1;
-                    stack[sp++] = near;
-                    prefetch(near.ref);
-                    for (; mask; mask &= mask - 1) {  // insertion by distance, nearest on top
-                        const int i = std::countr_zero(mask);
-                        int j = sp++;
-                        for (; j > first && stack[j - 1].t < tn[i]; --j) stack[j] = stack[j - 1];
-                        stack[j] = Entry{n.child[i], tn[i]};
-                        prefetch(n.child[i]);
-                    }
-                    assert(sp <= max_stack);
-                    ref = stack[--sp].ref;  // the nearest: within the interval, no test
-                    continue;
-                }
-            } else if (leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
-                found = true;
-                if constexpr (Any) return true;
-            }
-            do {
-                if (sp == 0) return found;
-                --sp;
-            } while (!Any && !(stack[sp].t <= detail::wide_exit_bound<Signed>(ray.tmax)));
-            ref = stack[sp].ref;
-        }
-    }
-
-    /// Asks for the cache lines of inner node `ref` (a child about to be visited or pushed).
-    [[gnu::always_inline]] void prefetch(std::uint32_t ref) const {
-        if (!detail::wide_is_leaf(ref)) {
-            const char* p = reinterpret_cast<const char*>(&nodes_[ref]);
-            for (std::size_t line = 0; line < sizeof(Node); line += 64) __builtin_prefetch(p + line, 0, 3);
-        }
     }
 
     std::vector<Node, detail::CacheLineAllocator<Node>> nodes_;
