@@ -572,7 +572,11 @@ void add_run_flags(cli::App& app, Options& o) {
     cli::number(app, "--primary", o.primary, 1, 8192, "--user-meshes: N x N primary rays")->group("Run");
     const auto set_isa = [&o](const std::string& name) {
         o.isa = isa_from_name(name);
-        if (!o.isa) return "unknown kernels '" + name + "' (portable, sse2, avx2)";
+        if (!o.isa) {
+            std::string names;
+            for (Isa isa : all_isas) names += std::string(names.empty() ? "" : ", ") + isa_name(isa);
+            return "unknown kernels '" + name + "' (" + names + ")";
+        }
         if (!isa_supported(*o.isa)) return "this build and CPU cannot run the " + name + " kernels";
         return std::string();
     };

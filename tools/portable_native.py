@@ -58,7 +58,8 @@ def main():
     a = p.parse_args()
     native = a.native or os.path.join(a.build, 'benchmarks', 'bench_trees')
     portable = a.portable or os.path.join(a.build, 'benchmarks', 'bench_trees_portable')
-    extra = {native: a.native_args.split(), portable: a.portable_args.split()}
+    # By role, not by path: the same binary may run both sides with different arguments.
+    runs = {'native': (native, a.native_args.split()), 'portable': (portable, a.portable_args.split())}
     for b in (native, portable):
         if not os.access(b, os.X_OK):
             sys.exit('portable_native: %s not built (cmake --build %s --target bench_trees bench_trees_portable)' % (b, a.build))
@@ -72,10 +73,10 @@ def main():
         for stem in stems:
             ratios = {q: [] for q in QUERIES}
             for rep in range(a.reps):
-                order = (native, portable) if rep % 2 == 0 else (portable, native)
-                got = {b: run(b, extra[b], stem, a, out) for b in order}
+                order = ('native', 'portable') if rep % 2 == 0 else ('portable', 'native')
+                got = {role: run(*runs[role], stem, a, out) for role in order}
                 for q in QUERIES:
-                    ratios[q].append(got[portable][q] / got[native][q])
+                    ratios[q].append(got['portable'][q] / got['native'][q])
             cells = []
             for q in QUERIES:
                 m = statistics.median(ratios[q])
