@@ -789,15 +789,16 @@ TEST_CASE("cluster tree: building 10^4 lights costs far less than 100x building 
 namespace {
 
 /// On every pixel each accepted node's true error is within its bound, and within twice the threshold.
-void check_cut_bounds(const CutFixture& f, ClusterGrouping grouping) {
+void check_cut_bounds(const CutFixture& f, ClusterGrouping grouping, CutError estimate) {
     CAPTURE(int(grouping));
+    CAPTURE(int(estimate));
     const LightClusterTree<float> tree(f.lights, grouping);
     std::vector<CutRecord<float>> trace;
     std::vector<std::uint32_t> below;
     int checked = 0, clustered = 0;
     for_each_receiver(f, 16, [&](const CutReceiver<float>& r, const auto& visible) {
         trace.clear();
-        const auto res = evaluate_cut(tree, r, CutSettings{}, visible, &trace);
+        const auto res = evaluate_cut(tree, r, CutSettings{.error = estimate}, visible, &trace);
         CHECK(res.shadow_rays <= res.nodes);
         CHECK(res.nodes <= 300);
         for (const auto& rec : trace) {
@@ -832,8 +833,10 @@ void check_cut_bounds(const CutFixture& f, ClusterGrouping grouping) {
 
 TEST_CASE("cuts: on every pixel each accepted node's true error is within its bound, and within twice the threshold") {
     const CutFixture f;
-    check_cut_bounds(f, ClusterGrouping::spatial);
-    check_cut_bounds(f, ClusterGrouping::by_orientation);
+    for (const CutError estimate : {CutError::bound, CutError::fernandez}) {
+        check_cut_bounds(f, ClusterGrouping::spatial, estimate);
+        check_cut_bounds(f, ClusterGrouping::by_orientation, estimate);
+    }
 }
 
 TEST_CASE("cuts: with threshold 0 and no size limit the cut is the exact sum over the lights") {
