@@ -9,8 +9,9 @@
 // cone of their axes (Conty Estevez and Kulla 2018's (axis, theta_o, theta_e): every axis
 // within theta_o of `axis`, no light emitting beyond theta_e from its own axis; isotropic
 // lights make theta_o = pi) and a representative light: the representative of the child
-// closer to the parent's power-weighted centroid (§5.1.2), so that a parent's evaluation is
-// reused by one child when a cut is refined (lights/cuts.hpp).
+// closer to the parent's power-weighted centroid (§5.1.2), so that a parent's shadow ray is
+// reused by one child when a cut is refined (lights/cuts.hpp). It also keeps that centroid and
+// the power-weighted mean of the lights' axes, where a cut evaluates the node's f G.
 //
 // The greedy merge order is found with Walter et al. 2008's heap of nearest neighbours: each
 // live node's nearest neighbour (lights/sphere_neighbours.hpp) is kept in a min-heap; a popped
@@ -66,6 +67,8 @@ struct LightNode {
     std::uint32_t left = none;  ///< Left child's node index (none: a leaf).
     std::uint32_t right = none; ///< Right child's node index (none: a leaf).
     bool cosine = false;        ///< Every light has the cosine profile (PointLightKind::cosine).
+    Vec3<T> centroid{0};        ///< Power-weighted mean of the lights' positions (a leaf: its light's).
+    Vec3<T> mean_axis{0, 0, 1}; ///< Unit power-weighted mean of the lights' axes (a leaf: its light's).
 
     /// True for a leaf (one light, no children).
     bool leaf() const { return left == none; }
@@ -114,6 +117,8 @@ private:
         n.intensity = l.intensity;
         n.rep = i;
         n.axis = l.axis;
+        n.centroid = l.position;
+        n.mean_axis = l.axis;
         n.cosine = l.kind == PointLightKind::cosine;
         n.theta_o = l.kind == PointLightKind::isotropic ? pi<T> : T(0);
         n.theta_e = l.kind == PointLightKind::isotropic ? pi<T> : std::acos(std::clamp(l.cos_emission(), T(-1), T(1)));
@@ -141,6 +146,9 @@ private:
         const Vec3<T> centroid = w > T(0) ? (moment_[a] + moment_[b]) / w : n.box.center();
         const Vec3<T> pa = lights_[na.rep].position, pb = lights_[nb.rep].position;
         n.rep = glm::dot(pb - centroid, pb - centroid) < glm::dot(pa - centroid, pa - centroid) ? nb.rep : na.rep;
+        n.centroid = centroid;
+        const Vec3<T> axes = axis_moment_[a] + axis_moment_[b];
+        n.mean_axis = glm::dot(axes, axes) > T(0) ? glm::normalize(axes) : n.axis;
         return with_cosines(n);
     }
 
@@ -168,11 +176,13 @@ private:
         spheres_.reserve(total);
         weight_.reserve(total);
         moment_.reserve(total);
+        axis_moment_.reserve(total);
         for (std::uint32_t i = 0; i < n; ++i) {
             nodes_.push_back(leaf_node(lights_[i], i));
             spheres_.push_back({lights_[i].position, T(0)});
             weight_.push_back(lights_[i].power().luminance());
             moment_.push_back(lights_[i].position * weight_.back());
+            axis_moment_.push_back(lights_[i].axis * weight_.back());
         }
         std::vector<char> merged_away(2 * std::size_t(n) - 1, 0);
         std::vector<std::uint32_t> roots;
@@ -182,6 +192,7 @@ private:
         std::vector<BoundingSphere<T>>().swap(spheres_);
         std::vector<T>().swap(weight_);
         std::vector<Vec3<T>>().swap(moment_);
+        std::vector<Vec3<T>>().swap(axis_moment_);
         depth_first_layout();
     }
 
@@ -273,6 +284,7 @@ private:
         spheres_.push_back(enclosing_sphere(spheres_[a], spheres_[b]));
         weight_.push_back(weight_[a] + weight_[b]);
         moment_.push_back(moment_[a] + moment_[b]);
+        axis_moment_.push_back(axis_moment_[a] + axis_moment_[b]);
         merged_away[a] = merged_away[b] = 1;
         nn.remove(a);
         nn.remove(b);
@@ -286,7 +298,7 @@ private:
     // Build scratch, released after the build.
     std::vector<BoundingSphere<T>> spheres_;
     std::vector<T> weight_;
-    std::vector<Vec3<T>> moment_;
+    std::vector<Vec3<T>> moment_, axis_moment_;  // per node: sum of power times position, times axis
 };
 
 }  // namespace glint
