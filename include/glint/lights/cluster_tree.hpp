@@ -13,12 +13,15 @@
 // reused by one child when a cut is refined (lights/cuts.hpp). It also keeps that centroid and
 // the power-weighted mean of the lights' axes, where a cut evaluates the node's f G.
 //
-// The greedy merge order is found with Walter et al. 2008's heap of nearest neighbours: each
-// live node's nearest neighbour (lights/sphere_neighbours.hpp) is kept in a min-heap; a popped
-// pair whose nodes are both live is the globally closest (the distance never decreases when a
-// node grows, so a stale entry is never too small), one whose neighbour was merged meanwhile
-// is searched again. O(n log n) in practice; single thread, ties broken by node index, so the
-// tree depends on the lights alone. The finished tree is laid out depth first (node 0 is the
+// The greedy merge order's merges are found by a chain of nearest neighbours, as Walter et al.
+// 2008's locally-ordered clustering: from a live node, its nearest neighbour
+// (lights/sphere_neighbours.hpp), that one's, and so on, until two are each other's nearest;
+// they are merged and the chain goes on from the node before them. Two mutual nearest
+// neighbours are merged by the greedy order too, whenever they are found: a node's distance to
+// a merged one is never below its distance to either part (the union's sphere holds both), so
+// no later merge comes between them (up to rounding). Fewer searches than a heap of every
+// node's nearest neighbour, whose entries go stale and are searched again; single thread,
+// ties broken by node index, so the tree depends on the lights alone. The finished tree is laid out depth first (node 0 is the
 // root), its copy of the lights in the order of the leaves.
 #pragma once
 
@@ -26,7 +29,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <queue>
 #include <span>
 #include <string>
 #include <vector>
@@ -159,15 +161,6 @@ private:
         return n;
     }
 
-    struct Pair {
-        T distance;
-        std::uint32_t a, b;
-        bool operator>(const Pair& o) const {
-            if (distance != o.distance) return distance > o.distance;
-            return a != o.a ? a > o.a : b > o.b;
-        }
-    };
-
     void build() {
         const std::uint32_t n = std::uint32_t(lights_.size());
         if (n == 0) return;
@@ -216,26 +209,29 @@ private:
     }
 
     /// Merges the closest two parentless nodes among `ids` (and the nodes made of them) until
-    /// one is left; returns it.
+    /// one is left; returns it. A chain of nearest neighbours is walked from a live node until
+    /// its last two are each other's nearest (a tie goes to the one before), which are merged;
+    /// the walk goes on from the chain's rest.
     std::uint32_t merge_all(std::vector<std::uint32_t> ids, std::vector<char>& merged_away) {
         if (ids.size() == 1) return ids[0];
         SphereNeighbours<T> nn(spheres_, ids);
-        std::priority_queue<Pair, std::vector<Pair>, std::greater<Pair>> heap;
-        const auto push_nearest = [&](std::uint32_t i) {
-            const auto near = nn.nearest(i);
-            heap.push({near.distance, i, near.id});
-        };
-        for (std::uint32_t i : ids) push_nearest(i);
+        std::vector<std::uint32_t> chain, start(ids.rbegin(), ids.rend());  // start: where a new chain may begin
         for (std::size_t live = ids.size(); live > 1;) {
-            const Pair p = heap.top();
-            heap.pop();
-            if (merged_away[p.a]) continue;
-            if (merged_away[p.b]) {
-                push_nearest(p.a);
+            if (chain.empty()) {
+                while (merged_away[start.back()]) start.pop_back();
+                chain.push_back(start.back());
+            }
+            const std::uint32_t a = chain.back();
+            const auto near = nn.nearest(a);
+            const std::uint32_t before = chain.size() >= 2 ? chain[chain.size() - 2] : LightNode<T>::none;
+            if (before == LightNode<T>::none || cluster_distance(spheres_[a], spheres_[before]) > near.distance) {
+                chain.push_back(near.id);
                 continue;
             }
-            merge(p.a, p.b, nn, merged_away);
-            if (--live > 1) push_nearest(std::uint32_t(nodes_.size() - 1));
+            chain.resize(chain.size() - 2);
+            merge(std::min(a, before), std::max(a, before), nn, merged_away);
+            start.push_back(std::uint32_t(nodes_.size() - 1));
+            --live;
         }
         return std::uint32_t(nodes_.size() - 1);
     }
