@@ -21,8 +21,9 @@
 // a merged one is never below its distance to either part (the union's sphere holds both), so
 // no later merge comes between them (up to rounding). Fewer searches than a heap of every
 // node's nearest neighbour, whose entries go stale and are searched again; single thread,
-// ties broken by node index, so the tree depends on the lights alone. The finished tree is laid out depth first (node 0 is the
-// root), its copy of the lights in the order of the leaves.
+// ties broken by node index, so the tree depends on the lights alone. The finished tree is
+// laid out depth first (node 0 is the root), its copy of the lights in the order of the
+// leaves.
 #pragma once
 
 #include <algorithm>

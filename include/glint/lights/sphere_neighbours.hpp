@@ -1,8 +1,9 @@
 // glint/lights/sphere_neighbours.hpp: nearest neighbours among a changing set of spheres under
 // Fernandez 2004, §5.1.2's cluster distance, the largest distance between two points of the
 // spheres: d(a, b) = |c_a - c_b| + r_a + r_b. The agglomerative build of lights/cluster_tree.hpp
-// asks it for each new cluster's nearest live cluster (Walter et al. 2008's nearest-neighbour
-// queries in a kd-tree), removes the two clusters it merges and inserts their union.
+// asks it for the nearest live cluster of each node on its chain (Walter et al. 2008's
+// nearest-neighbour queries in a kd-tree), removes the two clusters it merges and inserts
+// their union.
 //
 // A kd-tree over the initial centres (median splits, leaves of up to 8); an insertion goes to
 // the leaf its centre falls in; after an insertion or a removal the leaf's box of centres and
