@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
 
 #include <glint/lights/light.hpp>
 #include <glint/sampling/warps.hpp>
@@ -724,7 +725,7 @@ TEST_CASE("cluster tree: grouped by orientation, only the merges of the groups' 
 
 namespace {
 
-/// Every node sums its children, holds their boxes and cones, and takes a child's representative.
+/// Every node sums its children, holds their boxes, cones and centroids, and takes a child's representative.
 void check_tree_structure(ClusterGrouping grouping) {
     CAPTURE(int(grouping));
     const LightClusterTree<float> t(random_lights(500, 11), grouping);
@@ -734,8 +735,17 @@ void check_tree_structure(ClusterGrouping grouping) {
         const auto& n = t.node(k);
         if (n.leaf()) {
             CHECK(n.box.contains(t.lights()[n.rep].position));
+            CHECK(n.centroid == t.lights()[n.rep].position);  // a leaf's light is its approximation
+            CHECK(n.mean_axis == t.lights()[n.rep].axis);
             continue;
         }
+        // The centroid, a weighted mean of at most 500 positions in float, lies in the box up to
+        // 500 roundings of the box's largest coordinate.
+        float size = 0;
+        for (int c = 0; c < 3; ++c) size = std::max({size, std::abs(n.box.lo[c]), std::abs(n.box.hi[c])});
+        const float tol = 500 * std::numeric_limits<float>::epsilon() * size;
+        for (int c = 0; c < 3; ++c) CHECK((n.centroid[c] >= n.box.lo[c] - tol && n.centroid[c] <= n.box.hi[c] + tol));
+        CHECK(glm::length(n.mean_axis) == doctest::Approx(1.0f).epsilon(4 * std::numeric_limits<float>::epsilon()));
         const auto &l = t.node(n.left), &r = t.node(n.right);
         ++parents[n.left], ++parents[n.right];
         CHECK((n.rep == l.rep || n.rep == r.rep));
@@ -762,7 +772,7 @@ void check_tree_structure(ClusterGrouping grouping) {
 
 }  // namespace
 
-TEST_CASE("cluster tree: every node sums its children, holds their boxes and cones, and takes a child's representative") {
+TEST_CASE("cluster tree: every node sums its children, holds their boxes, cones and centroids, and takes a child's representative") {
     check_tree_structure(ClusterGrouping::spatial);
     check_tree_structure(ClusterGrouping::by_orientation);
 }
@@ -789,15 +799,16 @@ TEST_CASE("cluster tree: building 10^4 lights costs far less than 100x building 
 namespace {
 
 /// On every pixel each accepted node's true error is within its bound, and within twice the threshold.
-void check_cut_bounds(const CutFixture& f, ClusterGrouping grouping) {
+void check_cut_bounds(const CutFixture& f, ClusterGrouping grouping, CutError estimate) {
     CAPTURE(int(grouping));
+    CAPTURE(int(estimate));
     const LightClusterTree<float> tree(f.lights, grouping);
     std::vector<CutRecord<float>> trace;
     std::vector<std::uint32_t> below;
     int checked = 0, clustered = 0;
     for_each_receiver(f, 16, [&](const CutReceiver<float>& r, const auto& visible) {
         trace.clear();
-        const auto res = evaluate_cut(tree, r, CutSettings{}, visible, &trace);
+        const auto res = evaluate_cut(tree, r, CutSettings{.error = estimate}, visible, &trace);
         CHECK(res.shadow_rays <= res.nodes);
         CHECK(res.nodes <= 300);
         for (const auto& rec : trace) {
@@ -832,8 +843,10 @@ void check_cut_bounds(const CutFixture& f, ClusterGrouping grouping) {
 
 TEST_CASE("cuts: on every pixel each accepted node's true error is within its bound, and within twice the threshold") {
     const CutFixture f;
-    check_cut_bounds(f, ClusterGrouping::spatial);
-    check_cut_bounds(f, ClusterGrouping::by_orientation);
+    for (const CutError estimate : {CutError::bound, CutError::fernandez}) {
+        check_cut_bounds(f, ClusterGrouping::spatial, estimate);
+        check_cut_bounds(f, ClusterGrouping::by_orientation, estimate);
+    }
 }
 
 TEST_CASE("cuts: with threshold 0 and no size limit the cut is the exact sum over the lights") {

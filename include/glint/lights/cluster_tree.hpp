@@ -9,23 +9,27 @@
 // cone of their axes (Conty Estevez and Kulla 2018's (axis, theta_o, theta_e): every axis
 // within theta_o of `axis`, no light emitting beyond theta_e from its own axis; isotropic
 // lights make theta_o = pi) and a representative light: the representative of the child
-// closer to the parent's power-weighted centroid (§5.1.2), so that a parent's evaluation is
-// reused by one child when a cut is refined (lights/cuts.hpp).
+// closer to the parent's power-weighted centroid (§5.1.2), so that a parent's shadow ray is
+// reused by one child when a cut is refined (lights/cuts.hpp). It also keeps that centroid and
+// the power-weighted mean of the lights' axes, where a cut evaluates the node's f G.
 //
-// The greedy merge order is found with Walter et al. 2008's heap of nearest neighbours: each
-// live node's nearest neighbour (lights/sphere_neighbours.hpp) is kept in a min-heap; a popped
-// pair whose nodes are both live is the globally closest (the distance never decreases when a
-// node grows, so a stale entry is never too small), one whose neighbour was merged meanwhile
-// is searched again. O(n log n) in practice; single thread, ties broken by node index, so the
-// tree depends on the lights alone. The finished tree is laid out depth first (node 0 is the
-// root), its copy of the lights in the order of the leaves.
+// The greedy merge order's merges are found by a chain of nearest neighbours, as Walter et al.
+// 2008's locally-ordered clustering: from a live node, its nearest neighbour
+// (lights/sphere_neighbours.hpp), that one's, and so on, until two are each other's nearest;
+// they are merged and the chain goes on from the node before them. Two mutual nearest
+// neighbours are merged by the greedy order too, whenever they are found: a node's distance to
+// a merged one is never below its distance to either part (the union's sphere holds both), so
+// no later merge comes between them (up to rounding). Fewer searches than a heap of every
+// node's nearest neighbour, whose entries go stale and are searched again; single thread,
+// ties broken by node index, so the tree depends on the lights alone. The finished tree is
+// laid out depth first (node 0 is the root), its copy of the lights in the order of the
+// leaves.
 #pragma once
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <queue>
 #include <span>
 #include <string>
 #include <vector>
@@ -66,6 +70,8 @@ struct LightNode {
     std::uint32_t left = none;  ///< Left child's node index (none: a leaf).
     std::uint32_t right = none; ///< Right child's node index (none: a leaf).
     bool cosine = false;        ///< Every light has the cosine profile (PointLightKind::cosine).
+    Vec3<T> centroid{0};        ///< Power-weighted mean of the lights' positions (a leaf: its light's).
+    Vec3<T> mean_axis{0, 0, 1}; ///< Unit power-weighted mean of the lights' axes (a leaf: its light's).
 
     /// True for a leaf (one light, no children).
     bool leaf() const { return left == none; }
@@ -114,6 +120,8 @@ private:
         n.intensity = l.intensity;
         n.rep = i;
         n.axis = l.axis;
+        n.centroid = l.position;
+        n.mean_axis = l.axis;
         n.cosine = l.kind == PointLightKind::cosine;
         n.theta_o = l.kind == PointLightKind::isotropic ? pi<T> : T(0);
         n.theta_e = l.kind == PointLightKind::isotropic ? pi<T> : std::acos(std::clamp(l.cos_emission(), T(-1), T(1)));
@@ -141,6 +149,9 @@ private:
         const Vec3<T> centroid = w > T(0) ? (moment_[a] + moment_[b]) / w : n.box.center();
         const Vec3<T> pa = lights_[na.rep].position, pb = lights_[nb.rep].position;
         n.rep = glm::dot(pb - centroid, pb - centroid) < glm::dot(pa - centroid, pa - centroid) ? nb.rep : na.rep;
+        n.centroid = centroid;
+        const Vec3<T> axes = axis_moment_[a] + axis_moment_[b];
+        n.mean_axis = glm::dot(axes, axes) > T(0) ? glm::normalize(axes) : n.axis;
         return with_cosines(n);
     }
 
@@ -151,15 +162,6 @@ private:
         return n;
     }
 
-    struct Pair {
-        T distance;
-        std::uint32_t a, b;
-        bool operator>(const Pair& o) const {
-            if (distance != o.distance) return distance > o.distance;
-            return a != o.a ? a > o.a : b > o.b;
-        }
-    };
-
     void build() {
         const std::uint32_t n = std::uint32_t(lights_.size());
         if (n == 0) return;
@@ -168,11 +170,13 @@ private:
         spheres_.reserve(total);
         weight_.reserve(total);
         moment_.reserve(total);
+        axis_moment_.reserve(total);
         for (std::uint32_t i = 0; i < n; ++i) {
             nodes_.push_back(leaf_node(lights_[i], i));
             spheres_.push_back({lights_[i].position, T(0)});
             weight_.push_back(lights_[i].power().luminance());
             moment_.push_back(lights_[i].position * weight_.back());
+            axis_moment_.push_back(lights_[i].axis * weight_.back());
         }
         std::vector<char> merged_away(2 * std::size_t(n) - 1, 0);
         std::vector<std::uint32_t> roots;
@@ -182,6 +186,7 @@ private:
         std::vector<BoundingSphere<T>>().swap(spheres_);
         std::vector<T>().swap(weight_);
         std::vector<Vec3<T>>().swap(moment_);
+        std::vector<Vec3<T>>().swap(axis_moment_);
         depth_first_layout();
     }
 
@@ -205,26 +210,29 @@ private:
     }
 
     /// Merges the closest two parentless nodes among `ids` (and the nodes made of them) until
-    /// one is left; returns it.
+    /// one is left; returns it. A chain of nearest neighbours is walked from a live node until
+    /// its last two are each other's nearest (a tie goes to the one before), which are merged;
+    /// the walk goes on from the chain's rest.
     std::uint32_t merge_all(std::vector<std::uint32_t> ids, std::vector<char>& merged_away) {
         if (ids.size() == 1) return ids[0];
         SphereNeighbours<T> nn(spheres_, ids);
-        std::priority_queue<Pair, std::vector<Pair>, std::greater<Pair>> heap;
-        const auto push_nearest = [&](std::uint32_t i) {
-            const auto near = nn.nearest(i);
-            heap.push({near.distance, i, near.id});
-        };
-        for (std::uint32_t i : ids) push_nearest(i);
+        std::vector<std::uint32_t> chain, start(ids.rbegin(), ids.rend());  // start: where a new chain may begin
         for (std::size_t live = ids.size(); live > 1;) {
-            const Pair p = heap.top();
-            heap.pop();
-            if (merged_away[p.a]) continue;
-            if (merged_away[p.b]) {
-                push_nearest(p.a);
+            if (chain.empty()) {
+                while (merged_away[start.back()]) start.pop_back();
+                chain.push_back(start.back());
+            }
+            const std::uint32_t a = chain.back();
+            const auto near = nn.nearest(a);
+            const std::uint32_t before = chain.size() >= 2 ? chain[chain.size() - 2] : LightNode<T>::none;
+            if (before == LightNode<T>::none || cluster_distance(spheres_[a], spheres_[before]) > near.distance) {
+                chain.push_back(near.id);
                 continue;
             }
-            merge(p.a, p.b, nn, merged_away);
-            if (--live > 1) push_nearest(std::uint32_t(nodes_.size() - 1));
+            chain.resize(chain.size() - 2);
+            merge(std::min(a, before), std::max(a, before), nn, merged_away);
+            start.push_back(std::uint32_t(nodes_.size() - 1));
+            --live;
         }
         return std::uint32_t(nodes_.size() - 1);
     }
@@ -273,6 +281,7 @@ private:
         spheres_.push_back(enclosing_sphere(spheres_[a], spheres_[b]));
         weight_.push_back(weight_[a] + weight_[b]);
         moment_.push_back(moment_[a] + moment_[b]);
+        axis_moment_.push_back(axis_moment_[a] + axis_moment_[b]);
         merged_away[a] = merged_away[b] = 1;
         nn.remove(a);
         nn.remove(b);
@@ -286,7 +295,7 @@ private:
     // Build scratch, released after the build.
     std::vector<BoundingSphere<T>> spheres_;
     std::vector<T> weight_;
-    std::vector<Vec3<T>> moment_;
+    std::vector<Vec3<T>> moment_, axis_moment_;  // per node: sum of power times position, times axis
 };
 
 }  // namespace glint

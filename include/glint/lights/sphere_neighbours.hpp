@@ -1,8 +1,9 @@
 // glint/lights/sphere_neighbours.hpp: nearest neighbours among a changing set of spheres under
 // Fernandez 2004, §5.1.2's cluster distance, the largest distance between two points of the
 // spheres: d(a, b) = |c_a - c_b| + r_a + r_b. The agglomerative build of lights/cluster_tree.hpp
-// asks it for each new cluster's nearest live cluster (Walter et al. 2008's nearest-neighbour
-// queries in a kd-tree), removes the two clusters it merges and inserts their union.
+// asks it for the nearest live cluster of each node on its chain (Walter et al. 2008's
+// nearest-neighbour queries in a kd-tree), removes the two clusters it merges and inserts
+// their union.
 //
 // A kd-tree over the initial centres (median splits, leaves of up to 8); an insertion goes to
 // the leaf its centre falls in; after an insertion or a removal the leaf's box of centres and
@@ -117,20 +118,21 @@ private:
         AABB<T> box;
         std::uint32_t left = none;  // children left, left + 1; none for a leaf
         std::uint32_t parent = none;
-        std::uint32_t live = 0;
+        bool live = false;    // any live sphere below
         T min_radius = T(0);  // of the live spheres below
         int axis = 0;
         T split = T(0);
         std::vector<Item> items;
     };
 
-    /// Leaf k's box, live count and smallest radius from its spheres, then its ancestors' from
-    /// their children: the bounds stay tight as spheres come and go.
+    /// Leaf k's box, liveness and smallest radius from its spheres, then its ancestors' from
+    /// their children, up to the first ancestor they leave unchanged (its own ancestors then
+    /// are too): the bounds stay tight as spheres come and go.
     void refit(std::uint32_t k) {
         Node& leaf = nodes_[k];
         leaf.box = AABB<T>{};
         leaf.min_radius = infinity<T>;
-        leaf.live = std::uint32_t(leaf.items.size());
+        leaf.live = !leaf.items.empty();
         for (const Item& it : leaf.items) {
             leaf.box.extend(it.sphere.centre);
             leaf.min_radius = std::min(leaf.min_radius, it.sphere.radius);
@@ -138,10 +140,14 @@ private:
         for (k = leaf.parent; k != none; k = nodes_[k].parent) {
             Node& n = nodes_[k];
             const Node &a = nodes_[n.left], &b = nodes_[n.left + 1];
-            n.box = a.box;
-            n.box.extend(b.box);
-            n.min_radius = std::min(a.min_radius, b.min_radius);
-            n.live = a.live + b.live;
+            AABB<T> box = a.box;
+            box.extend(b.box);
+            const T min_radius = std::min(a.min_radius, b.min_radius);
+            const bool live = a.live || b.live;
+            if (live == n.live && min_radius == n.min_radius && box.lo == n.box.lo && box.hi == n.box.hi) break;
+            n.box = box;
+            n.min_radius = min_radius;
+            n.live = live;
         }
     }
 
@@ -153,7 +159,7 @@ private:
         stack[top++] = root;
         while (top > 0) {
             const Node& node = nodes_[stack[--top]];
-            if (node.live == 0 || box_distance(node.box, q.centre) + q.radius + node.min_radius > best.distance) continue;
+            if (!node.live || box_distance(node.box, q.centre) + q.radius + node.min_radius > best.distance) continue;
             if (node.left == none) {
                 for (const Item& it : node.items) consider(q, id, it, best);
                 continue;
@@ -187,7 +193,7 @@ private:
             todo.pop_back(), slots.pop_back(), parents.pop_back();
             Node& node = nodes_[k];
             node.parent = p;
-            node.live = b - a;
+            node.live = b > a;
             for (std::uint32_t i = a; i < b; ++i) node.box.extend((*spheres_)[ids[i]].centre);
             if (b - a <= 8) {
                 for (std::uint32_t i = a; i < b; ++i) {
