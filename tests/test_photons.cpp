@@ -24,6 +24,7 @@
 #include <glint/photons/selective_tracing.hpp>
 #include <glint/photons/sppm.hpp>
 #include <glint/photons/sppm_statistics.hpp>
+#include <glint/photons/surface_area.hpp>
 #include <glint/photons/surface_groups.hpp>
 #include <glint/photons/texel_cache.hpp>
 #include <glint/tracer/lighting.hpp>
@@ -445,6 +446,40 @@ TEST_CASE("hash grid over spheres: every sphere holding a point, as brute force 
     CHECK(found == 0);
 }
 
+TEST_CASE("surface area in a sphere: discs, half discs and quarter discs of a quad, planes at a distance") {
+    Scene<float> s;
+    const auto m = s.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    using V = Vec3<float>;
+    s.add_quad(V(0, 0, 0), V(1, 0, 0), V(1, 0, 1), V(0, 0, 1), m);  // the unit square in y = 0, two triangles
+    s.add_quad(V(0, 0, 0), V(0, 1, 0), V(0, 1, 1), V(0, 0, 1), m);  // a wall at x = 0 meeting it at a right angle
+    const SurfaceAreas<float> areas(std::span<const TriangleVertices<float>>(s.triangles), 0.45f);
+    const double r = 0.2, disc = pi<double> * r * r;
+    CHECK(areas.area(0, V(0.5f, 0, 0.5f), r) == doctest::Approx(disc).epsilon(1e-9));    // inside, across the diagonal
+    CHECK(areas.area(1, V(0.5f, 0, 0.5f), r) == doctest::Approx(disc).epsilon(1e-9));    // either triangle of the group
+    CHECK(areas.area(0, V(0.5f, 0, 0), r) == doctest::Approx(disc / 2).epsilon(1e-6));   // on an edge
+    CHECK(areas.area(0, V(1, 0, 1), r) == doctest::Approx(disc / 4).epsilon(1e-6));      // at a corner
+    CHECK(areas.area(0, V(0.5f, 0.12f, 0.5f), r) == doctest::Approx(pi<double> * (r * r - 0.0144)).epsilon(1e-6));
+    CHECK(areas.area(0, V(0.5f, 0.25f, 0.5f), r) == 0.0);                                   // the plane out of reach
+    CHECK(areas.area(2, V(0, 0.5f, 0.5f), r) == doctest::Approx(disc).epsilon(1e-6));    // the wall: its own group
+    // A point 0.1 from the edge: the disc less its segment beyond the edge.
+    const double d = 0.1, segment = r * r * std::acos(d / r) - d * std::sqrt(r * r - d * d);
+    CHECK(areas.area(0, V(0.5f, 0, 0.1f), r) == doctest::Approx(disc - segment).epsilon(1e-6));
+    // Against a Monte Carlo count on random discs (points near two edges and a corner).
+    Pcg32 rng(5);
+    for (int trial = 0; trial < 20; ++trial) {
+        const V x(float(rng.uniform()) * 0.3f, 0, float(rng.uniform()) * 0.3f);
+        int in = 0;
+        const int n = 200000;
+        for (int i = 0; i < n; ++i) {
+            const double u = rng.uniform<double>() * 2 - 1, v = rng.uniform<double>() * 2 - 1;
+            const double px = x.x + u * r, pz = x.z + v * r;
+            if (u * u + v * v <= 1 && px >= 0 && px <= 1 && pz >= 0 && pz <= 1) ++in;
+        }
+        const double mc = 4 * r * r * double(in) / n, se = 4 * r * r * std::sqrt(0.25 / n);
+        CHECK(std::abs(areas.area(0, x, r) - mc) < 4 * se);
+    }
+}
+
 TEST_CASE("SPPM statistics: the radius shrinks by (N + alpha M) / (N + M), tau scales with the area") {
     SppmStatistics s{0.04, 0.0, Rgb<double>(0.0)};
     s.update(0, Rgb<double>(5.0), 2.0 / 3.0);  // no photon: nothing changes
@@ -583,20 +618,24 @@ TEST_CASE("SPPM on the diffuse Cornell box: error against the path tracer falls 
     CHECK(mse[1] < mse[0]);
     CHECK(mse[2] < mse[1]);
 #if !defined(GLINT_SANITIZER_TESTS)  // the same code paths again: statistics, not memory errors
-    // The bias, with an initial radius of 0.3 so that the first passes' bias stands out of
-    // their noise: halves of 8 renders at 2 passes, of 1 at 128. Bounds are two standard
-    // errors (the seeds are fixed, so the outcome is too). Measured: at 2 passes bias^2
-    // 1.4e-5 +- 0.4e-5 and an image mean bias of -1.5% (5 se); at 128 passes bias^2 6.8e-6 +-
-    // 2.1e-6 and -0.3%. With 0.15 the same 2-pass bias^2 is 3e-6 +- 3e-6: not resolved from
-    // the noise (a single pair of renders once gave 5.7e-5 +- 1.9e-5 there: its seeds' luck).
-    st.radius = 0.3;
+    // The bias, with alpha = 0.3 (the radius shrinks faster than with 2/3: at 128 passes R is
+    // 0.033 from 0.3, against 0.114). Bounds are two standard errors (the seeds are fixed, so
+    // the outcome is too). Measured (docs/photons.md): from an initial radius of 0.6, at 2
+    // passes (halves of 8 renders) bias^2 1.8e-5 +- 0.4e-5 and an image mean bias of +0.78e-3
+    // (5 se), at 128 passes +0.18e-3; from 0.3, at 128 passes bias^2 1.1e-6 +- 0.9e-6 against
+    // one render's variance of 7.4e-6 (native build). From 0.3 the first passes' bias is not resolved from
+    // their noise (2.9e-6 +- 2.8e-6): the larger radius makes it show.
+    st.alpha = 0.3;
     double unused = 0;
+    st.radius = 0.6;
     const ErrorSplit early = split_error(half(2, 1, 8, unused), half(2, 2, 8, unused), ref.image, ref.variance);
     const ErrorSplit late = split_error(half(128, 1, 1, unused), half(128, 2, 1, unused), ref.image, ref.variance);
-    for (const ErrorSplit* e : {&early, &late})
-        MESSAGE("SPPM radius 0.3, " << std::string(e == &early ? "2 passes (halves of 8)" : "128 passes") << ": bias^2 " << e->bias2
-                                    << " +- " << e->bias2_se << ", variance " << e->variance << ", image mean bias "
-                                    << e->mean_bias << " +- " << e->mean_se << " (mean " << e->reference_mean << ")");
+    st.radius = 0.3;
+    const ErrorSplit small = split_error(half(128, 1, 1, unused), half(128, 2, 1, unused), ref.image, ref.variance);
+    for (const ErrorSplit* e : {&early, &late, &small})
+        MESSAGE("SPPM alpha 0.3, " << std::string(e == &early ? "radius 0.6, 2 passes (halves of 8)" : e == &late ? "radius 0.6, 128 passes" : "radius 0.3, 128 passes")
+                                   << ": bias^2 " << e->bias2 << " +- " << e->bias2_se << ", variance " << e->variance
+                                   << ", image mean bias " << e->mean_bias << " +- " << e->mean_se << " (mean " << e->reference_mean << ")");
     CHECK(early.bias2 - 2 * early.bias2_se > 0);
     CHECK(std::abs(early.mean_bias) > 2 * early.mean_se);
     // The image mean's bias falls with passes, beyond both bands, to below 1% of the mean (a
@@ -604,6 +643,12 @@ TEST_CASE("SPPM on the diffuse Cornell box: error against the path tracer falls 
     // bands as independent, which SPPM's shared photons are not: it is a guide, not a bound.
     CHECK(std::abs(late.mean_bias) + 2 * late.mean_se < std::abs(early.mean_bias) - 2 * early.mean_se);
     CHECK(std::abs(late.mean_bias) < 0.01 * late.reference_mean);
+    // Per pixel, the squared bias and two of its standard errors against one render's variance:
+    // below it in a -march=native GCC build (1.1e-6 +- 0.9e-6 against 7.4e-6), not in the
+    // portable one CI builds (6.9e-6 +- 3.0e-6 against 7.1e-6; the reference differs too), so
+    // it is printed, not checked (docs/photons.md).
+    MESSAGE("per pixel, radius 0.3, 128 passes: bias^2 + 2 se " << small.bias2 + 2 * small.bias2_se << " against variance "
+                                                                << small.variance);
 #endif
 }
 
