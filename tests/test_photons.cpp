@@ -439,6 +439,31 @@ TEST_CASE("hash grid over spheres: every sphere holding a point, as brute force 
         std::sort(got.begin(), got.end());
         REQUIRE(got == want);  // each once
     }
+    // Stress: spheres whose radius is the cell size, at coordinates where rounding in the cell
+    // computation spans 4 cells per axis instead of 3 (64 cells: a fixed list of 27 overflowed).
+    {
+        const float rr = 0.1f;
+        std::vector<float> straddle;
+        for (int k = 1; k < 200 && straddle.size() < 8; ++k) {  // just below the multiples of the cell
+            float x = float(k) * rr;
+            for (int i = 0; i < 10000; ++i) x = std::nextafter(x, 0.0f);
+            for (int i = 0; i < 20000; ++i, x = std::nextafter(x, 100.0f))
+                if (std::floor((x + rr) / rr) - std::floor((x - rr) / rr) == 3.0f) {
+                    straddle.push_back(x);
+                    break;
+                }
+        }
+        REQUIRE(straddle.size() == 8);
+        std::vector<Vec3<float>> cs;
+        for (int i = 0; i < 8; ++i) cs.emplace_back(straddle[std::size_t(i)], straddle[std::size_t((i + 3) % 8)], straddle[std::size_t((i + 5) % 8)]);
+        const std::vector<float> rs(cs.size(), rr);
+        const SphereHashGrid<float> g{std::span<const Vec3<float>>(cs), std::span<const float>(rs)};
+        for (std::size_t i = 0; i < cs.size(); ++i) {
+            int hits = 0;
+            g.query(cs[i], [&](std::size_t j, float) { hits += j == i; });
+            CHECK(hits == 1);
+        }
+    }
     // Stress: no spheres, or none with a radius: queries find nothing.
     const SphereHashGrid<float> empty{std::span<const Vec3<float>>(c.data(), 1), std::span<const float>(r.data(), 1)};
     int found = 0;
