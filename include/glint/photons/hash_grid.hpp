@@ -89,9 +89,10 @@ private:
             if (!(r2_[i] > T(0))) continue;
             const T r = std::sqrt(r2_[i]);
             const auto lo = cell_of(centres_[i] - Vec3<T>(r)), hi = cell_of(centres_[i] + Vec3<T>(r));
-            // At most 3 cells per axis (2 r <= twice the cell size); a bucket two of them hash to is
-            // listed once, so that a query visits each sphere once.
-            std::uint64_t seen[27];
+            // At most 3 cells per axis (2 r <= twice the cell size), 4 where rounding in cell_of
+            // adds one; a bucket two of them hash to is listed once, so that a query visits each
+            // sphere once.
+            std::uint64_t seen[64];
             int count = 0;
             for (std::int64_t z = lo.z; z <= hi.z; ++z)
                 for (std::int64_t y = lo.y; y <= hi.y; ++y)

@@ -165,7 +165,7 @@ private:
             const Vec3<T> ng = scene_.normal(hit.id);
             const SurfacePoint<T> p = surface_point(scene_, hit);
             vp = VisiblePoint<T>{p.x, p.err, glm::dot(ng, r.direction) < T(0) ? ng : -ng, -r.direction, Rgb<T>(T(1)),
-                                 scene_.material_of[hit.id], true};
+                                 scene_.material_of[hit.id], std::uint32_t(hit.id), true};
         } else {
             find_visible_point(scene_, rays, r, st_.max_specular, uniform, vp);  // re-finds hit: simple, rare
             if (!vp.valid) return Rgb<T>(T(0));

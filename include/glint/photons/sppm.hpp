@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -42,6 +43,7 @@
 #include <glint/photons/hash_grid.hpp>
 #include <glint/photons/photon_tracing.hpp>
 #include <glint/photons/sppm_statistics.hpp>
+#include <glint/photons/surface_area.hpp>
 #include <glint/photons/visible_points.hpp>
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/sampler.hpp>
@@ -60,6 +62,12 @@ struct SppmSettings {
     int max_specular = 32;         ///< Camera paths: specular vertices before the visible point; >= 0.
     int camera_samples = 1;        ///< Camera rays per pixel and pass for emission and direct light; >= 1.
     int photon_depth = 32;         ///< Photon paths: bounces (PhotonSettings::max_depth); >= 1.
+    /// A photon counts at a visible point when the cosine between its surface normal and the
+    /// point's is at least this, and the estimate divides by the area of the point's surface
+    /// group (triangles joined across edges whose normals meet it) inside R, not by pi R^2
+    /// (photons/surface_area.hpp); -1: every photon in the sphere from the point's front side
+    /// over the whole disc (Hachisuka and Jensen 2009's estimate). In [-1, 1].
+    double surface_cos = 0.9;
     std::uint64_t seed = 0;        ///< The render's seed; each pass derives its camera and photon seeds from it.
 
     /// Throws Error for a setting outside the ranges above.
@@ -69,6 +77,8 @@ struct SppmSettings {
         check_sppm_alpha(alpha);
         if (max_specular < 0 || photon_depth < 1) throw Error("SPPM depths must be >= 0 (camera) and >= 1 (photons)");
         if (camera_samples < 1) throw Error("SPPM camera samples must be >= 1, got " + std::to_string(camera_samples));
+        if (!(surface_cos >= -1.0 && surface_cos <= 1.0))
+            throw Error("SPPM surface cosine must be in [-1, 1], got " + std::to_string(surface_cos));
     }
 };
 
@@ -98,8 +108,8 @@ struct FluxSplat {
 /// into m and phi per pixel in chunk order, so the sums do not depend on the thread count.
 template <Scalar T>
 void splat_photons(const Scene<T>& s, std::span<const Photon> photons, const SphereHashGrid<T>& grid,
-                   std::span<const VisiblePoint<T>> points, std::span<const std::uint32_t> pixel_of, int threads,
-                   std::vector<double>& m, std::vector<Rgb<double>>& phi) {
+                   std::span<const VisiblePoint<T>> points, std::span<const std::uint32_t> pixel_of, T surface_cos,
+                   int threads, std::vector<double>& m, std::vector<Rgb<double>>& phi) {
     constexpr std::size_t chunk = 1 << 13;
     const int chunks = int((photons.size() + chunk - 1) / chunk);
     std::vector<std::vector<FluxSplat>> out(std::size_t(std::max(chunks, 0)));
@@ -108,9 +118,10 @@ void splat_photons(const Scene<T>& s, std::span<const Photon> photons, const Sph
             const std::size_t end = std::min(photons.size(), std::size_t(c + 1) * chunk);
             for (std::size_t j = std::size_t(c) * chunk; j < end; ++j) {
                 const Photon& ph = photons[j];
-                const Vec3<T> x(ph.position), wi = -Vec3<T>(ph.direction());
+                const Vec3<T> x(ph.position), wi = -Vec3<T>(ph.direction()), normal(ph.normal());
                 const Rgb<float> power = ph.power();
                 grid.query(x, [&](std::size_t i, T) {
+                    if (surface_cos > T(-1) && glm::dot(normal, points[i].n) < surface_cos) return;
                     const Rgb<T> w = points[i].weight(s, wi);
                     if (w.max() > T(0))
                         out[std::size_t(c)].push_back({pixel_of[i], Rgb<float>(float(w[0]) * power[0], float(w[1]) * power[1],
@@ -127,11 +138,12 @@ void splat_photons(const Scene<T>& s, std::span<const Photon> photons, const Sph
 }
 
 /// SPPM's photon pass `pass` over the visible points of `film`: the hash grid over them with
-/// their current radii, the photons traced without direct hits and splatted, and each pixel's
-/// statistics updated. Returns the photons emitted.
+/// their current radii, the photons traced without direct hits and splatted, each point's
+/// flux divided by the share of its disc its surface covers (`areas`; null: the whole disc),
+/// and each pixel's statistics updated. Returns the photons emitted.
 template <RayAccelerator A, Scalar T>
 std::size_t sppm_photon_pass(const Scene<T>& s, const A& accel, const VisiblePointFilm<T>& film, const SppmSettings& st,
-                             int pass, int threads, std::vector<SppmStatistics>& stats) {
+                             const SurfaceAreas<T>* areas, int pass, int threads, std::vector<SppmStatistics>& stats) {
     std::vector<Vec3<T>> centres;
     std::vector<T> radii;
     std::vector<VisiblePoint<T>> points;
@@ -155,7 +167,14 @@ std::size_t sppm_photon_pass(const Scene<T>& s, const A& accel, const VisiblePoi
     std::vector<Rgb<double>> phi(stats.size(), Rgb<double>(0.0));
     for (const auto* map : {&set.global, &set.caustic})
         splat_photons(s, std::span<const Photon>(*map), grid, std::span<const VisiblePoint<T>>(points),
-                      std::span<const std::uint32_t>(pixel_of), threads, m, phi);
+                      std::span<const std::uint32_t>(pixel_of), T(areas ? st.surface_cos : -1.0), threads, m, phi);
+    // The flux over the surface's part of the disc, scaled to the whole disc: tau then keeps its
+    // meaning (flux within pi R^2) whichever point a pass keeps.
+    if (areas)
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const double r = double(radii[i]), share = areas->area(points[i].triangle, points[i].x, r) / (pi<double> * r * r);
+            if (share > 0) phi[pixel_of[i]] /= share;
+        }
     for (std::size_t p = 0; p < stats.size(); ++p) stats[p].update(m[p], phi[p], st.alpha);
     return set.emitted;
 }
@@ -182,6 +201,10 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
     camera.progress = nullptr;
     camera.spp = st.camera_samples;
     // The pixel, the Fresnel choices and direct light's first samples from Halton, PCG after.
+    const std::optional<SurfaceAreas<T>> areas =
+        st.surface_cos > -1.0 ? std::optional<SurfaceAreas<T>>(std::in_place, std::span<const TriangleVertices<T>>(s.triangles),
+                                                                T(std::acos(st.surface_cos)))
+                              : std::nullopt;
     const HaltonSampler<T> sampler(image.width, image.height, render_halton_dims, HaltonRandomization::digit_permutation,
                                    detail::pass_seed(st.seed, 0, 1));
     for (int pass = 0;; ++pass) {
@@ -196,7 +219,7 @@ SppmResult render_sppm(const Scene<T>& s, const A& accel, const D& direct, const
         const auto photon_start = clock::now();
         for (std::size_t p = 0; p < pixels; ++p)
             lit[p] += Rgb<double>(double(film.radiance[p][0]), double(film.radiance[p][1]), double(film.radiance[p][2]));
-        out.photons_emitted += detail::sppm_photon_pass(s, accel, film, st, pass, image.threads, stats);
+        out.photons_emitted += detail::sppm_photon_pass(s, accel, film, st, areas ? &*areas : nullptr, pass, image.threads, stats);
         out.photon_seconds += std::chrono::duration<double>(clock::now() - photon_start).count();
         out.passes = pass + 1;
         if (budget.stop(out.passes, std::chrono::duration<double>(clock::now() - start).count())) break;

@@ -42,6 +42,7 @@ struct VisiblePoint {
     Vec3<T> wo{0};  ///< Unit direction back along the path.
     Rgb<T> beta{T(0)};  ///< The path's throughput through its specular vertices.
     std::uint32_t material = 0;  ///< Index of the vertex's material in Scene::materials.
+    std::uint32_t triangle = 0;  ///< Index of the triangle the vertex lies on in Scene::triangles.
     bool valid = false;          ///< A point was found (false: the other fields are meaningless).
 
     /// The point's BRDF in its own frame (frame must be this point's Frame::from_normal(n)).
@@ -74,7 +75,8 @@ Rgb<T> find_visible_point(const Scene<T>& s, RayQueries<A>& rays, Ray<T> ray, in
         const SurfacePoint<T> p = surface_point(s, hit);
         if (front && m.emissive()) L += beta * m.emission;
         if (!m.specular()) {
-            vp = VisiblePoint<T>{p.x, p.err, n, -safe_normalize(ray.direction), beta, s.material_of[hit.id], beta.max() > T(0)};
+            vp = VisiblePoint<T>{p.x, p.err, n, -safe_normalize(ray.direction), beta, s.material_of[hit.id], std::uint32_t(hit.id),
+                                 beta.max() > T(0)};
             break;
         }
         const T u = m.kind == MaterialKind::dielectric ? uniform() : T(0);
