@@ -259,6 +259,7 @@ struct Options {
     std::string scenes_dir = GLINT_BENCH_SCENES;  // --scenes DIR
     int primary = 384;                            // --primary N: N x N primary rays (--user-meshes)
     std::optional<Isa> isa;                       // --isa NAME: glint's kernels (--user-meshes)
+    int builds = 3;                               // --builds N: alternating builds per mesh (--user-meshes)
     bool rays_set = false, reps_set = false;
 };
 
@@ -583,6 +584,8 @@ void add_run_flags(cli::App& app, Options& o) {
     app.value("--isa", set_isa, "--user-meshes: glint's kernels (default: the best this CPU runs)", "NAME",
               isa_name(best_isa()))
         ->group("Run");
+    cli::number(app, "--builds", o.builds, 1, 1000, "--user-meshes: alternating builds per mesh (median; default 3)")
+        ->group("Run");
 }
 
 /// The trees' build settings.
@@ -626,6 +629,7 @@ int user_meshes_main(const Options& opt) {
     u.generated = !opt.no_generated;
     u.primary = opt.primary;
     u.isa = opt.isa;
+    u.builds = opt.builds;
     u.rays = opt.rays_set ? opt.rays : 200'000;
     u.reps = opt.reps_set ? opt.reps : 5;
     const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return read_obj(f); });

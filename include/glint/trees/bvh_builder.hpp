@@ -33,28 +33,11 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/trees/binary_bvh.hpp>
+#include <glint/trees/sah_binning.hpp>
 
 namespace glint {
 
 namespace detail {
-
-/// A reference: a primitive and the box of its part in the node that holds it (the whole
-/// primitive's box unless spatial splits chopped it). `left`: its side in a spatial split.
-struct BvhRef {
-    AABB<float> box;
-    std::uint32_t prim = 0;
-    std::uint32_t left = 0;
-};
-
-/// The cheapest bin boundary found at a node: axis (-1: none), the first bin of the right
-/// side, the normalized cost, the two sides' boxes and reference counts.
-struct SahSplit {
-    int axis = -1;
-    std::uint32_t bin = 0;
-    float cost = infinity<float>;
-    AABB<float> left, right;
-    std::uint32_t n_left = 0, n_right = 0;
-};
 
 /// The recursive build (Wald 2007), with spatial splits (Stich et al. 2009) where the options
 /// ask for them. One object per build, shared by its threads.
@@ -70,50 +53,58 @@ template <PrimitiveClipper Clip>
 class BinnedSah {
 public:
     BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, BinaryBvh& out)
-        : refs_(refs), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
+        : refs_(refs), scratch_(refs.size()), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
           spatial_(opt.spatial_splits),
-          min_overlap_(opt.spatial_alpha * root_area) {}
+          min_overlap_(opt.spatial_alpha * root_area), cost_(opt) {}
 
-    void node(std::uint32_t slot, std::uint32_t b, std::uint32_t e, std::uint32_t cap, const AABB<float>& box,
+    /// The box of some references and the box of their centres.
+    struct Bounds {
+        AABB<float> box, cbox;
+    };
+
+    /// Builds the subtree at `slot` over refs[b, e) (room up to cap), whose bounds are `in`.
+    void node(std::uint32_t slot, std::uint32_t b, std::uint32_t e, std::uint32_t cap, const Bounds& in,
               bool spatial = true) {
+        const AABB<float>& box = in.box;
         BinaryBvhNode& nd = out_.nodes[slot];
         nd.box = box;
         nd.begin = b;
         nd.count = e - b;
         const std::uint32_t n = e - b;
-        if (n == 1) return;
-        AABB<float> cbox;
-        for (std::uint32_t i = b; i < e; ++i) cbox.extend(centre(i));
-        const Vec3f k = scales(cbox);
+        // Every split costs at least C_T: where a leaf costs no more, it is a leaf unsearched.
+        if (n == 1 || (n <= opt_.max_leaf && opt_.traversal_cost >= opt_.intersection_cost * float(blocks(n)))) return;
+        const Vec3f k = scales(in.cbox);
+        const BinMap map(in.cbox, k, opt_.bins);
         const float inv_area = 1.0f / std::max(box.surface_area(), std::numeric_limits<float>::min());
-        const SahSplit s = find_split(b, e, cbox, k, inv_area);
+        const SahSplit s = find_split(b, e, map, k, inv_area);
         SahSplit sp;  // Stich et al. §4: spatial splits only where the object split's boxes overlap
         if (spatial && spatial_ && cap > e && (s.axis < 0 || overlap_area(s.left, s.right) > min_overlap_))
             sp = find_spatial(b, e, cap - e, box, inv_area);
-        if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(opt_.blocks(n)))) return;
+        if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(blocks(n)))) return;
         if (sp.cost < s.cost) {
-            if (!split_spatial(slot, b, e, cap, box, sp)) node(slot, b, e, cap, box, false);  // a side came out empty
+            // A side came out empty: boxes may have been clipped closer, so their centres again.
+            if (!split_spatial(slot, b, e, cap, box, sp)) node(slot, b, e, cap, {box, bounds(b, e).cbox}, false);
             return;
         }
-        std::uint32_t m = b + n / 2;
-        AABB<float> lb, rb;
         if (s.axis >= 0) {
-            const float lo = cbox.lo[s.axis], ka = k[s.axis];
-            const auto mid = std::partition(refs_.begin() + b, refs_.begin() + e, [&](const BvhRef& r) {
-                return bin_of(r.box.center()[s.axis], lo, ka) < s.bin;
-            });
-            m = std::uint32_t(mid - refs_.begin());
-            lb = s.left;
-            rb = s.right;
-        } else {  // every centre is the same point: any halving is as good
-            for (std::uint32_t i = b; i < m; ++i) lb.extend(refs_[i].box);
-            for (std::uint32_t i = m; i < e; ++i) rb.extend(refs_[i].box);
+            Bounds l{s.left, {}}, r{s.right, {}};
+            const std::uint32_t m = partition_by_bin(refs_.data(), scratch_.data(), b, e, map, s.axis, s.bin, l.cbox, r.cbox);
+            return children(slot, b, m, e, cap, l, r);
         }
-        children(slot, b, m, e, cap, lb, rb);
+        const std::uint32_t m = b + n / 2;  // every centre is the same point: any halving is as good
+        children(slot, b, m, e, cap, bounds(b, m), bounds(m, e));
     }
 
 private:
-    Vec3f centre(std::uint32_t i) const { return refs_[i].box.center(); }
+    Bounds bounds(std::uint32_t b, std::uint32_t e) const {
+        Bounds o;
+        for (std::uint32_t i = b; i < e; ++i) {
+            o.box.extend(refs_[i].box);
+            o.cbox.extend(refs_[i].box.center());
+        }
+        return o;
+    }
+    std::uint32_t blocks(std::uint32_t n) const { return cost_.blocks(n); }
     static float overlap_area(const AABB<float>& a, const AABB<float>& b) {
         AABB<float> o;
         o.lo = glm::max(a.lo, b.lo);
@@ -130,16 +121,12 @@ private:
         }
         return k;
     }
-    /// The bin of a centre coordinate; the binning and the partition call this same code.
-    std::uint32_t bin_of(float c, float lo, float k) const {
-        return std::uint32_t(std::min(float(opt_.bins - 1), std::max(0.0f, (c - lo) * k)));
-    }
 
     /// The children of a node whose references are split into [b, m) and [m, e) (e <= cap):
     /// the room [e, cap) is shared in proportion to the references, the right child's
     /// references move to the start of its room, and its slot follows from the left room.
     void children(std::uint32_t slot, std::uint32_t b, std::uint32_t m, std::uint32_t e, std::uint32_t cap,
-                  const AABB<float>& lb, const AABB<float>& rb) {
+                  const Bounds& lb, const Bounds& rb) {
         const auto room_l = std::uint32_t(std::uint64_t(cap - e) * (m - b) / (e - b));
         if (room_l) std::move_backward(refs_.begin() + m, refs_.begin() + e, refs_.begin() + e + room_l);
         const std::uint32_t mid = m + room_l;  // the left room's end, the right child's first reference
@@ -155,7 +142,7 @@ private:
     /// the left on a thread of its own if one is free (the tree does not depend on which
     /// runs where). A thread, and the waiting parent until the join, give the token back
     /// once done, so that the side still at work can split off again (uneven splits).
-    void recurse(const Range& l, const AABB<float>& lb, const Range& r, const AABB<float>& rb) {
+    void recurse(const Range& l, const Bounds& lb, const Range& r, const Bounds& rb) {
         constexpr std::uint32_t parallel_min = 4096;
         const bool large = (l.e - l.b) + (r.e - r.b) >= parallel_min;
         if (large && opt_.executor)  // the host's threads run both (BvhBuildOptions::executor)
@@ -176,26 +163,17 @@ private:
         node(r.slot, r.b, r.e, r.cap, rb);
     }
 
-    /// Bins every reference of the range on the three axes in one pass, then sweeps each
-    /// axis for its cheapest boundary (Wald 2007).
-    SahSplit find_split(std::uint32_t b, std::uint32_t e, const AABB<float>& cbox, const Vec3f& k, float inv_area) const {
-        constexpr int max_bins = 64;
-        AABB<float> bin_box[3][max_bins];
-        std::uint32_t bin_n[3][max_bins] = {};
-        for (std::uint32_t i = b; i < e; ++i) {
-            const Vec3f c = centre(i);
-            for (int a = 0; a < 3; ++a) {
-                const std::uint32_t j = bin_of(c[a], cbox.lo[a], k[a]);
-                bin_box[a][j].extend(refs_[i].box);
-                ++bin_n[a][j];
-            }
-        }
+    /// Bins every reference of the range on the three axes in one pass (sah_binning.hpp),
+    /// then sweeps each axis for its cheapest boundary (Wald 2007).
+    SahSplit find_split(std::uint32_t b, std::uint32_t e, const BinMap& map, const Vec3f& k, float inv_area) const {
+        const SahBins bins(refs_.data(), b, e, map, opt_.bins, avx2_);
         SahSplit best;
+        AABB<float> box[SahBins::max_bins];
+        std::uint32_t count[SahBins::max_bins], bin[SahBins::max_bins];
         for (int a = 0; a < 3; ++a)
-            if (k[a] != 0.0f) sweep(a, bin_box[a], bin_n[a], bin_n[a], e - b, 0, inv_area, best);
+            if (k[a] != 0.0f) sweep_bins(cost_, a, box, count, bin, bins.axis(a, box, count, bin), inv_area, best);
         return best;
     }
-
     /// The cheapest boundary on axis a, if cheaper than `best`: suffix costs right to left,
     /// then prefixes left to right. A reference counts on the left of boundary j if its first
     /// bin (enter) is below j, on the right if its last bin (leave) is j or above: an object
@@ -210,7 +188,7 @@ private:
             acc.extend(bin_box[j]);
             cnt += leave[j];
             right_n[j] = cnt;
-            right_cost[j] = cnt ? acc.surface_area() * float(opt_.blocks(cnt)) : infinity<float>;
+            right_cost[j] = cnt ? acc.surface_area() * float(blocks(cnt)) : infinity<float>;
         }
         acc = AABB<float>{};
         cnt = 0;
@@ -220,7 +198,7 @@ private:
             cnt += enter[j - 1];
             if (cnt == 0 || right_n[j] == 0 || cnt + right_n[j] > n + room) continue;
             const float c = opt_.traversal_cost +
-                            opt_.intersection_cost * (acc.surface_area() * float(opt_.blocks(cnt)) + right_cost[j]) * inv_area;
+                            opt_.intersection_cost * (acc.surface_area() * float(blocks(cnt)) + right_cost[j]) * inv_area;
             if (c < best.cost) {
                 best = SahSplit{a, j, c, acc, {}, cnt, right_n[j]};
                 improved = true;
@@ -333,20 +311,20 @@ private:
         const auto mid = std::partition(refs_.begin() + b, refs_.begin() + end, [](const BvhRef& r) { return r.left != 0; });
         const auto m = std::uint32_t(mid - refs_.begin());
         if (m == b || m == end) return false;  // only when nothing was appended
-        AABB<float> lb, rb;
-        for (std::uint32_t i = b; i < m; ++i) lb.extend(refs_[i].box);
-        for (std::uint32_t i = m; i < end; ++i) rb.extend(refs_[i].box);
-        children(slot, b, m, end, cap, lb, rb);
+        children(slot, b, m, end, cap, bounds(b, m), bounds(m, end));
         return true;
     }
 
     std::vector<BvhRef>& refs_;
+    std::vector<BvhRef> scratch_;  // the partition's, each node's range its own
     const BvhBuildOptions& opt_;
     const Clip& clip_;
     BinaryBvh& out_;
     std::atomic<int> tokens_;  // threads that may still be started
     const bool spatial_;
     const float min_overlap_;
+    const SahCosts cost_;
+    const bool avx2_ = best_isa() >= Isa::avx2;  // bin with AVX2 (sah_binning.hpp)
 };
 
 /// The leaves' references, in tree order, become `prims`; every node's range is renumbered
@@ -375,12 +353,14 @@ template <PrimitiveClipper Clip = NoClipper>
 BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
     opt.check();
     std::vector<detail::BvhRef> refs;
-    AABB<float> root;
+    refs.reserve(boxes.size());
+    typename detail::BinnedSah<Clip>::Bounds root;
     for (std::uint32_t i = 0; i < boxes.size(); ++i) {
         const AABB<float>& b = boxes[i];
         if (b.empty() || !all_finite(b.lo) || !all_finite(b.hi)) continue;
         refs.push_back({b, i, 0});
-        root.extend(b);
+        root.box.extend(b);
+        root.cbox.extend(b.center());
     }
     BinaryBvh out;
     if (refs.empty()) return out;
@@ -390,8 +370,13 @@ BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOpt
         throw Error("build_binary_bvh: " + std::to_string(cap) + " references, at most 2^31 - 1");
     refs.resize(cap);
     out.nodes.resize(2 * cap - 1);
-    detail::BinnedSah<Clip>(refs, opt, clip, root.surface_area(), out)
+    detail::BinnedSah<Clip>(refs, opt, clip, root.box.surface_area(), out)
         .node(0, 0, std::uint32_t(n), std::uint32_t(cap), root);
+    if (cap == n) {  // no room was left: every node's range is already its place in tree order
+        out.prims.resize(n);
+        for (std::size_t i = 0; i < n; ++i) out.prims[i] = refs[i].prim;
+        return out;
+    }
     out.prims.reserve(cap);
     detail::bvh_compact(out, refs, 0);
     return out;

@@ -300,21 +300,26 @@ private:
         if (n > std::size_t(detail::wide_max_first))
             throw Error("MeshBvh: " + std::to_string(n) + " triangles, at most 2^27 - 2");
         std::vector<AABB<float>> boxes(n);
+        std::vector<TriangleVertices<float>> tris(n);  // the user's triangles, read once, in order
         for (std::size_t j = 0; j < n; ++j) {
-            const TriangleVertices<float> t = tri(j);
+            const TriangleVertices<float>& t = tris[j] = tri(j);
             if (!detail::can_be_hit(t)) continue;  // an empty box: left out
             for (const auto& p : t) boxes[j].extend(p);
         }
         bvh_ = WideBvh<N, B, L>(boxes, opt, [&](std::uint32_t j, int axis, const AABB<float>& region) {
-            const TriangleVertices<float> t = tri(j);
+            const TriangleVertices<float>& t = tris[j];
             return clip_triangle(t[0], t[1], t[2], axis, region);
         });
-        std::vector<TriangleVertices<float>> leaf_tris;
+        // The triangles in leaf order, each asked for a few loop turns before it is copied.
+        const std::vector<std::uint32_t>& prims = bvh_.prims();
+        std::vector<TriangleVertices<float>> ordered(prims.size());
+        constexpr std::size_t ahead = 16;
+        for (std::size_t k = 0; k < prims.size(); ++k) {
+            if (k + ahead < prims.size()) __builtin_prefetch(&tris[prims[k + ahead]]);
+            ordered[k] = tris[prims[k]];
+        }
         bvh_.remap_leaves([&](std::uint32_t first, std::uint32_t count) {
-            const std::span<const std::uint32_t> ids(bvh_.prims().data() + first, count);
-            leaf_tris.clear();
-            for (std::uint32_t id : ids) leaf_tris.push_back(tri(id));
-            return leaves_.add(leaf_tris, ids);
+            return leaves_.add(std::span(ordered).subspan(first, count), std::span(prims).subspan(first, count));
         });
     }
 
