@@ -1,5 +1,6 @@
 // photon_cli.hpp: glint-render's photon-mapping integrators (glint/photons): where the
-// command line's values become their settings. Included by render.cpp only.
+// command line's values become their settings. Included by render.cpp and
+// render_integrators.cpp (which defines its functions).
 //
 //   --integrator sppm      stochastic progressive photon mapping (photons/sppm.hpp): passes
 //                          of one camera ray per pixel and --photons photons, direct light by
@@ -19,14 +20,12 @@
 //   --final-gather N       photons: final gather rays per pixel sample (default 64)
 #pragma once
 
-#include <cstdio>
+#include <cstdint>
 
 #include <glint/photons/photon_integrator.hpp>
 #include <glint/photons/sppm.hpp>
 #include <glint/tracer/any_accel.hpp>
-#include <glint/tracer/lighting.hpp>
 #include <glint/tracer/progressive.hpp>
-#include <glint/tracer/renderer.hpp>
 
 namespace glint {
 
@@ -39,33 +38,13 @@ struct PhotonCliOptions {
 };
 
 /// SPPM of `scene` (traced through `accel`) at `image`'s size and threads: passes until
-/// `budget` says stop.
-inline SppmResult render_sppm_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
-                                  const RenderSettings& image, const PassBudget& budget, std::uint64_t seed) {
-    SppmSettings st;
-    st.photons = p.photons;
-    st.radius = p.radius;
-    st.camera_samples = p.camera_samples;
-    st.seed = seed;
-    return render_sppm(scene, accel, MisDirect<float>(scene, PathTracerSettings<float>{}), image, st, budget);
-}
+/// `budget` says stop. Defined in render_integrators.cpp.
+SppmResult render_sppm_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
+                           const RenderSettings& image, const PassBudget& budget, std::uint64_t seed);
 
 /// Photon mapping of `scene` (traced through `accel`): passes of new maps (seed + pass) and
-/// `image`'s spp until `budget` says stop, averaged.
-inline ProgressiveResult render_photons_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
-                                            const RenderSettings& image, const PassBudget& budget, std::uint64_t seed) {
-    PhotonMapSettings st;
-    st.photons = p.photons;
-    st.caustic_photons = 4 * p.photons;
-    st.knn = std::size_t(p.knn);
-    st.radius = float(p.radius);
-    st.gather_rays = p.gather_rays;
-    st.threads = image.threads;
-    const MisDirect<float> direct(scene, PathTracerSettings<float>{});
-    return render_passes(budget, [&](int pass) {
-        st.seed = seed + std::uint64_t(pass);
-        return render_photon_map(scene, accel, direct, image, st);
-    });
-}
+/// `image`'s spp until `budget` says stop, averaged. Defined in render_integrators.cpp.
+ProgressiveResult render_photons_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
+                                     const RenderSettings& image, const PassBudget& budget, std::uint64_t seed);
 
 }  // namespace glint

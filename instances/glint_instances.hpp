@@ -5,6 +5,9 @@
 // eight policy combinations and the construction of every direct-lighting policy
 // (tracer/named_render.hpp), the largest piece of code in every program that renders by name;
 // a program passes its accelerator as AnyAccel (any_accel_view, or accelerator_choices()).
+// The name tables whose entries construct things (direct_choices, sampler_choices,
+// accelerator_choices: the policies and the trees) are compiled here too, so that a program
+// listing their names for its command line does not compile every policy and tree again.
 // The Python module, always built without -march, shares them where the programs are built
 // without -march too (GLINT_NATIVE=OFF) and compiles its own otherwise.
 //
@@ -19,6 +22,12 @@
 namespace glint {
 
 extern template RenderResult render_named<float>(const Scene<float>&, const AnyAccel&, const NamedRender<float>&);
+extern template std::span<const Choice<DirectChoice<float> (*)(const Scene<float>&, const AnyAccel&, const PathTracerSettings<float>&,
+                                                               const RenderSettings&)>>
+direct_choices<float>();
+extern template std::span<const Choice<AcceleratorChoice (*)(std::span<const TriangleVertices<float>>)>>
+accelerator_choices<float>();
+extern template std::span<const Choice<SamplerChoice<float> (*)(int, int, std::uint64_t)>> sampler_choices<float>();
 extern template FirstHitImages render_first_hit_named<float>(const Scene<float>&, const AnyAccel&,
                                                                        const NamedRender<float>&);
 
