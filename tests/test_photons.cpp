@@ -503,6 +503,21 @@ TEST_CASE("surface area in a sphere: discs, half discs and quarter discs of a qu
         const double mc = 4 * r * r * double(in) / n, se = 4 * r * r * std::sqrt(0.25 / n);
         CHECK(std::abs(areas.area(0, x, r) - mc) < 4 * se);
     }
+    // disc_share: the area's share of the disc on a small group; 1 (the whole disc) on a group
+    // of more than max_group_triangles triangles, whose per-point sum would cost its size.
+    CHECK(areas.disc_share(0, V(0.5f, 0, 0), r) == doctest::Approx(0.5).epsilon(1e-6));
+    Scene<float> fine;
+    const auto fm = fine.add_material(Material<float>::lambertian(Rgb<float>(0.5f)));
+    const int n = 8;  // the unit square as 2 n^2 = 128 triangles, one group
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const float x0 = float(i) / n, z0 = float(j) / n, x1 = float(i + 1) / n, z1 = float(j + 1) / n;
+            fine.add_quad(V(x0, 0, z0), V(x1, 0, z0), V(x1, 0, z1), V(x0, 0, z1), fm);
+        }
+    REQUIRE(fine.triangles.size() > SurfaceAreas<float>::max_group_triangles);
+    const SurfaceAreas<float> fine_areas(std::span<const TriangleVertices<float>>(fine.triangles), 0.45f);
+    CHECK(fine_areas.area(0, V(0.5f, 0, 0), r) == doctest::Approx(disc / 2).epsilon(1e-6));  // the sum is still exact
+    CHECK(fine_areas.disc_share(0, V(0.5f, 0, 0), r) == 1.0);
 }
 
 TEST_CASE("SPPM statistics: the radius shrinks by (N + alpha M) / (N + M), tau scales with the area") {

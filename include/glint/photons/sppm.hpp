@@ -172,7 +172,7 @@ std::size_t sppm_photon_pass(const Scene<T>& s, const A& accel, const VisiblePoi
     // meaning (flux within pi R^2) whichever point a pass keeps.
     if (areas)
         for (std::size_t i = 0; i < points.size(); ++i) {
-            const double r = double(radii[i]), share = areas->area(points[i].triangle, points[i].x, r) / (pi<double> * r * r);
+            const double share = areas->disc_share(points[i].triangle, points[i].x, double(radii[i]));
             if (share > 0) phi[pixel_of[i]] /= share;
         }
     for (std::size_t p = 0; p < stats.size(); ++p) stats[p].update(m[p], phi[p], st.alpha);
