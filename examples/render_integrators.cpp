@@ -17,9 +17,8 @@
 
 namespace glint {
 
-/// Renders `scene` (traced through `accel`) with the VPL integrator at `image`'s size and
-/// threads, one camera ray through each pixel's centre; occluders (for spheres) are built
-/// from `mesh`.
+// Each function is documented where it is declared (vpl_cli.hpp, photon_cli.hpp).
+
 VplResult render_vpl_cli(const Scene<float>& scene, const AnyAccel& accel, std::span<const TriangleVertices<float>> mesh,
                          const VplCliOptions& v, RenderSettings image, VplSettings st) {
     const auto roulette = Roulette<float, 3>::classic();
@@ -38,8 +37,6 @@ VplResult render_vpl_cli(const Scene<float>& scene, const AnyAccel& accel, std::
     return render_vpl(scene, accel, roulette, SphereVisibilityKdTree<float>(set), image, st);
 }
 
-/// SPPM of `scene` (traced through `accel`) at `image`'s size and threads: passes until
-/// `budget` says stop.
 SppmResult render_sppm_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
                            const RenderSettings& image, const PassBudget& budget, std::uint64_t seed) {
     SppmSettings st;
@@ -50,8 +47,6 @@ SppmResult render_sppm_cli(const Scene<float>& scene, const AnyAccel& accel, con
     return render_sppm(scene, accel, MisDirect<float>(scene, PathTracerSettings<float>{}), image, st, budget);
 }
 
-/// Photon mapping of `scene` (traced through `accel`): passes of new maps (seed + pass) and
-/// `image`'s spp until `budget` says stop, averaged.
 ProgressiveResult render_photons_cli(const Scene<float>& scene, const AnyAccel& accel, const PhotonCliOptions& p,
                                      const RenderSettings& image, const PassBudget& budget, std::uint64_t seed) {
     PhotonMapSettings st;

@@ -8,8 +8,8 @@
 // along its mean axis, at most the node's bound f_max G_max per band, and V_rep the
 // representative's visibility. Eq. 5.4 takes f G at the representative (f_rep G_rep V_rep I_C);
 // the centroid's is right to first order in the lights' spread, and on bench_cuts' VPLs gives
-// 15-25% lower image error for the same cuts. A leaf's centroid is its light: leaves are exact. The cut
-// starts at the root; the node with the largest error estimate
+// 15-25% lower image error for the same cuts. A leaf's centroid is its light: leaves are
+// exact. The cut starts at the root; the node with the largest error estimate
 //   Error(C) = 0.5 f_max G_max I_C                          (CutError::bound, the default)
 //   Error(C) = max(0.5 f_max G_max I_C, f_C G_C V_rep I_C)  (CutError::fernandez, eq. 5.8-5.10)
 // is replaced by its children until every node's error is at most `threshold` times the

@@ -28,8 +28,9 @@
 // here the largest deviation either way (a sample far below the rest disagrees too); all-zero
 // R (every sample's representative occluded) agrees for t_interp > 0. The evaluation test of
 // eq. 5.18 (I_C G_rep < 2% of the total, no bound, no visibility) is replaced by the dense
-// cut's (its CutSettings::error estimate), so that the reconstruction never accepts a node the dense cut would
-// refine: it costs a shadow ray per refined node whose representative is new.
+// cut's (its CutSettings::error estimate), so that the reconstruction never accepts a node
+// the dense cut would refine: it costs a shadow ray per refined node whose representative is
+// new.
 //
 // Bias: interpolation blurs every feature narrower than the samples' spacing (shadow edges
 // above all, §5.3.2): its error is largest near them (tests/test_lights.cpp measures it).

@@ -4,10 +4,10 @@
 // no photons of the surface there, and the estimate is dark by the missing share: the
 // estimate assumes the surface locally flat and filling the disc, Jensen 2001, ch. 7). The
 // surface is a visible point's surface group (photons/surface_groups.hpp, Larsen 2004, ch. 8:
-// triangles joined across edges of small dihedral angle), and its area inside the sphere is the sum over its triangles of each
-// triangle's intersection with the disc the sphere cuts from the triangle's plane, computed
-// exactly (circle and polygon: the pieces of each edge inside the circle add triangle areas,
-// the pieces outside add circular sectors).
+// triangles joined across edges of small dihedral angle), and its area inside the sphere is
+// the sum over its triangles of each triangle's intersection with the disc the sphere cuts
+// from the triangle's plane, computed exactly (circle and polygon: the pieces of each edge
+// inside the circle add triangle areas, the pieces outside add circular sectors).
 #pragma once
 
 #include <algorithm>
