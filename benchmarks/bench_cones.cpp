@@ -40,7 +40,7 @@
 #include "tree_scenes.hpp"
 #include <glint/trees/traversal.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

@@ -72,7 +72,7 @@
 #include <glint/tracer/scenes.hpp>
 
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

@@ -38,7 +38,7 @@
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/vpl/integrator.hpp>
 #include "counted_visibility.hpp"
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

@@ -43,7 +43,7 @@
 #include <glint/trees/uniform_grid.hpp>
 
 #include "cell_leaves.hpp"
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 #include "tree_scenes.hpp"
 
 using namespace glint;

@@ -44,7 +44,7 @@
 #include "occluder_box.hpp"
 #include "tree_scenes.hpp"
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

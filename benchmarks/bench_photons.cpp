@@ -48,7 +48,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 #include "support/clock.hpp"
 
 using namespace glint;

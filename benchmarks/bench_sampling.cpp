@@ -30,7 +30,7 @@
 #include <glint/sampling/halton.hpp>
 #include <glint/sampling/permuted_radical_inverse.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 namespace {
 

@@ -65,7 +65,7 @@
 #include <glint/trees/mesh_bvh.hpp>
 #include <glint/trees/traversal.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 #include "support/embree_scene.hpp"
 #include "support/intersector_names.hpp"
 #include "support/user_meshes.hpp"

@@ -30,7 +30,7 @@
 #include <glint/vpl/integrator.hpp>
 #include "image_error.hpp"
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

@@ -22,7 +22,7 @@
 #include "../tests/intersection_cases.hpp"
 #include "support/intersector_names.hpp"
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 using namespace glint::testing;

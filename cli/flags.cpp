@@ -1,6 +1,7 @@
-// cli/flags.cpp: cli/flags.hpp's App on CLI11, the one translation unit that compiles CLI11.
+// cli/flags.cpp: cli/flags.hpp's App: the flags, the command line's parse and --help.
 #include "flags.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -8,54 +9,119 @@
 #include <filesystem>
 #include <utility>
 
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
 #include <glint/core/error.hpp>
 
 namespace glint::cli {
 
-Flag* Flag::group(const std::string& name) {
-    o_->group(name);
-    return this;
-}
-
-bool Flag::given() const { return o_->count() > 0; }
-
-App::App(const std::string& description) : app_(std::make_unique<CLI::App>(description)) {}
+App::App(const std::string& description) : description_(description) {}
 
 App::~App() = default;
 
-void App::version(const std::string& text) { app_->set_version_flag("--version", text); }
+void App::version(const std::string& text) { version_ = text; }
 
 Flag* App::value(const std::string& flag, std::function<std::string(const std::string&)> set, const std::string& help,
                  const std::string& type, const std::string& default_text, bool repeat) {
-    // A single flag keeps its last value (`--size 8 --size 16` reads 16); a repeated one hands
-    // each value to `set` in order.
-    const auto check = [flag](const std::string& error) {
-        if (!error.empty()) throw CLI::ValidationError(flag, error);
-    };
-    CLI::Option* o = nullptr;
-    if (repeat) {
-        o = app_->add_option_function<std::vector<std::string>>(
-            flag, [set = std::move(set), check](const std::vector<std::string>& values) {
-                for (const std::string& v : values) check(set(v));
-            }, help);
-        o->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)->allow_extra_args(false);
-    } else {
-        o = app_->add_option_function<std::string>(
-            flag, [set = std::move(set), check](const std::string& v) { check(set(v)); }, help);
-        o->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-    }
-    o->type_name(type);
-    if (!default_text.empty()) o->default_str(default_text);
-    flags_.push_back(std::make_unique<Flag>(o));
+    auto f = std::make_unique<Flag>();
+    f->name_ = flag, f->help_ = help, f->type_ = type, f->default_ = default_text;
+    f->set_ = std::move(set);
+    f->repeat_ = repeat;
+    flags_.push_back(std::move(f));
     return flags_.back().get();
 }
 
 Flag* App::flag(const std::string& flag, std::function<void()> set, const std::string& help) {
-    flags_.push_back(std::make_unique<Flag>(app_->add_flag_callback(flag, std::move(set), help)));
+    auto f = std::make_unique<Flag>();
+    f->name_ = flag, f->help_ = help;
+    f->set_flag_ = std::move(set);
+    flags_.push_back(std::move(f));
     return flags_.back().get();
+}
+
+Flag* App::find(std::string_view name) {
+    for (const auto& f : flags_)
+        if (f->name_ == name) return f.get();
+    return nullptr;
+}
+
+namespace {
+/// One --help line: the flag, its type and default in a column of 30, then its help, whose
+/// further lines are indented to that column.
+void help_line(std::string& out, const std::string& left, const std::string& help) {
+    std::string line = "  " + left;
+    line += line.size() < 30 ? std::string(30 - line.size(), ' ') : "\n" + std::string(30, ' ');
+    for (const char c : help) {
+        line += c;
+        if (c == '\n') line += std::string(30, ' ');
+    }
+    out += line + "\n";
+}
+}  // namespace
+
+std::string App::help(const std::string& program) const {
+    std::string out = description_ + "\nUsage: " + program + " [OPTIONS]\n\nOptions:\n";
+    help_line(out, "-h,--help", "Print this help message and exit");
+    if (!version_.empty()) help_line(out, "--version", "Display program version information and exit");
+    std::vector<std::string> groups{""};
+    for (const auto& f : flags_)
+        if (std::find(groups.begin(), groups.end(), f->group_) == groups.end()) groups.push_back(f->group_);
+    for (const std::string& g : groups) {
+        if (!g.empty()) out += "\n\n" + g + ":\n";
+        for (const auto& f : flags_) {
+            if (f->group_ != g) continue;
+            std::string left = f->name_;
+            if (f->set_) left += " " + f->type_ + (f->default_.empty() ? "" : "=" + f->default_);
+            help_line(out, left, f->help_);
+        }
+    }
+    return out;
+}
+
+bool App::parse(int argc, const char* const* argv) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string_view a = argv[i];
+        if (a == "-h" || a == "--help") {
+            std::fputs(help(argv[0]).c_str(), stdout);
+            return false;
+        }
+        if (a == "--version" && !version_.empty()) {
+            std::printf("%s\n", version_.c_str());
+            return false;
+        }
+    }
+    for (int i = 1; i < argc; ++i) {  // every value stored first, then handed over in flag order
+        const std::string_view a = argv[i];
+        const auto eq = a.find('=');
+        Flag* f = a.starts_with("--") ? find(a.substr(0, eq)) : nullptr;
+        if (f == nullptr)
+            throw Error("unexpected argument '" + std::string(a) + (a.starts_with("--") ? "': no such flag" : "'") + " (see --help)");
+        if (!f->set_) {
+            if (eq != std::string_view::npos) throw Error(f->name_ + " takes no value, got '" + std::string(a) + "'");
+            f->values_.assign(1, "");
+            continue;
+        }
+        std::string v;
+        if (eq != std::string_view::npos) {
+            v = a.substr(eq + 1);
+        } else if (i + 1 < argc && !std::string_view(argv[i + 1]).starts_with("--")) {
+            v = argv[++i];
+        } else {
+            throw Error(f->name_ + ": expects a value (" + f->type_ + ") (see --help)");
+        }
+        if (!f->repeat_) f->values_.clear();
+        f->values_.push_back(std::move(v));
+    }
+    for (const auto& f : flags_) {
+        for (const std::string& v : f->values_) {
+            if (!f->set_) {
+                f->set_flag_();
+                continue;
+            }
+            if (const std::string error = f->set_(v); !error.empty()) throw Error(f->name_ + ": " + error + " (see --help)");
+        }
+    }
+    return true;
 }
 
 void check_writable(const std::string& path) {
@@ -88,30 +154,6 @@ Flag* folder(App& app, const std::string& flag, std::string& target, const std::
         return std::string();
     };
     return app.value(flag, set, help, "DIR", target);
-}
-
-bool App::parse(int argc, const char* const* argv) {
-    for (int i = 1; i < argc; ++i) {  // --flag=value for a flag that takes none: an error, not a value
-        const std::string_view a = argv[i];
-        const auto eq = a.find('=');
-        if (!a.starts_with("--") || eq == std::string_view::npos) continue;
-        const CLI::Option* o = app_->get_option_no_throw(std::string(a.substr(0, eq)));
-        if (o != nullptr && o->get_expected_max() == 0)
-            throw Error(std::string(a.substr(0, eq)) + " takes no value, got '" + std::string(a) + "'");
-    }
-    try {
-        app_->parse(argc, argv);
-        return true;
-    } catch (const CLI::CallForHelp&) {
-        std::fputs(app_->help().c_str(), stdout);
-    } catch (const CLI::CallForAllHelp&) {
-        std::fputs(app_->help("", CLI::AppFormatMode::All).c_str(), stdout);
-    } catch (const CLI::CallForVersion& v) {
-        std::printf("%s\n", v.what());
-    } catch (const CLI::ParseError& e) {
-        throw Error(std::string(e.what()) + " (see --help)");
-    }
-    return false;
 }
 
 void parse_or_exit(App& app, int argc, const char* const* argv, const std::string& program) {

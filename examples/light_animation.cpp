@@ -28,7 +28,7 @@
 #include <glint/vpl/light_animation.hpp>
 #include <glint/vpl/scenes.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

@@ -32,7 +32,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 using Accel = MeshBvh<MollerTrumbore<float>, 8>;

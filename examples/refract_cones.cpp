@@ -33,7 +33,7 @@
 #include <glint/intersection/ivm.hpp>
 #include "tree_scenes.hpp"
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 
 using namespace glint;
 

@@ -45,7 +45,7 @@
 #include <glint/tracer/scenes.hpp>
 #include <glint/tracer/smooth_normals.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 #include "photon_cli.hpp"
 #include "vpl_cli.hpp"
 

@@ -3,7 +3,7 @@
 # Runs apt-get only when something is missing; needs root (or sudo) for that.
 set -euo pipefail
 packages=(g++ cmake make libglm-dev doctest-dev libbenchmark-dev libembree-dev libopenexr-dev
-          libtinyobjloader-dev libtinygltf-dev libstb-dev libcli11-dev gnuplot-nox clang libclang-rt-14-dev pkg-config
+          libtinyobjloader-dev libtinygltf-dev libstb-dev gnuplot-nox clang libclang-rt-14-dev pkg-config
           doxygen pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib openexr)
 missing=()
 for p in "${packages[@]}"; do

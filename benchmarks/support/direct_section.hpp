@@ -16,7 +16,7 @@
 
 #include <glint/lights/scenes.hpp>
 
-#include "flags.hpp"  // cli/: the command-line conventions on CLI11
+#include "flags.hpp"  // cli/: the command-line conventions
 #include "support/direct_measure.hpp"
 
 namespace glint::bench {
