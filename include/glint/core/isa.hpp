@@ -6,8 +6,8 @@
 // vectors (the wide BVH's traversal with its leaf tests) are therefore compiled twice: for
 // the flags given, and for AVX2 through GCC's and Clang's `target` attribute (no compiler
 // flag needed). A tree picks one when it is built (best_isa()) and branches on it
-// once per query, never per node. With -march flags that already include AVX2 both are the
-// same code.
+// once per query, never per node. A build with -march flags that include AVX2 compiles only
+// those kernels: the others would never be chosen.
 #pragma once
 
 #include <optional>
@@ -91,7 +91,12 @@ inline Isa best_isa() {
 #endif
 }
 
-/// Whether this build and this CPU can run `isa`'s kernels.
-inline bool isa_supported(Isa isa) { return isa <= best_isa() || isa <= compiled_isa; }
+/// Whether this build and this CPU can run `isa`'s kernels. A build whose flags give AVX2
+/// compiles those kernels only (the CPU it is built for runs them); a build without compiles
+/// the portable and SSE2 kernels and, through the `target` attribute, AVX2's for CPUs with it.
+inline bool isa_supported(Isa isa) {
+    if constexpr (compiled_isa == Isa::avx2) return isa == Isa::avx2;
+    return isa <= best_isa() || isa <= compiled_isa;
+}
 
 }  // namespace glint

@@ -142,8 +142,7 @@ public:
         } else
 #endif
         {
-            if (isa_ == compiled_isa) [[likely]] return query(IsaTag<compiled_isa>{});
-            return dispatch_other(query);
+            return query(IsaTag<compiled_isa>{});  // the flags' kernels are the only ones compiled
         }
     }
 
@@ -161,8 +160,8 @@ private:
     [[gnu::noinline, gnu::flatten]] GLINT_TARGET_AVX2 bool dispatch_avx2(Query& query) const {
         return query(IsaTag<Isa::avx2>{});
     }
-    /// The kernels other than AVX2 where the flags do not give AVX2, and those below what the
-    /// flags give where they do (for tests and comparisons).
+    /// The kernels other than AVX2 where the flags do not give AVX2 (SSE2, and the portable
+    /// loops for tests and comparisons).
     template <class Query>
     [[gnu::noinline, gnu::flatten]] bool dispatch_other(Query& query) const {
 #if GLINT_X86
