@@ -7,9 +7,8 @@
 // that of a light with the representative's profile at the node's power-weighted centroid
 // along its mean axis, at most the node's bound f_max G_max per band, and V_rep the
 // representative's visibility. Eq. 5.4 takes f G at the representative (f_rep G_rep V_rep I_C);
-// the centroid's is right to first order in the lights' spread, and on bench_cuts' VPLs gives
-// 15-25% lower image error for the same cuts. A leaf's centroid is its light: leaves are
-// exact. The cut starts at the root; the node with the largest error estimate
+// the centroid's is right to first order in the lights' spread (lower image error for the
+// same cuts: docs/lights.md). A leaf's centroid is its light: leaves are exact. The cut starts at the root; the node with the largest error estimate
 //   Error(C) = 0.5 f_max G_max I_C                          (CutError::bound, the default)
 //   Error(C) = max(0.5 f_max G_max I_C, f_C G_C V_rep I_C)  (CutError::fernandez, eq. 5.8-5.10)
 // is replaced by its children until every node's error is at most `threshold` times the
@@ -36,8 +35,8 @@
 // at most twice the threshold times the running total (§5.1.4), under either estimate.
 // The default refines on the bound alone, as Walter et al. 2005 do (their threshold is on
 // f_max G_max I_C; the 0.5 keeps the seed's scale): the seed's second term refines nodes whose
-// representative is bright, which their bound already ranks, and on the bunny's 10^4 VPLs
-// (bench_cuts) the bound alone needs ~15% fewer nodes at the same image error.
+// representative is bright, which their bound already ranks (fewer nodes at the same image
+// error: docs/lights.md).
 #pragma once
 
 #include <algorithm>

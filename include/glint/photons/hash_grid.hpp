@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include <glint/core/buckets.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 
@@ -45,12 +46,8 @@ public:
         std::size_t buckets = 1;
         while (buckets < 2 * cells) buckets <<= 1;
         mask_ = buckets - 1;
-        start_.assign(buckets + 1, 0);
-        for_each_listing([&](std::size_t, std::uint64_t h) { ++start_[h + 1]; });
-        for (std::size_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
-        index_.resize(start_.back());
-        std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-        for_each_listing([&](std::size_t i, std::uint64_t h) { index_[fill[h]++] = std::uint32_t(i); });
+        fill_buckets(buckets, [&](auto emit) { for_each_listing([&](std::size_t i, std::uint64_t h) { emit(i, h); }); }, start_,
+                     index_);
     }
 
     /// Calls visit(i, d2) for every sphere i that holds point p (d2: squared distance to its

@@ -16,6 +16,7 @@
 #include <span>
 #include <vector>
 
+#include <glint/core/buckets.hpp>
 #include <glint/core/math.hpp>
 #include <glint/intersection/triangle.hpp>
 #include <glint/photons/surface_groups.hpp>
@@ -83,12 +84,12 @@ public:
     SurfaceAreas(std::span<const TriangleVertices<T>> triangles, T alpha) : triangles_(triangles) {
         const SurfaceGroups g = surface_groups(triangles, alpha);
         group_of_ = g.group_of;
-        start_.assign(g.count + 1, 0);
-        for (const std::uint32_t k : group_of_) ++start_[k + 1];
-        for (std::size_t k = 0; k < g.count; ++k) start_[k + 1] += start_[k];
-        members_.resize(triangles.size());
-        std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-        for (std::size_t i = 0; i < triangles.size(); ++i) members_[fill[group_of_[i]]++] = std::uint32_t(i);
+        fill_buckets(
+            g.count,
+            [&](auto emit) {
+                for (std::size_t i = 0; i < group_of_.size(); ++i) emit(i, group_of_[i]);
+            },
+            start_, members_);
     }
 
     /// Groups of more triangles than this (a curved, finely tessellated surface) count as

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/buckets.hpp>
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/ray.hpp>
@@ -185,12 +186,12 @@ private:
                             throw Error("UniformGrid: more than 2^32 - 1 references");
                     }
         }
-        cell_begin_.assign(cells + 1, 0);
-        for (const auto& ref : refs) ++cell_begin_[ref.first + 1];
-        for (std::size_t c = 0; c < cells; ++c) cell_begin_[c + 1] += cell_begin_[c];
-        prims_.resize(refs.size());
-        std::vector<std::uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
-        for (const auto& ref : refs) prims_[fill[ref.first]++] = ref.second;  // each cell in primitive order
+        fill_buckets(  // each cell in primitive order
+            cells,
+            [&](auto emit) {
+                for (const auto& ref : refs) emit(ref.second, ref.first);
+            },
+            cell_begin_, prims_);
     }
 
     std::vector<std::uint32_t> cell_begin_, prims_;
