@@ -7,7 +7,7 @@
 //
 // Traversal: children whose box the ray enters (wide_box_test.hpp) are visited nearest
 // first; the others go on a stack with their entry distance and are dropped when popped
-// beyond the closest hit.
+// beyond the closest hit. Any-hit queries sort nothing and test a node's leaves first.
 //
 // Thread safety: traversal is const and keeps its state on the caller's stack; any number
 // of threads may query one tree at once.
@@ -173,6 +173,7 @@ private:
     /// intersect() for a valid ray, with the box test for intervals starting below 0 or not.
     template <bool Any, Isa I, bool Signed, class Leaf, class Hook>
     [[gnu::always_inline]] bool traverse(Ray<float>& ray, Leaf& leaf, Hook& node_hook) const {
+        if constexpr (Any) return traverse_any<I, Signed>(ray, leaf, node_hook);
         const detail::WideBoxTest<N, I, Signed> box(ray);
         struct Entry {
             std::uint32_t ref;
@@ -230,6 +231,36 @@ private:
                 --sp;
             } while (!Any && !(stack[sp].t <= detail::wide_exit_bound<Signed>(ray.tmax)));
             ref = stack[sp].ref;
+        }
+    }
+
+    /// Any hit: no child is sorted by distance (the interval never shrinks, so the order only
+    /// decides which hit ends the query, and sorting costs every node). At a node, the leaves
+    /// entered are tested at once, in the order they are stored, before any inner child is
+    /// visited: each is a chance to end the query that costs no further node visit. The
+    /// inner children go on the stack; the last pushed is visited next.
+    template <Isa I, bool Signed, class Leaf, class Hook>
+    [[gnu::always_inline]] bool traverse_any(const Ray<float>& ray, Leaf& leaf, Hook& node_hook) const {
+        const detail::WideBoxTest<N, I, Signed> box(ray);
+        std::uint32_t stack[max_stack];
+        int sp = 0;
+        std::uint32_t ref = 0;  // the root: an inner node (a tree of one leaf has a root node too)
+        for (;;) {
+            alignas(32) float tn[N];
+            const Node& n = nodes_[ref];
+            node_hook();
+            for (unsigned mask = box.test(n, ray.tmin, ray.tmax, tn); mask; mask &= mask - 1) {
+                const std::uint32_t c = n.child[std::countr_zero(mask)];
+                if (!detail::wide_is_leaf(c)) {
+                    stack[sp++] = c;
+                    prefetch(c);
+                } else if (leaf(detail::wide_leaf_first(c), detail::wide_leaf_count(c))) {
+                    return true;
+                }
+            }
+            assert(sp <= max_stack);
+            if (sp == 0) return false;
+            ref = stack[--sp];
         }
     }
 
