@@ -173,7 +173,16 @@ private:
     /// intersect() for a valid ray, with the box test for intervals starting below 0 or not.
     template <bool Any, Isa I, bool Signed, class Leaf, class Hook>
     [[gnu::always_inline]] bool traverse(Ray<float>& ray, Leaf& leaf, Hook& node_hook) const {
-        if constexpr (Any) return traverse_any<I, Signed>(ray, leaf, node_hook);
+        if constexpr (Any)
+            return traverse_any<I, Signed>(ray, leaf, node_hook);
+        else
+            return traverse_closest<I, Signed>(ray, leaf, node_hook);
+    }
+
+    /// Closest hit: children nearest first; a leaf's hit lowers ray.tmax, which culls the
+    /// stacked children beyond it.
+    template <Isa I, bool Signed, class Leaf, class Hook>
+    [[gnu::always_inline]] bool traverse_closest(Ray<float>& ray, Leaf& leaf, Hook& node_hook) const {
         const detail::WideBoxTest<N, I, Signed> box(ray);
         struct Entry {
             std::uint32_t ref;
@@ -224,12 +233,11 @@ private:
                 }
             } else if (leaf(detail::wide_leaf_first(ref), detail::wide_leaf_count(ref))) {
                 found = true;
-                if constexpr (Any) return true;
             }
             do {
                 if (sp == 0) return found;
                 --sp;
-            } while (!Any && !(stack[sp].t <= detail::wide_exit_bound<Signed>(ray.tmax)));
+            } while (!(stack[sp].t <= detail::wide_exit_bound<Signed>(ray.tmax)));
             ref = stack[sp].ref;
         }
     }
