@@ -5,7 +5,7 @@
 //   const glint::MeshBvh<> bvh(mesh, {.threads = 2});  // Möller-Trumbore, 8 wide: the fastest
 //   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
 //   if (bvh.closest_hit(ray, hit)) n = mesh.geometric_normal(hit.id);  // core/offset.hpp
-//   bvh.closest_hit(rays, hits);  // spans of rays and hits: packets of 8 where coherent (wide_packet.hpp)
+//   bvh.closest_hit(rays, hits);  // spans of rays and hits: packets of 16 where coherent (wide_packet.hpp)
 //
 // Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
 // intersector's batch kernel through the leaf callable, a LeafQuery, WideBvh::intersect takes), laid out
@@ -123,7 +123,7 @@ public:
 
     /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it
     /// (the same t, u, v and id); returns how many hits were updated. Consecutive rays go in
-    /// packets of 8 sharing the node visits where they are coherent (trees/wide_packet.hpp),
+    /// packets of 16 sharing the node visits where they are coherent (trees/wide_packet.hpp),
     /// as single rays otherwise. Throws glint::Error naming both sizes when they differ.
     std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const {
         return closest_stream(rays, hits, uncounted, [](unsigned) {});
@@ -301,6 +301,7 @@ private:
     [[gnu::always_inline]] unsigned packet_leaves(IsaTag<I>, const Ray<float>* r, detail::PacketLeafRays& p,
                                                   const detail::PacketShape& shape, Wrap& wrap, Hook& hook,
                                                   detail::PacketEntry* stack) const {
+        static_assert(detail::packet_leaf_lanes == detail::packet_lanes);
         const detail::PacketRays packet(r, shape);
         const detail::PacketBoxTest<I> box(packet);
         const RecordView<P> view = leaves_.store().view();

@@ -9,8 +9,9 @@
 // single-ray leaf test keeps (the nearest lane of each batch, a later batch only when
 // strictly nearer). Records that can never hit (the padding of a leaf's last batch, and
 // degenerate triangles: zero edges) are skipped. Testing a record against 8 rays costs what
-// testing a batch of 8 records against one ray costs, so a leaf with more live records than
-// entering rays (per batch) is tested lane by lane with the single-ray batches instead.
+// testing a batch of 8 records against one ray costs (16 rays: two vectors of 8, or one
+// AVX-512 vector), so a leaf with more live records than entering rays (per batch) is
+// tested lane by lane with the single-ray batches instead.
 //
 // It applies to policies whose per-ray data is the plain ray, without per-ray field choice,
 // in the identity frame (Möller-Trumbore, the default of MeshBvh); others test each ray
@@ -31,7 +32,7 @@ namespace glint {
 namespace detail {
 
 /// Lanes of a packet leaf test (the rays of one packet).
-inline constexpr int packet_leaf_lanes = 8;
+inline constexpr int packet_leaf_lanes = 16;
 
 /// Whether P's leaves can be tested by packet_leaf(): float records, plain ray data, no
 /// per-ray choice of fields, identity frame.

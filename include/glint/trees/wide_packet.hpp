@@ -1,9 +1,9 @@
-// glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 8
+// glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 16
 // rays share each node visit (Wald, Slusallek, Benthin, Wagner 2001's ray packets: coherent
 // rays traced together, a node entered when any ray of the packet enters it), after an
 // interval test of the whole packet (Boulos, Wald, Shirley, Parker 2006).
 //
-// The rays sit in the 8 lanes of a vector; a node's children are tested one at a time
+// The rays sit in the lanes of vectors; a node's children are tested one at a time
 // against all lanes (each child's 6 planes broadcast), which gives each child directly the
 // lanes that enter it: the child goes on the stack with that lane mask and the lanes' entry
 // distances, and is visited with only those lanes. Children are visited nearest first by the
@@ -41,8 +41,9 @@ namespace glint {
 
 namespace detail {
 
-/// Rays per packet: one AVX2 vector of floats (16, two vectors, measured no faster).
-inline constexpr int packet_lanes = 8;
+/// Rays per packet (as Embree's 16-ray packets): one AVX-512 vector of floats in the lane
+/// box test where the flags give AVX-512, two AVX2 vectors otherwise.
+inline constexpr int packet_lanes = 16;
 /// Fewer valid rays than this in a packet: single rays are cheaper.
 inline constexpr int packet_min_rays = 2;
 
@@ -175,7 +176,8 @@ struct PacketBoxTest {
 };
 
 #if GLINT_X86
-/// The same with AVX2: one child's planes broadcast against the lanes, 8 at a time.
+/// The same with AVX2: one child's planes broadcast against the lanes, 8 at a time (all 16
+/// in one AVX-512 vector where the flags give AVX-512).
 template <>
 struct PacketBoxTest<Isa::avx2> {
     static constexpr int H = packet_lanes / 8;  // vectors of 8 lanes
@@ -195,6 +197,21 @@ struct PacketBoxTest<Isa::avx2> {
     }
     template <int N>
     GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
+#if defined(__AVX512F__)
+        if constexpr (H == 2) {
+            __m512 t0 = _mm512_loadu_ps(p.tmin), t1 = _mm512_loadu_ps(tmax);
+            for (int a = 0; a < 3; ++a) {
+                const __m512 o16 = _mm512_loadu_ps(p.o[a]), inv16 = _mm512_loadu_ps(p.inv[a]);
+                const __m512 bn = _mm512_set1_ps(n.bounds[near[a]][i]), bf = _mm512_set1_ps(n.bounds[far[a]][i]);
+                // maskz: GCC 12's _mm512_max_ps / min_ps warn of their undefined pass-through
+                t0 = _mm512_maskz_max_ps(0xffff, _mm512_mul_ps(_mm512_sub_ps(bn, o16), inv16), t0);
+                t1 = _mm512_maskz_min_ps(0xffff, _mm512_mul_ps(_mm512_sub_ps(bf, o16), inv16), t1);
+            }
+            _mm512_storeu_ps(tn, t0);
+            t1 = _mm512_mul_ps(t1, _mm512_set1_ps(wide_exit_scale));
+            return unsigned(_mm512_cmp_ps_mask(t0, t1, _CMP_LE_OQ));
+        }
+#endif
         unsigned mask = 0;
         for (int h = 0; h < H; ++h) {
             __m256 t0 = tmin[h], t1 = _mm256_load_ps(tmax + 8 * h);
