@@ -45,6 +45,20 @@ struct MollerTrumbore {
 
     static RayData prepare(const Ray<T>& r) { return RayData::from(r); }  ///< Copies the ray's fields; no work.
 
+    /// Which of the batch_width records of one block (`block`: its field 0 of record 0, the
+    /// SoaView layout) can hit: those with a non-zero edge (degenerate triangles and a
+    /// leaf's padding never do). A packet's leaf test (trees/packet_leaf.hpp) skips the rest.
+    static unsigned live_records(const T* block) {
+        constexpr int W = int(batch_width);
+        unsigned live = 0;
+        for (int i = 0; i < W; ++i) {
+            bool zero = true;
+            for (int f = 3; f < 9; ++f) zero &= block[f * W + i] == T(0);  // e1, e2
+            live |= unsigned(!zero) << i;
+        }
+        return live;
+    }
+
     /// Cramer's rule; bitwise &, not &&, so that the batch loop has no branches and
     /// vectorizes.
     [[gnu::always_inline]] bool test(const RayData& r, T& t, T& u, T& v) const {

@@ -5,7 +5,7 @@
 //   const glint::MeshBvh<> bvh(mesh, {.threads = 2});  // Möller-Trumbore, 8 wide: the fastest
 //   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
 //   if (bvh.closest_hit(ray, hit)) n = mesh.geometric_normal(hit.id);  // core/offset.hpp
-//   bvh.closest_hit(rays, hits);  // spans of rays and hits: packets of 8 where coherent (wide_packet.hpp)
+//   bvh.closest_hit(rays, hits);  // spans of rays and hits: packets of 16 where coherent (wide_packet.hpp)
 //
 // Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
 // intersector's batch kernel through the leaf callable, a LeafQuery, WideBvh::intersect takes), laid out
@@ -38,6 +38,7 @@
 #include <glint/intersection/triangle_leaves.hpp>
 #include <glint/trees/bvh_builder.hpp>
 #include <glint/trees/tree.hpp>
+#include <glint/trees/packet_leaf.hpp>
 #include <glint/trees/wide_bvh.hpp>
 #include <glint/trees/wide_packet.hpp>
 
@@ -122,7 +123,7 @@ public:
 
     /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it
     /// (the same t, u, v and id); returns how many hits were updated. Consecutive rays go in
-    /// packets of 8 sharing the node visits where they are coherent (trees/wide_packet.hpp),
+    /// packets of 16 sharing the node visits where they are coherent (trees/wide_packet.hpp),
     /// as single rays otherwise. Throws glint::Error naming both sizes when they differ.
     std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const {
         return closest_stream(rays, hits, uncounted, [](unsigned) {});
@@ -232,11 +233,27 @@ private:
     [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
                                               Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
         Ray<float> r[detail::packet_lanes];
-        for (int k = 0; k < n; ++k) r[k] = ray_before(rays[k], hits[k]);
+        for (int k = 0; k < n; ++k) {  // ray_before, field by field (measured faster than a copy)
+            r[k].origin = rays[k].origin, r[k].direction = rays[k].direction, r[k].tmin = rays[k].tmin;
+            r[k].tmax = hits[k].t < rays[k].tmax ? hits[k].t : rays[k].tmax;
+        }
         const detail::PacketShape shape = detail::packet_shape(r, n);
         int found = 0;
         if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
             for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, [&] { hook(1u); });
+            return found;
+        }
+        if constexpr (detail::packet_leaf_supported<P>) {
+            alignas(32) detail::PacketLeafRays p{};
+            for (unsigned m = shape.lanes; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                p.set(k, r[k], r[k].tmax, hits[k].t);
+            }
+            const unsigned hit = packet_leaves<false>(kernels, r, p, shape, wrap, hook, stack);
+            for (unsigned m = hit; m; m &= m - 1, ++found) {
+                const int k = std::countr_zero(m);
+                hits[k].t = p.t[k], hits[k].u = p.u[k], hits[k].v = p.v[k], hits[k].id = leaves_.id(p.id[k]);
+            }
             return found;
         }
         StoreHit<float> h[detail::packet_lanes];
@@ -258,6 +275,16 @@ private:
             for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, [&] { hook(1u); });
             return found;
         }
+        if constexpr (detail::packet_leaf_supported<P>) {
+            alignas(32) detail::PacketLeafRays p{};
+            for (unsigned m = shape.lanes; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                p.set(k, rays[k], rays[k].tmax, infinity<float>);
+            }
+            const unsigned hit = packet_leaves<true>(kernels, rays, p, shape, wrap, hook, stack);
+            for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
+            return found;
+        }
         Ray<float> r[detail::packet_lanes];
         StoreHit<float> h[detail::packet_lanes];
         RayDataOf<P> world[detail::packet_lanes];
@@ -266,20 +293,52 @@ private:
         for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
         return found;
     }
-    /// The packet traversal of a coherent packet (closest or any hit) over its prepared rays:
-    /// each lane's leaf test is the single ray's LeafQuery on r[k], world[k], h[k]; returns
-    /// the mask of lanes that found a hit.
+    /// The packet traversal of a coherent packet (closest or any hit) with leaves tested by
+    /// the whole packet (trees/packet_leaf.hpp; P's ray data is the plain ray, so `p` holds
+    /// the rays r with their hit bounds); returns the mask of lanes that found a hit, whose
+    /// hit is in p (p.id[k]: a record).
     template <bool Any, Isa I, class Wrap, class Hook>
-    [[gnu::always_inline]] unsigned traverse_packet(IsaTag<I>, Ray<float>* r, StoreHit<float>* h, const RayDataOf<P>* world,
-                                                    const detail::PacketShape& shape, Wrap& wrap, Hook& hook,
-                                                    detail::PacketEntry* stack) const {
-        auto leaf = [&](int k, std::uint32_t first, std::uint32_t count) __attribute__((always_inline)) {
-            LeafQuery<P, Any> q(leaves_, r[k], world[k], h[k]);
-            return wrap(q)(first, count);
-        };
+    [[gnu::always_inline]] unsigned packet_leaves(IsaTag<I>, const Ray<float>* r, detail::PacketLeafRays& p,
+                                                  const detail::PacketShape& shape, Wrap& wrap, Hook& hook,
+                                                  detail::PacketEntry* stack) const {
+        static_assert(detail::packet_leaf_lanes == detail::packet_lanes);
         const detail::PacketRays packet(r, shape);
         const detail::PacketBoxTest<I> box(packet);
-        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, r, shape.lanes, leaf, hook, stack);
+        const RecordView<P> view = leaves_.store().view();
+        auto leaf = [&](unsigned lanes, std::uint32_t first, std::uint32_t count, float* tmax)
+                        __attribute__((always_inline)) {
+            auto none = [](std::uint32_t, std::uint32_t) { return false; };
+            for (unsigned m = lanes; m; m &= m - 1) wrap(none)(first, count);  // counts each lane's leaf
+            const unsigned hit = detail::packet_leaf<Any, P>(view, first, count, lanes, p);
+            if constexpr (!Any)
+                for (unsigned m = hit; m; m &= m - 1) tmax[std::countr_zero(m)] = p.t[std::countr_zero(m)];
+            return hit;
+        };
+        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, p.tmax, shape.lanes, leaf, hook, stack);
+    }
+    /// The same for other policies: each lane's leaf test is the single ray's LeafQuery on
+    /// r[k], world[k], h[k].
+    template <bool Any, Isa I, class Wrap, class Hook>
+    [[gnu::always_inline]] unsigned traverse_packet(IsaTag<I>, Ray<float>* r, StoreHit<float>* h,
+                                                    const RayDataOf<P>* world, const detail::PacketShape& shape,
+                                                    Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
+        const detail::PacketRays packet(r, shape);
+        const detail::PacketBoxTest<I> box(packet);
+        auto leaf = [&](unsigned lanes, std::uint32_t first, std::uint32_t count, float* tmax)
+                        __attribute__((always_inline)) {
+            unsigned hit = 0;
+            for (unsigned m = lanes; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                LeafQuery<P, Any> q(leaves_, r[k], world[k], h[k]);
+                if (!wrap(q)(first, count)) continue;
+                hit |= 1u << k;
+                if constexpr (!Any) tmax[k] = r[k].tmax;
+            }
+            return hit;
+        };
+        alignas(32) float tmax[detail::packet_lanes];
+        for (int k = 0; k < detail::packet_lanes; ++k) tmax[k] = r[k].tmax;
+        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, tmax, shape.lanes, leaf, hook, stack);
     }
     /// Counts a packet's node visit and its ray-node tests into `c`.
     static auto packet_counting(WideBvhCounters& c) {

@@ -1,16 +1,17 @@
-// glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 8
+// glint/trees/wide_packet.hpp: packet traversal of the wide BVH (wide_bvh.hpp): up to 16
 // rays share each node visit (Wald, Slusallek, Benthin, Wagner 2001's ray packets: coherent
 // rays traced together, a node entered when any ray of the packet enters it), after an
 // interval test of the whole packet (Boulos, Wald, Shirley, Parker 2006).
 //
-// The rays sit in the 8 lanes of a vector; a node's children are tested one at a time
+// The rays sit in the lanes of vectors; a node's children are tested one at a time
 // against all lanes (each child's 6 planes broadcast), which gives each child directly the
 // lanes that enter it: the child goes on the stack with that lane mask and the lanes' entry
 // distances, and is visited with only those lanes. Children are visited nearest first by the
 // entry distance of their lowest lane. A popped entry keeps only the lanes whose entry
 // distance is still within their interval (closest hit) or which have not found a hit yet
-// (any hit). Leaves are tested per lane with the caller's leaf callable `leaf(k, first,
-// count)` (ray k of the packet; closest hit lowers that ray's tmax).
+// (any hit). Leaves go to the caller's leaf callable `leaf(lanes, first, count, tmax)`
+// with the lanes that enter them (trees/packet_leaf.hpp tests them all at once; closest hit
+// lowers the lanes' tmax).
 //
 // Each lane computes the very floats of the single-ray box test (wide_box_test.hpp: Ize
 // 2013's enlarged exit distance), so a lane never misses a box its single ray would enter;
@@ -40,8 +41,9 @@ namespace glint {
 
 namespace detail {
 
-/// Rays per packet (lanes of an AVX2 vector of floats).
-inline constexpr int packet_lanes = 8;
+/// Rays per packet (as Embree's 16-ray packets): one AVX-512 vector of floats in the lane
+/// box test where the flags give AVX-512, two AVX2 vectors otherwise.
+inline constexpr int packet_lanes = 16;
 /// Fewer valid rays than this in a packet: single rays are cheaper.
 inline constexpr int packet_min_rays = 2;
 
@@ -174,34 +176,56 @@ struct PacketBoxTest {
 };
 
 #if GLINT_X86
-/// The same with AVX2: one child's planes broadcast against the 8 lanes.
+/// The same with AVX2: one child's planes broadcast against the lanes, 8 at a time (all 16
+/// in one AVX-512 vector where the flags give AVX-512).
 template <>
 struct PacketBoxTest<Isa::avx2> {
-    __m256 o[3], inv[3], tmin;
+    static constexpr int H = packet_lanes / 8;  // vectors of 8 lanes
+    __m256 o[H][3], inv[H][3], tmin[H];
     int near[3], far[3];
     const PacketRays& p;  // the caller's: outlives the test
 
     GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& rays) : p(rays) {
-        for (int a = 0; a < 3; ++a) {
-            o[a] = _mm256_load_ps(p.o[a]);
-            inv[a] = _mm256_load_ps(p.inv[a]);
-            near[a] = p.near[a];
-            far[a] = p.far[a];
+        for (int h = 0; h < H; ++h) {
+            for (int a = 0; a < 3; ++a) {
+                o[h][a] = _mm256_load_ps(p.o[a] + 8 * h);
+                inv[h][a] = _mm256_load_ps(p.inv[a] + 8 * h);
+            }
+            tmin[h] = _mm256_load_ps(p.tmin + 8 * h);
         }
-        tmin = _mm256_load_ps(p.tmin);
+        for (int a = 0; a < 3; ++a) near[a] = p.near[a], far[a] = p.far[a];
     }
     template <int N>
     GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
-        __m256 t0 = tmin, t1 = _mm256_load_ps(tmax);
-        for (int a = 0; a < 3; ++a) {
-            const __m256 tl = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(&n.bounds[near[a]][i]), o[a]), inv[a]);
-            const __m256 th = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(&n.bounds[far[a]][i]), o[a]), inv[a]);
-            t0 = _mm256_max_ps(tl, t0);
-            t1 = _mm256_min_ps(th, t1);
+#if defined(__AVX512F__)
+        if constexpr (H == 2) {
+            __m512 t0 = _mm512_loadu_ps(p.tmin), t1 = _mm512_loadu_ps(tmax);
+            for (int a = 0; a < 3; ++a) {
+                const __m512 o16 = _mm512_loadu_ps(p.o[a]), inv16 = _mm512_loadu_ps(p.inv[a]);
+                const __m512 bn = _mm512_set1_ps(n.bounds[near[a]][i]), bf = _mm512_set1_ps(n.bounds[far[a]][i]);
+                // maskz: GCC 12's _mm512_max_ps / min_ps warn of their undefined pass-through
+                t0 = _mm512_maskz_max_ps(0xffff, _mm512_mul_ps(_mm512_sub_ps(bn, o16), inv16), t0);
+                t1 = _mm512_maskz_min_ps(0xffff, _mm512_mul_ps(_mm512_sub_ps(bf, o16), inv16), t1);
+            }
+            _mm512_storeu_ps(tn, t0);
+            t1 = _mm512_mul_ps(t1, _mm512_set1_ps(wide_exit_scale));
+            return unsigned(_mm512_cmp_ps_mask(t0, t1, _CMP_LE_OQ));
         }
-        _mm256_store_ps(tn, t0);
-        t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
-        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+#endif
+        unsigned mask = 0;
+        for (int h = 0; h < H; ++h) {
+            __m256 t0 = tmin[h], t1 = _mm256_load_ps(tmax + 8 * h);
+            for (int a = 0; a < 3; ++a) {
+                const __m256 bn = _mm256_broadcast_ss(&n.bounds[near[a]][i]);
+                const __m256 bf = _mm256_broadcast_ss(&n.bounds[far[a]][i]);
+                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(bn, o[h][a]), inv[h][a]), t0);
+                t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(bf, o[h][a]), inv[h][a]), t1);
+            }
+            _mm256_store_ps(tn + 8 * h, t0);
+            t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
+            mask |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ))) << (8 * h);
+        }
+        return mask;
     }
     /// packet_candidates() with the 8 children in the lanes (the same floats).
     GLINT_KERNEL_AVX2 unsigned candidates(const WideBvhNode<8>& n, float tmax_hi) const {
@@ -228,8 +252,12 @@ struct PacketBoxTest<Isa::avx2> {
         return p.bounded ? packet_candidates(p, n, tmax_hi) : (1u << N) - 1u;
     }
     GLINT_KERNEL_AVX2 unsigned within(const float* t, const float* tmax) const {
-        const __m256 t1 = _mm256_mul_ps(_mm256_load_ps(tmax), _mm256_set1_ps(wide_exit_scale));
-        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(t), t1, _CMP_LE_OQ)));
+        unsigned mask = 0;
+        for (int h = 0; h < H; ++h) {
+            const __m256 t1 = _mm256_mul_ps(_mm256_load_ps(tmax + 8 * h), _mm256_set1_ps(wide_exit_scale));
+            mask |= unsigned(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(t + 8 * h), t1, _CMP_LE_OQ))) << (8 * h);
+        }
+        return mask;
     }
 };
 #endif
@@ -280,19 +308,21 @@ template <int N, class Test>
     return c;
 }
 
-/// Closest (Any = false) or any hit of the packet's rays `rays` (lanes `lanes`, a coherent
-/// PacketShape's) through nodes (root at 0): `leaf(k, first, count)` tests ray k against a
-/// leaf, lowering rays[k].tmax to a hit (closest hit). `node_hook(lanes)` is called at every
-/// inner node with the lanes that test its children. `stack` holds the tree's stack bound
-/// (WideBvh::max_stack entries; one per stream, not per packet). Returns the lanes that
-/// found a hit.
+/// Closest (Any = false) or any hit of the packet's rays (lanes `lanes`, a coherent
+/// PacketShape's; their intervals end at tmax0[k]) through nodes (root at 0):
+/// `leaf(lanes, first, count, tmax)` tests the rays of `lanes` against a leaf and returns
+/// those that found a hit (closest hit: a hit nearer than tmax[k], which it lowers to it).
+/// `node_hook(lanes)` is called at every inner node with the lanes that test its children.
+/// `stack` holds the tree's stack bound (WideBvh::max_stack entries; one per stream, not per
+/// packet). Returns the lanes that found a hit.
 template <bool Any, int N, Isa I, class Node, class Leaf, class Hook>
-[[gnu::always_inline]] inline unsigned packet_traverse(const Node* nodes, const PacketBoxTest<I>& box, Ray<float>* rays,
-                                                       unsigned lanes, Leaf& leaf, Hook& node_hook, PacketEntry* stack) {
+[[gnu::always_inline]] inline unsigned packet_traverse(const Node* nodes, const PacketBoxTest<I>& box,
+                                                       const float* tmax0, unsigned lanes, Leaf& leaf, Hook& node_hook,
+                                                       PacketEntry* stack) {
     alignas(32) float tmax[packet_lanes];
     float tmax_hi = -infinity<float>;  // the largest tmax of the packet
     for (int k = 0; k < packet_lanes; ++k) {
-        tmax[k] = (lanes >> k) & 1u ? rays[k].tmax : -infinity<float>;
+        tmax[k] = (lanes >> k) & 1u ? tmax0[k] : -infinity<float>;
         tmax_hi = std::max(tmax_hi, tmax[k]);
     }
     WideBvhNode<N> decoded;
@@ -310,16 +340,14 @@ template <bool Any, int N, Isa I, class Node, class Leaf, class Hook>
                 continue;
             }
         } else {
-            const std::uint32_t first = wide_leaf_first(ref), count = wide_leaf_count(ref);
-            for (unsigned m = cur; m; m &= m - 1) {
-                const int k = std::countr_zero(m);
-                if (!leaf(k, first, count)) continue;
-                found |= 1u << k;
-                if constexpr (Any) lanes &= ~(1u << k);
-                else tmax[k] = rays[k].tmax;
+            const unsigned hit = leaf(cur, wide_leaf_first(ref), wide_leaf_count(ref), tmax);
+            found |= hit;
+            if constexpr (Any) {
+                lanes &= ~hit;
+                if (lanes == 0) return found;
+            } else if (hit) {
+                tmax_hi = packet_max(tmax);
             }
-            if (Any && lanes == 0) return found;
-            if (!Any && (found & cur)) tmax_hi = packet_max(tmax);
         }
         do {
             if (sp == 0) return found;
