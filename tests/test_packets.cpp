@@ -1,5 +1,5 @@
 // Tests of MeshBvh's ray streams (closest_hit / any_hit over spans of rays, traversed in
-// packets of 8 where the rays are coherent): every ray's answer is the single-ray query's,
+// packets of 8 and 16 where the rays are coherent): every ray's answer is the single-ray query's,
 // bit for bit (t, u, v, triangle id; occluded or not), with every kernel the CPU runs.
 //
 // Rays per scene and kind: GLINT_PACKET_RAYS from the environment, default 2^14 (CI; 2^11
