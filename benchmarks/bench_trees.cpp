@@ -593,6 +593,10 @@ void add_build_flags(cli::App& app, Options& o) {
     cli::number(app, "--build-threads", o.build_threads, 1u, 1024u, "the wide BVH rows' build threads")->group("Build");
     cli::number(app, "--sbvh-alpha", o.bvh.spatial_alpha, 0.0f, 1.0f, "spatial splits: overlap threshold alpha")->group("Build");
     cli::number(app, "--sbvh-budget", o.bvh.spatial_budget, 1.0f, 4.0f, "spatial splits: references per primitive at most")->group("Build");
+    cli::number_to<int>(app, "--early-split", [&o](int k) { o.bvh.early_split = k != 0; }, 0, 1,
+                        "1: early split clipping of sliver triangles before the build")->group("Build");
+    cli::number(app, "--early-split-ratio", o.bvh.early_split_ratio, 0.0f, 1.0f, "early splits: halves' area over the box's below which a reference is cut")->group("Build");
+    cli::number(app, "--early-split-budget", o.bvh.early_split_budget, 1.0f, 4.0f, "early splits: references per primitive at most")->group("Build");
     cli::number_to<int>(app, "--bvh-siblings", [&o](int k) {
         o.bvh.node_order = k ? WideNodeOrder::sibling_blocks : WideNodeOrder::depth_first;
     }, 0, 1, "1: sibling blocks node order (default 0: depth first)")->group("Build");
@@ -630,6 +634,7 @@ int user_meshes_main(const Options& opt) {
     u.primary = opt.primary;
     u.isa = opt.isa;
     u.builds = opt.builds;
+    u.bvh = opt.bvh;
     u.rays = opt.rays_set ? opt.rays : 200'000;
     u.reps = opt.reps_set ? opt.reps : 5;
     const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return read_obj(f); });

@@ -386,6 +386,14 @@ struct SpatialBvh8 : MeshBvh<P, 8> {
         : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m), BvhBuildOptions{.spatial_splits = true}) {}
 };
 
+/// The 8-wide BVH with early split clipping, every reference that pays cut, twice the references.
+template <class P>
+struct EarlySplitBvh8 : MeshBvh<P, 8> {
+    explicit EarlySplitBvh8(const Mesh<float>& m)
+        : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m),
+                        BvhBuildOptions{.early_split = true, .early_split_ratio = 1.0f, .early_split_budget = 2.0f}) {}
+};
+
 template <class P>
 using WideBvh8 = MeshBvh<P, 8>;
 template <class P>
@@ -499,6 +507,7 @@ TEST_CASE("agreement: wide BVH, 8 wide, every intersector vs brute force") { che
 TEST_CASE("agreement: wide BVH, 4 wide, every intersector vs brute force") { check_wide<WideBvh4>(); }
 TEST_CASE("agreement: wide BVH, 8 wide quantized boxes, every intersector vs brute force") { check_wide<QuantizedBvh8>(); }
 TEST_CASE("agreement: wide BVH, 8 wide spatial splits, every intersector vs brute force") { check_wide<SpatialBvh8>(); }
+TEST_CASE("agreement: wide BVH, 8 wide early splits, every intersector vs brute force") { check_wide<EarlySplitBvh8>(); }
 TEST_CASE("agreement: wide BVH, 8 wide compact subtrees, every intersector vs brute force") { check_wide<CompactBvh8>(); }
 
 TEST_CASE("agreement: double precision kd-tree and BIH") {

@@ -1,6 +1,6 @@
 // benchmarks/support/user_meshes.hpp: bench_trees --user-meshes, glint as a user gets it
-// (MeshBvh<MollerTrumbore<float>, 8>, default build options, threads = 1, closest_hit and
-// any_hit single rays) against Embree 3 (rtcIntersect1 / rtcOccluded1, FTZ and DAZ set as
+// (MeshBvh<MollerTrumbore<float>, 8>, default build options unless --bvh-* / --early-split*
+// say, threads = 1, closest_hit and any_hit single rays) against Embree 3 (rtcIntersect1 / rtcOccluded1, FTZ and DAZ set as
 // Embree's documentation asks, build quality HIGH and MEDIUM) on every mesh of a folder.
 // Passes alternate glint, Embree HIGH, Embree MEDIUM; the ratio printed is the median over
 // passes of Embree's time / glint's (above 1: glint is faster). Hit counts are compared, and
@@ -123,6 +123,7 @@ struct UserMeshOptions {
     int builds = 3;                // alternating builds (glint on 1 and 2 threads, Embree HIGH, MEDIUM)
     bool generated = true;         // also the generated scenes, reported apart
     std::optional<Isa> isa;        // --isa NAME: glint's kernels (default: best_isa())
+    BvhBuildOptions bvh{};         // glint's build (the --bvh-* and --early-split* flags; threads set here)
 };
 
 /// One CSV row of the mode (bench_trees' columns plus api, embree_quality, query).
@@ -271,7 +272,9 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
         for (unsigned threads : {1u, 2u}) {
             const double p0 = user_cpu_seconds(RUSAGE_SELF), m0 = user_cpu_seconds(RUSAGE_THREAD);
             const auto t0 = std::chrono::steady_clock::now();
-            const MeshBvh<MollerTrumbore<float>, 8> b(mesh, {.threads = threads});
+            BvhBuildOptions bo = opt.bvh;
+            bo.threads = threads;
+            const MeshBvh<MollerTrumbore<float>, 8> b(mesh, bo);
             (threads == 1 ? bg : bg2).push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             const double pc = user_cpu_seconds(RUSAGE_SELF) - p0, mc = user_cpu_seconds(RUSAGE_THREAD) - m0;
             if (threads == 1) cpu1.push_back(pc);
@@ -280,7 +283,9 @@ inline void user_mesh(const std::string& name, const std::vector<TriangleVertice
         bh.push_back(EmbreeQ(soup, RTC_BUILD_QUALITY_HIGH).build_s);
         bm.push_back(EmbreeQ(soup, RTC_BUILD_QUALITY_MEDIUM).build_s);
     }
-    MeshBvh<MollerTrumbore<float>, 8> bvh(mesh, {.threads = 1});
+    BvhBuildOptions bo1 = opt.bvh;
+    bo1.threads = 1;
+    MeshBvh<MollerTrumbore<float>, 8> bvh(mesh, bo1);
     if (opt.isa) bvh.set_isa(*opt.isa);
     const EmbreeQ high(soup, RTC_BUILD_QUALITY_HIGH), medium(soup, RTC_BUILD_QUALITY_MEDIUM);
     std::printf("# %s build (median of %d): glint %.4f s (SAH %.4f), 2 threads %.4f s (x%.2f, SAH %.4f), Embree HIGH "

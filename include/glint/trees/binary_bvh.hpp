@@ -56,6 +56,13 @@ struct BvhBuildOptions {
     bool spatial_splits = false;
     float spatial_alpha = 1e-5f;     ///< Overlap, as a fraction of the root's area, that tries a spatial split (0 ... 1).
     float spatial_budget = 1.5f;     ///< Cap on references per primitive over the tree (1 ... 4).
+    /// Early split clipping (Ernst, Greiner 2007; trees/early_split.hpp): before the build, a
+    /// reference is cut in two at its box's longest axis' midpoint where the halves' clipped
+    /// boxes have less than early_split_ratio times its box's area, largest saving first, until
+    /// references are early_split_budget times the primitives.
+    bool early_split = false;
+    float early_split_ratio = 0.7f;   ///< Halves' area over the box's area below which a cut is made (0 ... 1).
+    float early_split_budget = 1.2f;  ///< Cap on references per primitive after the early splits (1 ... 4).
 
     /// Throws Error naming the first option outside its range (build_binary_bvh calls it).
     void check() const {
@@ -72,6 +79,9 @@ struct BvhBuildOptions {
         if (!(spatial_alpha >= 0 && spatial_alpha <= 1) || !(spatial_budget >= 1 && spatial_budget <= 4))
             bad("spatial_alpha in 0 ... 1 and spatial_budget in 1 ... 4 (got " + std::to_string(spatial_alpha) + ", " +
                 std::to_string(spatial_budget) + ")");
+        if (!(early_split_ratio >= 0 && early_split_ratio <= 1) || !(early_split_budget >= 1 && early_split_budget <= 4))
+            bad("early_split_ratio in 0 ... 1 and early_split_budget in 1 ... 4 (got " +
+                std::to_string(early_split_ratio) + ", " + std::to_string(early_split_budget) + ")");
     }
     /// Leaf blocks started by n primitives: the unit in which the SAH counts C_I.
     std::uint32_t blocks(std::uint32_t n) const { return (n + leaf_block - 1) / leaf_block; }

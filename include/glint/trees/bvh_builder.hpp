@@ -33,6 +33,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/trees/binary_bvh.hpp>
+#include <glint/trees/early_split.hpp>
 #include <glint/trees/sah_binning.hpp>
 
 namespace glint {
@@ -328,12 +329,15 @@ private:
 };
 
 /// The leaves' references, in tree order, become `prims`; every node's range is renumbered
-/// to match (the room spatial splits left unused disappears).
+/// to match (the room spatial splits left unused disappears, and a primitive that early
+/// splits left twice in one leaf is kept once).
 inline void bvh_compact(BinaryBvh& out, const std::vector<BvhRef>& refs, std::uint32_t slot) {
     BinaryBvhNode& nd = out.nodes[slot];
     const auto begin = std::uint32_t(out.prims.size());
     if (nd.leaf()) {
-        for (std::uint32_t i = nd.begin; i < nd.begin + nd.count; ++i) out.prims.push_back(refs[i].prim);
+        for (std::uint32_t i = nd.begin; i < nd.begin + nd.count; ++i)
+            if (std::find(out.prims.begin() + begin, out.prims.end(), refs[i].prim) == out.prims.end())
+                out.prims.push_back(refs[i].prim);
     } else {
         bvh_compact(out, refs, slot + 1);
         bvh_compact(out, refs, nd.right);
@@ -348,7 +352,8 @@ inline void bvh_compact(BinaryBvh& out, const std::vector<BvhRef>& refs, std::ui
 /// (others are left out: they can never be hit). With opt.spatial_splits, `clip` chops
 /// primitives at split planes (clip_triangle for triangles; NoClipper chops their boxes); a primitive may then be in
 /// several leaves (prims holds it once per leaf), at most opt.spatial_budget times the
-/// primitives in all.
+/// primitives in all. With opt.early_split, `clip` also cuts sliver primitives before the
+/// build (detail::early_split), again a primitive per leaf at most once.
 template <PrimitiveClipper Clip = NoClipper>
 BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
     opt.check();
@@ -364,6 +369,11 @@ BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOpt
     }
     BinaryBvh out;
     if (refs.empty()) return out;
+    const bool split = opt.early_split && detail::early_split(refs, clip, opt.early_split_ratio, opt.early_split_budget) > 0;
+    if (split) {  // the pieces' centres
+        root.cbox = {};
+        for (const detail::BvhRef& r : refs) root.cbox.extend(r.box.center());
+    }
     const std::size_t n = refs.size();
     const std::size_t cap = opt.spatial_splits ? std::max(n, std::size_t(double(n) * double(opt.spatial_budget))) : n;
     if (cap >= (std::size_t(1) << 31))
@@ -372,7 +382,7 @@ BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOpt
     out.nodes.resize(2 * cap - 1);
     detail::BinnedSah<Clip>(refs, opt, clip, root.box.surface_area(), out)
         .node(0, 0, std::uint32_t(n), std::uint32_t(cap), root);
-    if (cap == n) {  // no room was left: every node's range is already its place in tree order
+    if (cap == n && !split) {  // no room was left: every node's range is already its place in tree order
         out.prims.resize(n);
         for (std::size_t i = 0; i < n; ++i) out.prims[i] = refs[i].prim;
         return out;
