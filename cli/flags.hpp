@@ -20,9 +20,8 @@
 // flags were added (so `--width 24 --size 8` and `--size 8 --width 24` give the same width:
 // --size is added first), and the first value a flag rejects stops the parse.
 //
-// The parser is this project's own (cli/flags.cpp, ~200 lines, about 1 CPU-s to compile):
-// CLI11, which it replaced, cost 6-7 CPU-s to compile even at -O1, a tenth of glint-render's
-// build, for the few conventions above.
+// The parser is this project's own (cli/flags.cpp): CLI11, which it replaced, was most of
+// that file's compile time for the few conventions above (docs/hardening.md).
 #pragma once
 
 #include <charconv>

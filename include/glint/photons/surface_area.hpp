@@ -94,9 +94,8 @@ public:
 
     /// Groups of more triangles than this (a curved, finely tessellated surface) count as
     /// covering the whole disc in disc_share(): summing their triangles per point and pass would
-    /// cost the group's size (docs/photons.md: a 15k-triangle mesh in the Cornell box made
-    /// SPPM about 2.3x slower); the correction is for walls and boxes, where a disc reaches
-    /// past an edge or a corner.
+    /// cost the group's size (measured in docs/photons.md); the correction is for walls and
+    /// boxes, where a disc reaches past an edge or a corner.
     static constexpr std::uint32_t max_group_triangles = 64;
 
     /// The share of the disc pi r^2 that the surface group of `triangle` covers inside the
