@@ -197,7 +197,7 @@ struct OffsetFrames {
         for (const std::uint32_t end = first + count; first < end; ++first) {
             const auto& g = s.group(first);
             Ray<typename Store::T> r = local(ray, g.origin);
-            r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;  // keeps a NaN tmax (no hit)
+            r.tmax = tmax_before(ray, hit);
             if (s.template test_batches<Any>(g.begin, g.end, P::prepare(r), hit)) {
                 if constexpr (Any) return true;
                 found = true;

@@ -31,6 +31,13 @@ struct TriangleHit {
     T v = 0;            ///< Barycentric weight of vertex 2.
 };
 
+/// The end of a closest-hit query's interval for a hit found so far: ray.tmax lowered to
+/// hit.t (a NaN tmax kept: no hit).
+template <class T, class Hit>
+[[gnu::always_inline]] inline T tmax_before(const Ray<T>& ray, const Hit& hit) {
+    return hit.t < ray.tmax ? hit.t : ray.tmax;
+}
+
 /// The vertices of one triangle.
 template <class T>
 using TriangleVertices = std::array<Vec3<T>, 3>;

@@ -83,11 +83,11 @@ private:
     TriangleStore<P> store_;
 };
 
-/// The ray of a closest-hit query for `hit`: its tmax lowered to hit.t (a NaN tmax kept: no hit).
+/// The ray of a closest-hit query for `hit`: `ray` with tmax_before(ray, hit).
 template <class T>
 [[gnu::always_inline]] inline Ray<T> ray_before(const Ray<T>& ray, const StoreHit<T>& hit) {
     Ray<T> r = ray;
-    r.tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+    r.tmax = tmax_before(ray, hit);
     return r;
 }
 

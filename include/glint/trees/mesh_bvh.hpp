@@ -235,7 +235,7 @@ private:
         Ray<float> r[detail::packet_lanes];
         for (int k = 0; k < n; ++k) {  // ray_before, field by field (measured faster than a copy)
             r[k].origin = rays[k].origin, r[k].direction = rays[k].direction, r[k].tmin = rays[k].tmin;
-            r[k].tmax = hits[k].t < rays[k].tmax ? hits[k].t : rays[k].tmax;
+            r[k].tmax = tmax_before(rays[k], hits[k]);
         }
         const detail::PacketShape shape = detail::packet_shape(r, n);
         int found = 0;
