@@ -21,6 +21,7 @@
 #include <glint/core/error.hpp>
 #include <glint/core/random.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
+#include <glint/intersection/watertight.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
 #include "support/tree_scenes.hpp"
@@ -45,7 +46,8 @@ std::vector<Ray<float>> primary(const Mesh<float>& m, std::size_t n) {
 }
 
 /// Shadow rays from the primary rays' hit points to one point light above the mesh.
-std::vector<Ray<float>> shadow(const MeshBvh<>& bvh, const Mesh<float>& m, std::size_t n) {
+template <class Bvh>
+std::vector<Ray<float>> shadow(const Bvh& bvh, const Mesh<float>& m, std::size_t n) {
     const auto hit_t = [&](const Ray<float>& r, float& t) {
         StoreHit<float> h;
         const bool hit = bvh.closest_hit(r, h);
@@ -82,7 +84,8 @@ bool same(const StoreHit<float>& a, const StoreHit<float>& b) {
 
 /// The stream queries over `rays`, cut into spans of `chunk` rays (the last shorter),
 /// against the single-ray queries: the number of rays answered differently.
-std::size_t differences(const MeshBvh<>& bvh, const std::vector<Ray<float>>& rays, std::size_t chunk) {
+template <class Bvh>
+std::size_t differences(const Bvh& bvh, const std::vector<Ray<float>>& rays, std::size_t chunk) {
     std::vector<StoreHit<float>> hits(rays.size()), ref(rays.size());
     for (std::size_t i = 0; i < rays.size(); i += 97) hits[i].t = ref[i].t = 0.5f * float(i % 7);  // pre-set bounds
     const std::unique_ptr<bool[]> occluded(new bool[rays.size()]);
@@ -106,16 +109,17 @@ std::size_t differences(const MeshBvh<>& bvh, const std::vector<Ray<float>>& ray
 
 }  // namespace
 
-TEST_CASE("packets: streams give the single-ray hits, bit for bit, with every kernel") {
-    const std::size_t n = rays_per_kind();
-    MESSAGE("rays per scene and kind: " << n << " (GLINT_PACKET_RAYS)");
+/// Every scene, ray kind and kernel through MeshBvh<P>'s streams against its single rays;
+/// the packet traversal must have run (coherent primary rays).
+template <class P>
+void check_streams(std::size_t n) {
     const std::vector<std::pair<const char*, Mesh<float>>> scenes = {
         {"torus-knot", make_torus_knot<float>()},
         {"sphere", make_sphere<float>(40, 80)},
         {"stadium", make_teapot_in_stadium<float>()},
     };
     for (const auto& [name, mesh] : scenes) {
-        MeshBvh<> bvh{std::span<const TriangleVertices<float>>(mesh)};
+        MeshBvh<P> bvh{std::span<const TriangleVertices<float>>(mesh)};
         const std::vector<std::pair<const char*, std::vector<Ray<float>>>> kinds = {
             {"primary", primary(mesh, n)},
             {"shadow", shadow(bvh, mesh, n)},
@@ -132,8 +136,27 @@ TEST_CASE("packets: streams give the single-ray hits, bit for bit, with every ke
                 CHECK(differences(bvh, rays, rays.size()) == 0);
                 CHECK(differences(bvh, rays, 13) == 0);  // spans that are not whole packets
             }
+            std::vector<StoreHit<float>> hits(kinds[0].second.size());
+            WideBvhCounters c;
+            bvh.closest_hit(kinds[0].second, hits, c);
+            CHECK(c.packets > 0);
         }
     }
+}
+
+// MeshBvh's default policy tests a leaf with the whole packet (packet_leaf.hpp); Watertight,
+// whose ray data is its own, tests each lane with the single-ray leaf test.
+static_assert(detail::packet_leaf_supported<MollerTrumbore<float>>);
+static_assert(!detail::packet_leaf_supported<Watertight<float>>);
+
+TEST_CASE("packets: streams give the single-ray hits, bit for bit, with every kernel") {
+    const std::size_t n = rays_per_kind();
+    MESSAGE("rays per scene and kind: " << n << " (GLINT_PACKET_RAYS)");
+    check_streams<MollerTrumbore<float>>(n);
+}
+
+TEST_CASE("packets: policies without the shared leaf test (Watertight)") {
+    check_streams<Watertight<float>>(rays_per_kind() / 4);
 }
 
 TEST_CASE("packets: empty streams, an empty tree, and sizes that differ") {

@@ -232,78 +232,72 @@ private:
     template <Isa I, class Wrap, class Hook>
     [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
                                               Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
-        Ray<float> r[detail::packet_lanes];
-        for (int k = 0; k < n; ++k) {  // ray_before, field by field (measured faster than a copy)
-            r[k].origin = rays[k].origin, r[k].direction = rays[k].direction, r[k].tmin = rays[k].tmin;
-            r[k].tmax = tmax_before(rays[k], hits[k]);
-        }
-        const detail::PacketShape shape = detail::packet_shape(r, n);
         int found = 0;
-        if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
+        const auto singles = [&] {  // single rays (an empty tree: no hits)
             for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, [&] { hook(1u); });
             return found;
-        }
+        };
         if constexpr (detail::packet_leaf_supported<P>) {
-            alignas(32) detail::PacketLeafRays p{};
-            for (unsigned m = shape.lanes; m; m &= m - 1) {
-                const int k = std::countr_zero(m);
-                p.set(k, r[k], r[k].tmax, hits[k].t);
-            }
-            const unsigned hit = packet_leaves<false>(kernels, r, p, shape, wrap, hook, stack);
+            alignas(64) detail::PacketLeafRays p;
+            p.load(rays, n, [&](int k) { return tmax_before(rays[k], hits[k]); });
+            const detail::PacketShape shape = detail::packet_shape(p, n);
+            if (!shape.coherent || bvh_.nodes().empty()) return singles();
+            p.set_bounds(n, [&](int k) { return hits[k].t; });
+            const unsigned hit = packet_leaves<false>(kernels, p, shape, wrap, hook, stack);
             for (unsigned m = hit; m; m &= m - 1, ++found) {
                 const int k = std::countr_zero(m);
                 hits[k].t = p.t[k], hits[k].u = p.u[k], hits[k].v = p.v[k], hits[k].id = leaves_.id(p.id[k]);
             }
             return found;
+        } else {
+            Ray<float> r[detail::packet_lanes];
+            StoreHit<float> h[detail::packet_lanes];
+            RayDataOf<P> world[detail::packet_lanes];
+            for (int k = 0; k < n; ++k) r[k] = ray_before(rays[k], hits[k]), h[k] = hits[k];
+            const unsigned hit = traverse_packet<false>(kernels, r, h, world, n, wrap, hook, stack);
+            if (hit == ~0u) return singles();
+            for (unsigned m = hit; m; m &= m - 1, ++found) {
+                const int k = std::countr_zero(m);
+                hits[k] = LeafQuery<P, false>(leaves_, r[k], world[k], h[k]).hit();
+            }
+            return found;
         }
-        StoreHit<float> h[detail::packet_lanes];
-        RayDataOf<P> world[detail::packet_lanes];
-        for (int k = 0; k < n; ++k) h[k] = hits[k], world[k] = leaves_.prepare(r[k]);
-        const unsigned hit = traverse_packet<false>(kernels, r, h, world, shape, wrap, hook, stack);
-        for (unsigned m = hit; m; m &= m - 1, ++found) {
-            const int k = std::countr_zero(m);
-            hits[k] = LeafQuery<P, false>(leaves_, r[k], world[k], h[k]).hit();
-        }
-        return found;
     }
     template <Isa I, class Wrap, class Hook>
     [[gnu::always_inline]] int any_packet(IsaTag<I> kernels, const Ray<float>* rays, bool* occluded, int n, Wrap& wrap,
                                           Hook& hook, detail::PacketEntry* stack) const {
-        const detail::PacketShape shape = detail::packet_shape(rays, n);
         int found = 0;
-        if (!shape.coherent || bvh_.nodes().empty()) {  // single rays (an empty tree: no hits)
+        const auto singles = [&] {
             for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, [&] { hook(1u); });
             return found;
-        }
+        };
+        unsigned hit;
         if constexpr (detail::packet_leaf_supported<P>) {
-            alignas(32) detail::PacketLeafRays p{};
-            for (unsigned m = shape.lanes; m; m &= m - 1) {
-                const int k = std::countr_zero(m);
-                p.set(k, rays[k], rays[k].tmax, infinity<float>);
-            }
-            const unsigned hit = packet_leaves<true>(kernels, rays, p, shape, wrap, hook, stack);
-            for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
-            return found;
+            alignas(64) detail::PacketLeafRays p;
+            p.load(rays, n, [&](int k) { return rays[k].tmax; });
+            const detail::PacketShape shape = detail::packet_shape(p, n);
+            if (!shape.coherent || bvh_.nodes().empty()) return singles();
+            p.set_bounds(n, [](int) { return infinity<float>; });
+            hit = packet_leaves<true>(kernels, p, shape, wrap, hook, stack);
+        } else {
+            Ray<float> r[detail::packet_lanes];
+            StoreHit<float> h[detail::packet_lanes];
+            RayDataOf<P> world[detail::packet_lanes];
+            for (int k = 0; k < n; ++k) r[k] = rays[k];
+            hit = traverse_packet<true>(kernels, r, h, world, n, wrap, hook, stack);
+            if (hit == ~0u) return singles();
         }
-        Ray<float> r[detail::packet_lanes];
-        StoreHit<float> h[detail::packet_lanes];
-        RayDataOf<P> world[detail::packet_lanes];
-        for (int k = 0; k < n; ++k) r[k] = rays[k], world[k] = leaves_.prepare(r[k]);
-        const unsigned hit = traverse_packet<true>(kernels, r, h, world, shape, wrap, hook, stack);
         for (int k = 0; k < n; ++k) found += occluded[k] = (hit >> k) & 1u;
         return found;
     }
     /// The packet traversal of a coherent packet (closest or any hit) with leaves tested by
     /// the whole packet (trees/packet_leaf.hpp; P's ray data is the plain ray, so `p` holds
-    /// the rays r with their hit bounds); returns the mask of lanes that found a hit, whose
+    /// the rays with their hit bounds); returns the mask of lanes that found a hit, whose
     /// hit is in p (p.id[k]: a record).
     template <bool Any, Isa I, class Wrap, class Hook>
-    [[gnu::always_inline]] unsigned packet_leaves(IsaTag<I>, const Ray<float>* r, detail::PacketLeafRays& p,
-                                                  const detail::PacketShape& shape, Wrap& wrap, Hook& hook,
-                                                  detail::PacketEntry* stack) const {
-        static_assert(detail::packet_leaf_lanes == detail::packet_lanes);
-        const detail::PacketRays packet(r, shape);
-        const detail::PacketBoxTest<I> box(packet);
+    [[gnu::always_inline]] unsigned packet_leaves(IsaTag<I>, detail::PacketLeafRays& p, const detail::PacketShape& shape,
+                                                  Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
+        const detail::PacketBoxTest<I> box(p, shape);
         const RecordView<P> view = leaves_.store().view();
         auto leaf = [&](unsigned lanes, std::uint32_t first, std::uint32_t count, float* tmax)
                         __attribute__((always_inline)) {
@@ -316,14 +310,18 @@ private:
         };
         return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, p.tmax, shape.lanes, leaf, hook, stack);
     }
-    /// The same for other policies: each lane's leaf test is the single ray's LeafQuery on
-    /// r[k], world[k], h[k].
+    /// The same for other policies, on rays r[0, n): each lane's leaf test is the single
+    /// ray's LeafQuery on r[k], world[k] (prepared here) and h[k]; ~0u where the rays are not
+    /// coherent (nothing traced).
     template <bool Any, Isa I, class Wrap, class Hook>
-    [[gnu::always_inline]] unsigned traverse_packet(IsaTag<I>, Ray<float>* r, StoreHit<float>* h,
-                                                    const RayDataOf<P>* world, const detail::PacketShape& shape,
-                                                    Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
-        const detail::PacketRays packet(r, shape);
-        const detail::PacketBoxTest<I> box(packet);
+    [[gnu::always_inline]] unsigned traverse_packet(IsaTag<I>, Ray<float>* r, StoreHit<float>* h, RayDataOf<P>* world,
+                                                    int n, Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
+        alignas(64) detail::PacketRaySoa soa;
+        soa.load(r, n, [&](int k) { return r[k].tmax; });
+        const detail::PacketShape shape = detail::packet_shape(soa, n);
+        if (!shape.coherent || bvh_.nodes().empty()) return ~0u;
+        for (int k = 0; k < n; ++k) world[k] = leaves_.prepare(r[k]);
+        const detail::PacketBoxTest<I> box(soa, shape);
         auto leaf = [&](unsigned lanes, std::uint32_t first, std::uint32_t count, float* tmax)
                         __attribute__((always_inline)) {
             unsigned hit = 0;
@@ -336,9 +334,7 @@ private:
             }
             return hit;
         };
-        alignas(32) float tmax[detail::packet_lanes];
-        for (int k = 0; k < detail::packet_lanes; ++k) tmax[k] = r[k].tmax;
-        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, tmax, shape.lanes, leaf, hook, stack);
+        return detail::packet_traverse<Any, N, I>(bvh_.nodes().data(), box, soa.tmax, shape.lanes, leaf, hook, stack);
     }
     /// Counts a packet's node visit and its ray-node tests into `c`.
     static auto packet_counting(WideBvhCounters& c) {

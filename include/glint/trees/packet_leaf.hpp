@@ -26,38 +26,36 @@
 #include <glint/intersection/frame.hpp>
 #include <glint/intersection/intersector.hpp>
 #include <glint/intersection/triangle.hpp>
+#include <glint/trees/wide_packet.hpp>
 
 namespace glint {
 
 namespace detail {
 
 /// Lanes of a packet leaf test (the rays of one packet).
-inline constexpr int packet_leaf_lanes = 16;
+inline constexpr int packet_leaf_lanes = packet_lanes;
 
 /// Whether P's leaves can be tested by packet_leaf(): float records, plain ray data, no
 /// per-ray choice of fields, identity frame.
 template <class P>
 inline constexpr bool packet_leaf_supported =
     std::is_same_v<typename P::scalar_type, float> && std::is_same_v<RayDataOf<P>, PlainRay<float>> &&
-    std::is_same_v<FrameOf<P>, IdentityFrame> &&
+    std::is_same_v<glint::FrameOf<P>, IdentityFrame> &&
     !requires(const float* const (&in)[field_count<P>], const RayDataOf<P>& r, const float* (&out)[field_count<P>]) {
         P::select_fields(in, r, out);
     };
 
-/// A packet's rays as the leaf test reads them (structure of arrays, the rays as the query
-/// prepared them), and each ray's nearest hit so far: t (its bound: +inf for any hit), u, v
-/// and the record index.
-struct alignas(32) PacketLeafRays {
-    float o[3][packet_leaf_lanes], d[3][packet_leaf_lanes], tmin[packet_leaf_lanes], tmax[packet_leaf_lanes];
+/// A packet's rays as the leaf test reads them (the rays as the query prepared them: their
+/// plain ray data, PlainRay::from), and each ray's nearest hit so far: t (its bound: +inf for
+/// any hit), u, v and the record index.
+struct alignas(64) PacketLeafRays : PacketRaySoa {
     float t[packet_leaf_lanes], u[packet_leaf_lanes], v[packet_leaf_lanes];
     std::uint32_t id[packet_leaf_lanes];
 
-    /// Lane k: the query's ray r with its interval ending at `end` (its plain ray data,
-    /// PlainRay::from) and its hit bound t0.
-    [[gnu::always_inline]] void set(int k, const Ray<float>& r, float end, float t0) {
-        for (int a = 0; a < 3; ++a) o[a][k] = r.origin[a], d[a][k] = r.direction[a];
-        tmin[k] = r.tmin, tmax[k] = end;
-        t[k] = t0, u[k] = v[k] = 0.0f, id[k] = 0;
+    /// Each lane's hit bound t0(j) (for_lanes, as load()), u = v = id = 0.
+    template <class Bound>
+    [[gnu::always_inline]] void set_bounds(int n, Bound&& t0) {
+        for_lanes(n, [&](int k, int j) __attribute__((always_inline)) { t[k] = t0(j), u[k] = v[k] = 0.0f, id[k] = 0; });
     }
 };
 

@@ -30,6 +30,7 @@
 
 #include <glint/core/isa.hpp>
 #include <glint/core/ray.hpp>
+#include <glint/trees/packet_rays.hpp>
 #include <glint/trees/wide_box_test.hpp>
 #include <glint/trees/wide_node.hpp>
 
@@ -40,77 +41,6 @@
 namespace glint {
 
 namespace detail {
-
-/// Rays per packet (as Embree's 16-ray packets): one AVX-512 vector of floats in the lane
-/// box test where the flags give AVX-512, two AVX2 vectors otherwise.
-inline constexpr int packet_lanes = 16;
-/// Fewer valid rays than this in a packet: single rays are cheaper.
-inline constexpr int packet_min_rays = 2;
-
-/// The valid rays of a packet (wide_ray_valid) as a lane mask, and whether they can share
-/// the packet traversal (at least packet_min_rays, one sign per axis, tmin >= 0).
-struct PacketShape {
-    unsigned lanes = 0;
-    bool coherent = false;
-};
-
-[[gnu::always_inline]] inline PacketShape packet_shape(const Ray<float>* rays, int n) {
-    PacketShape s;
-    int signs = -1;
-    bool same = true;
-    for (int k = 0; k < n; ++k) {
-        const Ray<float>& r = rays[k];
-        if (!wide_ray_valid(r)) continue;
-        s.lanes |= 1u << k;
-        const int sk = int(std::signbit(r.direction.x)) | int(std::signbit(r.direction.y)) << 1 |
-                       int(std::signbit(r.direction.z)) << 2;
-        same &= (signs < 0 || sk == signs) & !(r.tmin < 0.0f);
-        signs = sk;
-    }
-    s.coherent = same && std::popcount(s.lanes) >= packet_min_rays;
-    return s;
-}
-
-/// The rays of one coherent packet, structure of arrays; lanes not in the packet hold a ray
-/// that enters nothing.
-struct alignas(32) PacketRays {
-    float o[3][packet_lanes], inv[3][packet_lanes], tmin[packet_lanes];
-    int near[3], far[3];  // rows of the entry and exit planes per axis (WideBvhNode::bounds)
-    // The packet's intervals: origins and reciprocal directions per axis, smallest tmin;
-    // `bounded` when every reciprocal is a normal float (else no interval test).
-    float omin[3], omax[3], imin[3], imax[3], tmin_lo;
-    bool bounded;
-
-    [[gnu::always_inline]] PacketRays(const Ray<float>* rays, const PacketShape& s) {
-        const int first = std::countr_zero(s.lanes);
-        for (int a = 0; a < 3; ++a) {
-            const int neg = std::signbit(rays[first].direction[a]) ? 1 : 0;
-            near[a] = 2 * a + neg;
-            far[a] = 2 * a + 1 - neg;
-        }
-        for (int k = 0; k < packet_lanes; ++k) {
-            const bool in = (s.lanes >> k) & 1u;
-            for (int a = 0; a < 3; ++a) {
-                o[a][k] = in ? rays[k].origin[a] : 0.0f;
-                inv[a][k] = in ? 1.0f / rays[k].direction[a] : 1.0f;
-            }
-            tmin[k] = in ? rays[k].tmin : infinity<float>;
-        }
-        bounded = true;
-        tmin_lo = infinity<float>;
-        for (int a = 0; a < 3; ++a) {
-            omin[a] = imin[a] = infinity<float>;
-            omax[a] = imax[a] = -infinity<float>;
-            for (unsigned m = s.lanes; m; m &= m - 1) {
-                const int k = std::countr_zero(m);
-                omin[a] = std::min(omin[a], o[a][k]), omax[a] = std::max(omax[a], o[a][k]);
-                imin[a] = std::min(imin[a], inv[a][k]), imax[a] = std::max(imax[a], inv[a][k]);
-                bounded &= std::isnormal(inv[a][k]);
-                tmin_lo = std::min(tmin_lo, tmin[k]);
-            }
-        }
-    }
-};
 
 /// Bounds of the distances (plane - o) * inv over the packet's intervals of o and inv, as
 /// floats (rounded subtraction and multiplication are monotone in each operand, so the
@@ -126,7 +56,7 @@ template <bool Max>
 /// arithmetic, on the packet's intervals of origin and reciprocal direction): a
 /// superset of those the lane tests accept, for tmin >= tmin_lo and tmax <= tmax_hi.
 template <int N>
-[[gnu::always_inline]] inline unsigned packet_candidates(const PacketRays& p, const WideBvhNode<N>& n, float tmax_hi) {
+[[gnu::always_inline]] inline unsigned packet_candidates(const PacketBounds& p, const WideBvhNode<N>& n, float tmax_hi) {
     unsigned mask = 0;
     for (int i = 0; i < N; ++i) {
         float t0 = p.tmin_lo, t1 = tmax_hi;
@@ -143,9 +73,10 @@ template <int N>
 /// entry distances in tn; the single-ray test's operations lane by lane (portable, SSE2).
 template <Isa I>
 struct PacketBoxTest {
-    const PacketRays& p;  // the caller's: outlives the test
+    PacketRays p;
 
-    [[gnu::always_inline]] explicit PacketBoxTest(const PacketRays& rays) : p(rays) {}
+    /// The rays `s.lanes` of r, a coherent packet (packet_shape).
+    [[gnu::always_inline]] PacketBoxTest(const PacketRaySoa& r, const PacketShape& s) : p(r, s) {}
     template <int N>
     [[gnu::always_inline]] unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
         unsigned mask = 0;
@@ -183,25 +114,64 @@ struct PacketBoxTest<Isa::avx2> {
     static constexpr int H = packet_lanes / 8;  // vectors of 8 lanes
     __m256 o[H][3], inv[H][3], tmin[H];
     int near[3], far[3];
-    const PacketRays& p;  // the caller's: outlives the test
+    PacketBounds p;
 
-    GLINT_KERNEL_AVX2 explicit PacketBoxTest(const PacketRays& rays) : p(rays) {
+    /// The rays `s.lanes` of r, a coherent packet (packet_shape): PacketRays' floats, the
+    /// lanes in vectors.
+    GLINT_KERNEL_AVX2 PacketBoxTest(const PacketRaySoa& r, const PacketShape& s) {
+        p.set_planes(r, std::countr_zero(s.lanes));
+        const __m256 inf = _mm256_set1_ps(infinity<float>), ninf = _mm256_set1_ps(-infinity<float>);
+        const __m256 one = _mm256_set1_ps(1.0f), bit = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+        __m256 lo[3], hi[3], ilo[3], ihi[3], tlo = inf;
+        for (int a = 0; a < 3; ++a) lo[a] = ilo[a] = inf, hi[a] = ihi[a] = ninf;
         for (int h = 0; h < H; ++h) {
+            const __m256 lanes = _mm256_castsi256_ps(_mm256_set1_epi32(int((s.lanes >> (8 * h)) & 0xffu)));
+            const __m256 in = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                _mm256_castps_si256(_mm256_and_ps(lanes, bit)), _mm256_castps_si256(bit)));
+            tmin[h] = _mm256_blendv_ps(inf, _mm256_loadu_ps(r.tmin + 8 * h), in);
+            tlo = _mm256_min_ps(tlo, tmin[h]);
             for (int a = 0; a < 3; ++a) {
-                o[h][a] = _mm256_load_ps(p.o[a] + 8 * h);
-                inv[h][a] = _mm256_load_ps(p.inv[a] + 8 * h);
+                const __m256 oa = _mm256_loadu_ps(r.o[a] + 8 * h);
+                const __m256 ia = _mm256_div_ps(one, _mm256_loadu_ps(r.d[a] + 8 * h));
+                o[h][a] = _mm256_and_ps(oa, in);  // 0 outside the packet
+                inv[h][a] = _mm256_blendv_ps(one, ia, in);
+                lo[a] = _mm256_min_ps(lo[a], _mm256_blendv_ps(inf, oa, in));
+                hi[a] = _mm256_max_ps(hi[a], _mm256_blendv_ps(ninf, oa, in));
+                ilo[a] = _mm256_min_ps(ilo[a], _mm256_blendv_ps(inf, ia, in));
+                ihi[a] = _mm256_max_ps(ihi[a], _mm256_blendv_ps(ninf, ia, in));
             }
-            tmin[h] = _mm256_load_ps(p.tmin + 8 * h);
         }
-        for (int a = 0; a < 3; ++a) near[a] = p.near[a], far[a] = p.far[a];
+        p.tmin_lo = extreme<false>(tlo);
+        for (int a = 0; a < 3; ++a) {
+            p.omin[a] = extreme<false>(lo[a]), p.omax[a] = extreme<true>(hi[a]);
+            p.imin[a] = extreme<false>(ilo[a]), p.imax[a] = extreme<true>(ihi[a]);
+            near[a] = p.near[a], far[a] = p.far[a];
+        }
+        p.set_bounded();
+    }
+#if defined(__AVX512F__)
+    /// The 16 lanes of two halves.
+    [[gnu::always_inline]] static __m512 wide16(__m256 lo, __m256 hi) {
+        return _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_castps_pd(lo)), _mm256_castps_pd(hi), 1));
+    }
+#endif
+    /// The smallest (Max = false) or largest of v's 8 lanes.
+    template <bool Max>
+    GLINT_KERNEL_AVX2 static float extreme(__m256 v) {
+        const auto f = [](__m128 x, __m128 y) __attribute__((always_inline)) {
+            return Max ? _mm_max_ps(x, y) : _mm_min_ps(x, y);
+        };
+        __m128 m = f(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+        m = f(m, _mm_movehl_ps(m, m));
+        return _mm_cvtss_f32(f(m, _mm_shuffle_ps(m, m, 1)));
     }
     template <int N>
     GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
 #if defined(__AVX512F__)
         if constexpr (H == 2) {
-            __m512 t0 = _mm512_loadu_ps(p.tmin), t1 = _mm512_loadu_ps(tmax);
+            __m512 t0 = wide16(tmin[0], tmin[1]), t1 = _mm512_loadu_ps(tmax);
             for (int a = 0; a < 3; ++a) {
-                const __m512 o16 = _mm512_loadu_ps(p.o[a]), inv16 = _mm512_loadu_ps(p.inv[a]);
+                const __m512 o16 = wide16(o[0][a], o[1][a]), inv16 = wide16(inv[0][a], inv[1][a]);
                 const __m512 bn = _mm512_set1_ps(n.bounds[near[a]][i]), bf = _mm512_set1_ps(n.bounds[far[a]][i]);
                 // maskz: GCC 12's _mm512_max_ps / min_ps warn of their undefined pass-through
                 t0 = _mm512_maskz_max_ps(0xffff, _mm512_mul_ps(_mm512_sub_ps(bn, o16), inv16), t0);
@@ -289,8 +259,9 @@ struct alignas(32) PacketEntry {
 };
 
 /// Pushes the children of node n that some lane of `lanes` enters onto stack[sp...], the
-/// nearest last; returns how many.
-template <int N, class Test>
+/// nearest last where Sort (closest hit; any hit takes them in the node's order, as the
+/// single ray's traverse_any); returns how many.
+template <int N, bool Sort, class Test>
 [[gnu::always_inline]] inline int packet_children(const WideBvhNode<N>& n, const Test& box, unsigned lanes,
                                                   const float* tmax, float tmax_hi, PacketEntry* stack, int sp) {
     int c = 0;
@@ -302,7 +273,8 @@ template <int N, class Test>
         if (e.lanes == 0) continue;
         e.ref = n.child[i];
         e.key = e.t[std::countr_zero(e.lanes)];
-        for (int j = sp + c; j > sp && stack[j - 1].key < stack[j].key; --j) std::swap(stack[j - 1], stack[j]);
+        if constexpr (Sort)
+            for (int j = sp + c; j > sp && stack[j - 1].key < stack[j].key; --j) std::swap(stack[j - 1], stack[j]);
         ++c;
     }
     return c;
@@ -332,7 +304,7 @@ template <bool Any, int N, Isa I, class Node, class Leaf, class Hook>
     for (;;) {
         if (!wide_is_leaf(ref)) {
             node_hook(cur);
-            const int c = packet_children<N>(packet_node(nodes[ref], decoded), box, cur, tmax, tmax_hi, stack, sp);
+            const int c = packet_children<N, !Any>(packet_node(nodes[ref], decoded), box, cur, tmax, tmax_hi, stack, sp);
             if (c > 0) {  // the nearest child next, the others on the stack
                 sp += c - 1;
                 ref = stack[sp].ref;
