@@ -386,6 +386,18 @@ struct SpatialBvh8 : MeshBvh<P, 8> {
         : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m), BvhBuildOptions{.spatial_splits = true}) {}
 };
 
+/// The 8-wide BVH with spatial splits in the top levels (BvhBuildOptions::top_spatial_splits),
+/// tried at every top node (no node overlap needed) so that the test scenes split.
+template <class P>
+struct TopSpatialBvh8 : MeshBvh<P, 8> {
+    static BvhBuildOptions options() {
+        BvhBuildOptions o = BvhBuildOptions::top_spatial_splits();
+        o.spatial_node_overlap = 0.0f;
+        return o;
+    }
+    explicit TopSpatialBvh8(const Mesh<float>& m) : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m), options()) {}
+};
+
 template <class P>
 using WideBvh8 = MeshBvh<P, 8>;
 template <class P>
@@ -499,6 +511,9 @@ TEST_CASE("agreement: wide BVH, 8 wide, every intersector vs brute force") { che
 TEST_CASE("agreement: wide BVH, 4 wide, every intersector vs brute force") { check_wide<WideBvh4>(); }
 TEST_CASE("agreement: wide BVH, 8 wide quantized boxes, every intersector vs brute force") { check_wide<QuantizedBvh8>(); }
 TEST_CASE("agreement: wide BVH, 8 wide spatial splits, every intersector vs brute force") { check_wide<SpatialBvh8>(); }
+TEST_CASE("agreement: wide BVH, 8 wide top-level spatial splits, every intersector vs brute force") {
+    check_wide<TopSpatialBvh8>();
+}
 TEST_CASE("agreement: wide BVH, 8 wide compact subtrees, every intersector vs brute force") { check_wide<CompactBvh8>(); }
 
 TEST_CASE("agreement: double precision kd-tree and BIH") {
@@ -1171,6 +1186,37 @@ TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree d
     CHECK(hits > 2000);
     // A budget below 1 is refused.
     CHECK_THROWS_WITH_AS(WideBvh<8>(boxes, {.spatial_budget = 0.5f}, clip), doctest::Contains("spatial_budget"), Error);
+    CHECK_THROWS_WITH_AS(WideBvh<8>(boxes, {.spatial_node_overlap = 2.0f}, clip), doctest::Contains("spatial_node_overlap"),
+                         Error);
+}
+
+TEST_CASE("wide BVH: top-level spatial splits split within their budget, every thread count alike, the same hits") {
+    const Mesh<float> knot = make_torus_knot<float>(400, 32);
+    const auto boxes = triangle_boxes(knot);
+    const auto clip = [&](std::uint32_t j, int axis, const AABB<float>& region) {
+        return clip_triangle(knot[j][0], knot[j][1], knot[j][2], axis, region);
+    };
+    BvhBuildOptions opt = BvhBuildOptions::top_spatial_splits();
+    opt.spatial_node_overlap = 0.0f;  // the knot's top nodes overlap little: try them all
+    opt.threads = 1;
+    const WideBvh<8> one(boxes, opt, clip), plain(boxes, {}, clip);
+    CHECK(one.prims().size() > knot.size());
+    CHECK(one.prims().size() <= std::size_t(double(opt.spatial_budget) * double(knot.size())));
+    for (unsigned threads : {2u, 4u}) {
+        opt.threads = threads;
+        const WideBvh<8> other(boxes, opt, clip);
+        REQUIRE(other.nodes().size() == one.nodes().size());
+        CHECK(other.prims() == one.prims());
+    }
+    std::vector<Triangle<MollerTrumbore<float>>> tris;
+    for (const auto& t : knot) tris.emplace_back(t[0], t[1], t[2]);
+    std::size_t generic = 0, differ = 0;
+    for (const Ray<float>& r : ray_mix(knot, 20000, 11, generic)) {
+        StoreHit<float> a, b;
+        const bool fa = user_leaf_closest(one, tris, r, a), fb = user_leaf_closest(plain, tris, r, b);
+        differ += fa != fb || a.t != b.t;
+    }
+    CHECK(differ == 0);
 }
 
 TEST_CASE("wide BVH: clip_triangle bounds the triangle's part in a slab, and nothing outside the region") {

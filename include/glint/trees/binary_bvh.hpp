@@ -52,10 +52,34 @@ struct BvhBuildOptions {
     float wide_node_cost = 1.0f;     ///< C_N, per wide node, in the wide collapse (wide_collapse.hpp); finite, >= 0.
     /// Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
     /// where the best object split's two boxes overlap by more than spatial_alpha times the
-    /// root's surface area; references stay at most spatial_budget times the primitives.
+    /// root's surface area (and the node's own limits below); references stay at most
+    /// spatial_budget times the primitives. top_spatial_splits(): a cheap choice.
     bool spatial_splits = false;
     float spatial_alpha = 1e-5f;     ///< Overlap, as a fraction of the root's area, that tries a spatial split (0 ... 1).
     float spatial_budget = 1.5f;     ///< Cap on references per primitive over the tree (1 ... 4).
+    /// Overlap, as a fraction of the node's own area, that a spatial split also needs (0 ... 1;
+    /// 0: alpha alone decides).
+    float spatial_node_overlap = 0.0f;
+    /// Spatial splits only at nodes of at least 1/2^k of the root's references (the top k
+    /// levels of a balanced tree); 0: at every node.
+    std::uint32_t spatial_levels = 0;
+    /// Spatial search by boxes: a reference counted in its first and last bin whole, the
+    /// sides cut at the plane, no clipping (the split itself still clips exactly).
+    bool spatial_box_chop = false;
+    bool spatial_one_axis = false;   ///< Spatial search on the node's longest axis only.
+
+    /// Spatial splits where they pay most, at about the binned build's cost (docs/trees.md,
+    /// "Spatial splits in the top levels"): the top 4 levels, nodes whose object split
+    /// overlaps by more than 0.4 of the node's area, longest axis, box chop, budget 1.1.
+    static BvhBuildOptions top_spatial_splits() {
+        BvhBuildOptions o;
+        o.spatial_splits = true;
+        o.spatial_budget = 1.1f;
+        o.spatial_node_overlap = 0.4f;
+        o.spatial_levels = 4;
+        o.spatial_box_chop = o.spatial_one_axis = true;
+        return o;
+    }
 
     /// Throws Error naming the first option outside its range (build_binary_bvh calls it).
     void check() const {
@@ -72,6 +96,8 @@ struct BvhBuildOptions {
         if (!(spatial_alpha >= 0 && spatial_alpha <= 1) || !(spatial_budget >= 1 && spatial_budget <= 4))
             bad("spatial_alpha in 0 ... 1 and spatial_budget in 1 ... 4 (got " + std::to_string(spatial_alpha) + ", " +
                 std::to_string(spatial_budget) + ")");
+        if (!(spatial_node_overlap >= 0 && spatial_node_overlap <= 1))
+            bad("spatial_node_overlap in 0 ... 1 (got " + std::to_string(spatial_node_overlap) + ")");
     }
     /// Leaf blocks started by n primitives: the unit in which the SAH counts C_I.
     std::uint32_t blocks(std::uint32_t n) const { return (n + leaf_block - 1) / leaf_block; }

@@ -17,6 +17,10 @@
 // polygon against the bin's planes), and a plane that cuts references in two wins when its
 // SAH cost is lower; a reference then sits on both sides, each piece bounded by its part of
 // the primitive, references at most spatial_budget times the primitives. Slots: binary_bvh.hpp.
+// Cheaper searches (BvhBuildOptions::top_spatial_splits): only at the top levels, where the
+// overlap is also a large part of the node's own area, on the longest axis, and by boxes: a
+// reference counted whole in its first and last bin, the sides' boxes cut at the plane, so
+// the search costs what an object binning does; the split it chooses still clips exactly.
 #pragma once
 
 #include <algorithm>
@@ -52,10 +56,12 @@ namespace detail {
 template <PrimitiveClipper Clip>
 class BinnedSah {
 public:
-    BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, BinaryBvh& out)
+    BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, std::uint32_t root_refs,
+              BinaryBvh& out)
         : refs_(refs), scratch_(refs.size()), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
-          spatial_(opt.spatial_splits),
-          min_overlap_(opt.spatial_alpha * root_area), cost_(opt) {}
+          spatial_(opt.spatial_splits), sbins_(opt.bins),
+          min_overlap_(opt.spatial_alpha * root_area),
+          min_refs_(opt.spatial_levels ? std::max(2u, root_refs >> std::min(opt.spatial_levels, 31u)) : 0u), cost_(opt) {}
 
     /// The box of some references and the box of their centres.
     struct Bounds {
@@ -71,6 +77,7 @@ public:
         nd.begin = b;
         nd.count = e - b;
         const std::uint32_t n = e - b;
+        if (n < min_refs_) cap = e;  // no spatial split below: its children need no room
         // Every split costs at least C_T: where a leaf costs no more, it is a leaf unsearched.
         if (n == 1 || (n <= opt_.max_leaf && opt_.traversal_cost >= opt_.intersection_cost * float(blocks(n)))) return;
         const Vec3f k = scales(in.cbox);
@@ -78,7 +85,8 @@ public:
         const float inv_area = 1.0f / std::max(box.surface_area(), std::numeric_limits<float>::min());
         const SahSplit s = find_split(b, e, map, k, inv_area);
         SahSplit sp;  // Stich et al. §4: spatial splits only where the object split's boxes overlap
-        if (spatial && spatial_ && cap > e && (s.axis < 0 || overlap_area(s.left, s.right) > min_overlap_))
+        if (spatial && spatial_ && cap > e && n >= min_refs_ &&
+            (s.axis < 0 || overlap_area(s.left, s.right) > std::max(min_overlap_, opt_.spatial_node_overlap * box.surface_area())))
             sp = find_spatial(b, e, cap - e, box, inv_area);
         if (n <= opt_.max_leaf && !(std::min(s.cost, sp.cost) < opt_.intersection_cost * float(blocks(n)))) return;
         if (sp.cost < s.cost) {
@@ -178,89 +186,80 @@ private:
     /// then prefixes left to right. A reference counts on the left of boundary j if its first
     /// bin (enter) is below j, on the right if its last bin (leave) is j or above: an object
     /// split passes the same counts twice; a spatial split may add at most `room` references.
-    void sweep(int a, const AABB<float>* bin_box, const std::uint32_t* enter, const std::uint32_t* leave,
-               std::uint32_t n, std::uint32_t room, float inv_area, SahSplit& best) const {
+    /// A side's box is the union of its bins' boxes (lbox from the left, rbox from the right)
+    /// cut at the boundary's plane: pieces clipped to their bins are already within it, whole
+    /// boxes counted in their first and last bins only (box chop) are chopped by the cut.
+    void sweep(int a, const AABB<float>& node, const AABB<float>* lbox, const AABB<float>* rbox,
+               const std::uint32_t* enter, const std::uint32_t* leave, std::uint32_t n, std::uint32_t room,
+               float inv_area, SahSplit& best) const {
         float right_cost[64];
         std::uint32_t right_n[64];
+        AABB<float> right_box[64];
         AABB<float> acc;
         std::uint32_t cnt = 0;
-        for (std::uint32_t j = opt_.bins - 1; j > 0; --j) {
-            acc.extend(bin_box[j]);
+        for (std::uint32_t j = sbins_ - 1; j > 0; --j) {
+            acc.extend(rbox[j]);
             cnt += leave[j];
             right_n[j] = cnt;
-            right_cost[j] = cnt ? acc.surface_area() * float(blocks(cnt)) : infinity<float>;
+            right_box[j] = acc;
+            right_box[j].lo[a] = std::min(acc.hi[a], std::max(acc.lo[a], plane(node, a, j)));
+            right_cost[j] = cnt ? right_box[j].surface_area() * float(blocks(cnt)) : infinity<float>;
         }
         acc = AABB<float>{};
         cnt = 0;
-        bool improved = false;
-        for (std::uint32_t j = 1; j < opt_.bins; ++j) {
-            acc.extend(bin_box[j - 1]);
+        for (std::uint32_t j = 1; j < sbins_; ++j) {
+            acc.extend(lbox[j - 1]);
             cnt += enter[j - 1];
             if (cnt == 0 || right_n[j] == 0 || cnt + right_n[j] > n + room) continue;
+            AABB<float> l = acc;
+            l.hi[a] = std::max(acc.lo[a], std::min(acc.hi[a], plane(node, a, j)));
             const float c = opt_.traversal_cost +
-                            opt_.intersection_cost * (acc.surface_area() * float(blocks(cnt)) + right_cost[j]) * inv_area;
-            if (c < best.cost) {
-                best = SahSplit{a, j, c, acc, {}, cnt, right_n[j]};
-                improved = true;
-            }
+                            opt_.intersection_cost * (l.surface_area() * float(blocks(cnt)) + right_cost[j]) * inv_area;
+            if (c < best.cost) best = SahSplit{a, j, c, l, right_box[j], cnt, right_n[j]};
         }
-        if (improved)
-            for (std::uint32_t j = best.bin; j < opt_.bins; ++j) best.right.extend(bin_box[j]);
     }
 
-    /// Spatial bin boundary j of the node box on axis a (0: its low plane, bins: its high
-    /// one); non-decreasing in j. The binning and the partition use these same floats.
-    float plane(const AABB<float>& box, int a, std::uint32_t j) const {
-        if (j >= opt_.bins) return box.hi[a];
-        return std::min(box.hi[a], box.lo[a] + (box.hi[a] - box.lo[a]) * (float(j) / float(opt_.bins)));
-    }
-    /// The last bin whose low plane is <= x (a reference with lo = x starts there).
-    std::uint32_t bin_from(const AABB<float>& box, int a, float x) const {
-        std::uint32_t j = bin_guess(box, a, x);
-        while (j > 0 && plane(box, a, j) > x) --j;
-        while (j + 1 < opt_.bins && plane(box, a, j + 1) <= x) ++j;
-        return j;
-    }
-    /// The first bin whose high plane is >= x (a reference with hi = x ends there).
-    std::uint32_t bin_to(const AABB<float>& box, int a, float x) const {
-        std::uint32_t j = bin_guess(box, a, x);
-        while (j + 1 < opt_.bins && plane(box, a, j + 1) < x) ++j;
-        while (j > 0 && plane(box, a, j) >= x) --j;
-        return j;
-    }
-    std::uint32_t bin_guess(const AABB<float>& box, int a, float x) const {
-        const float f = (x - box.lo[a]) / (box.hi[a] - box.lo[a]) * float(opt_.bins);
-        return std::uint32_t(std::min(float(opt_.bins - 1), std::max(0.0f, f)));
-    }
+    /// Spatial bin boundary j of the node box on axis a (sah_binning.hpp's spatial_plane).
+    float plane(const AABB<float>& box, int a, std::uint32_t j) const { return spatial_plane(box, a, j, sbins_); }
 
     /// Spatial split search (Stich et al. 2009 §3): bins of equal width over the node box;
     /// each reference is chopped into the bins it spans, each piece clipped to its bin, and
-    /// counted as entering its first bin and leaving its last.
+    /// counted as entering its first bin and leaving its last. With spatial_box_chop a
+    /// reference's whole box is counted in its first and last bins only and the sweep cuts the
+    /// sides' boxes at the plane (the box's chop, no clipping: one pass as cheap as object
+    /// binning); with spatial_one_axis only the node's longest axis is binned.
     SahSplit find_spatial(std::uint32_t b, std::uint32_t e, std::uint32_t room, const AABB<float>& box,
                           float inv_area) const {
         SahSplit best;
+        const int longest = box.longest_axis();
         for (int a = 0; a < 3; ++a) {
-            if (!(box.hi[a] > box.lo[a])) continue;
-            AABB<float> bin_box[64];
+            if (!(box.hi[a] > box.lo[a]) || (opt_.spatial_one_axis && a != longest)) continue;
+            AABB<float> bin_box[64], rbox[64];
             std::uint32_t enter[64] = {}, leave[64] = {};
+            const SpatialBins sb(box, a, sbins_);
             for (std::uint32_t i = b; i < e; ++i) {
                 const BvhRef& r = refs_[i];
-                const std::uint32_t last = bin_to(box, a, r.box.hi[a]);
-                const std::uint32_t first = std::min(last, bin_from(box, a, r.box.lo[a]));  // min: flat on a plane
+                const std::uint32_t last = sb.to(r.box.hi[a]);
+                const std::uint32_t first = std::min(last, sb.from(r.box.lo[a]));  // min: flat on a plane
                 ++enter[first];
                 ++leave[last];
+                if (opt_.spatial_box_chop) {
+                    bin_box[first].extend(r.box);
+                    rbox[last].extend(r.box);
+                    continue;
+                }
                 if (first == last) {
                     bin_box[first].extend(r.box);
                     continue;
                 }
                 for (std::uint32_t j = first; j <= last; ++j) {
                     AABB<float> region = r.box;
-                    if (j > first) region.lo[a] = plane(box, a, j);
-                    if (j < last) region.hi[a] = plane(box, a, j + 1);
+                    if (j > first) region.lo[a] = sb.pl[j];
+                    if (j < last) region.hi[a] = sb.pl[j + 1];
                     bin_box[j].extend(clip_(r.prim, a, region));
                 }
             }
-            sweep(a, bin_box, enter, leave, e - b, room, inv_area, best);
+            sweep(a, box, bin_box, opt_.spatial_box_chop ? rbox : bin_box, enter, leave, e - b, room, inv_area, best);
         }
         return best;
     }
@@ -322,7 +321,9 @@ private:
     BinaryBvh& out_;
     std::atomic<int> tokens_;  // threads that may still be started
     const bool spatial_;
+    const std::uint32_t sbins_;  // spatial bins per axis
     const float min_overlap_;
+    const std::uint32_t min_refs_;  // spatial splits only at nodes of at least this many references
     const SahCosts cost_;
     const bool avx2_ = best_isa() >= Isa::avx2;  // bin with AVX2 (sah_binning.hpp)
 };
@@ -370,7 +371,7 @@ BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOpt
         throw Error("build_binary_bvh: " + std::to_string(cap) + " references, at most 2^31 - 1");
     refs.resize(cap);
     out.nodes.resize(2 * cap - 1);
-    detail::BinnedSah<Clip>(refs, opt, clip, root.box.surface_area(), out)
+    detail::BinnedSah<Clip>(refs, opt, clip, root.box.surface_area(), std::uint32_t(n), out)
         .node(0, 0, std::uint32_t(n), std::uint32_t(cap), root);
     if (cap == n) {  // no room was left: every node's range is already its place in tree order
         out.prims.resize(n);

@@ -8,6 +8,7 @@
 // floats (SahBins: AVX2 where the CPU has it), the sweep skips empty bins, and the partition,
 // without a branch per reference, returns the two sides' centre boxes, which are their
 // children's binning ranges: no node reads its references only to find their centres.
+// SpatialBins: the equal-width bins of the spatial split search (Stich et al. 2009, §3).
 #pragma once
 
 #include <algorithm>
@@ -228,6 +229,46 @@ struct SahCosts {
     /// Leaf blocks started by n references (BvhBuildOptions::blocks, a shift where it can be).
     std::uint32_t blocks(std::uint32_t n) const {
         return shift >= 0 ? (n + leaf_block - 1) >> shift : (n + leaf_block - 1) / leaf_block;
+    }
+};
+
+/// Spatial bin boundary j (0 ... bins) of `box` on axis a, bins of equal width (Stich et al.
+/// 2009 §3): 0 is the box's low plane, bins its high one; non-decreasing in j. The spatial
+/// binning and the spatial partition use these same floats.
+inline float spatial_plane(const AABB<float>& box, int a, std::uint32_t j, std::uint32_t bins) {
+    if (j >= bins) return box.hi[a];
+    return std::min(box.hi[a], box.lo[a] + (box.hi[a] - box.lo[a]) * (float(j) / float(bins)));
+}
+
+/// The spatial bins of one axis of a node box: their planes (spatial_plane for j = 0 ... bins)
+/// and the bins of a coordinate, guessed with one multiply and corrected against the planes.
+struct SpatialBins {
+    float pl[SahBins::max_bins + 1];  ///< The planes, pl[j] = spatial_plane(box, a, j, bins).
+    float lo;            ///< The box's low plane on the axis.
+    float scale;         ///< Bins per unit of the axis.
+    std::uint32_t bins;  ///< Bins on the axis.
+    /// The planes of `box` on axis a (an axis the box has extent on), `bins` <= max_bins.
+    SpatialBins(const AABB<float>& box, int a, std::uint32_t n)
+        : lo(box.lo[a]), scale(float(n) / (box.hi[a] - box.lo[a])), bins(n) {
+        for (std::uint32_t j = 0; j <= bins; ++j) pl[j] = spatial_plane(box, a, j, bins);
+    }
+    /// The last bin whose low plane is <= x (a reference with lo = x starts there).
+    std::uint32_t from(float x) const {
+        std::uint32_t j = guess(x);
+        while (j > 0 && pl[j] > x) --j;
+        while (j + 1 < bins && pl[j + 1] <= x) ++j;
+        return j;
+    }
+    /// The first bin whose high plane is >= x (a reference with hi = x ends there).
+    std::uint32_t to(float x) const {
+        std::uint32_t j = guess(x);
+        while (j + 1 < bins && pl[j + 1] < x) ++j;
+        while (j > 0 && pl[j] >= x) --j;
+        return j;
+    }
+    /// A bin near x, the loops above correct it.
+    std::uint32_t guess(float x) const {
+        return std::uint32_t(std::min(float(bins - 1), std::max(0.0f, (x - lo) * scale)));
     }
 };
 
