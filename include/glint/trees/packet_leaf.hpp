@@ -8,10 +8,11 @@
 // first record of the leaf, in record order, with the smallest t below its bound: what the
 // single-ray leaf test keeps (the nearest lane of each batch, a later batch only when
 // strictly nearer). Records that can never hit (the padding of a leaf's last batch, and
-// degenerate triangles: zero edges) are skipped. Testing a record against 8 rays costs what
-// testing a batch of 8 records against one ray costs (16 rays: two vectors of 8, or one
-// AVX-512 vector), so a leaf with more live records than entering rays (per batch) is
-// tested lane by lane with the single-ray batches instead.
+// degenerate triangles: zero edges) are skipped. Testing a record against the 16 rays costs
+// two vectors of 8 (GCC keeps 256-bit vectors here), testing a batch of 8 records against one
+// ray one, so a leaf with more than half as many live records as entering rays (per batch)
+// is tested lane by lane with the single-ray batches instead (the threshold counted in
+// instructions: docs/history/trees.md).
 //
 // It applies to policies whose per-ray data is the plain ray, without per-ray field choice,
 // in the identity frame (Möller-Trumbore, the default of MeshBvh); others test each ray
@@ -124,8 +125,9 @@ template <bool Any, class P>
 /// Leaf (first, count) of padded records (a TriangleLeaves leaf in the identity frame)
 /// against the packet's lanes `lanes`: the lanes that found a hit in it (closest hit: nearer
 /// than their bound p.t, which is lowered to it; any hit: every lane that hits, the test
-/// stopping once all have). Record by record against all lanes where the leaf has no more
-/// live records than lanes times batches, else lane by lane with the single-ray batches.
+/// stopping once all have). Record by record against all lanes where twice its live records
+/// (a record against 16 lanes: two vectors of 8) are at most the lanes times its batches (a
+/// batch against one lane: one vector), else lane by lane with the single-ray batches.
 template <bool Any, class P>
 [[gnu::always_inline]] inline unsigned packet_leaf(const RecordView<P>& view, std::uint32_t first, std::uint32_t count,
                                                    unsigned lanes, PacketLeafRays& p) {
@@ -138,7 +140,7 @@ template <bool Any, class P>
         records += std::popcount(live[b]);
     }
     unsigned found = 0;
-    if (batches > 4 || records > std::popcount(lanes) * int(batches)) {
+    if (batches > 4 || 2 * records > std::popcount(lanes) * int(batches)) {
         for (unsigned m = lanes; m; m &= m - 1)
             if (packet_lane_leaf<Any, P>(view, first, count, std::countr_zero(m), p)) found |= m & -m;
         return found;

@@ -292,11 +292,8 @@ template <bool Any, int N, Isa I, class Node, class Leaf, class Hook>
                                                        const float* tmax0, unsigned lanes, Leaf& leaf, Hook& node_hook,
                                                        PacketEntry* stack) {
     alignas(32) float tmax[packet_lanes];
-    float tmax_hi = -infinity<float>;  // the largest tmax of the packet
-    for (int k = 0; k < packet_lanes; ++k) {
-        tmax[k] = (lanes >> k) & 1u ? tmax0[k] : -infinity<float>;
-        tmax_hi = std::max(tmax_hi, tmax[k]);
-    }
+    for (int k = 0; k < packet_lanes; ++k) tmax[k] = (lanes >> k) & 1u ? tmax0[k] : -infinity<float>;
+    float tmax_hi = packet_max(tmax);  // the largest tmax of the packet
     WideBvhNode<N> decoded;
     unsigned found = 0, cur = lanes;
     std::uint32_t ref = 0;
