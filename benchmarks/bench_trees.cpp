@@ -68,6 +68,7 @@
 #include "flags.hpp"  // cli/: the command-line conventions
 #include "support/embree_scene.hpp"
 #include "support/intersector_names.hpp"
+#include "support/obj_reader.hpp"  // bench::read_obj
 #include "support/user_meshes.hpp"
 #include "tree_scenes.hpp"
 
@@ -104,49 +105,6 @@ double closest_hit_pass(const Accel& acc, const std::vector<Ray<float>>& rays) {
     const double t = pass_clock() - t0;
     if (hits == std::size_t(-1)) std::puts("");  // keep the loop
     return t;
-}
-
-/// Minimal OBJ reader: `v x y z` and `f i j k ...` (i, i/t, i//n, i/t/n, negative indices),
-/// polygons fan-triangulated; every other line is ignored.
-Mesh<float> read_obj(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw Error("cannot open mesh '" + path + "'");
-    std::vector<Vec3f> v;
-    Mesh<float> m;
-    std::string line;
-    int lineno = 0;
-    while (std::getline(in, line)) {
-        ++lineno;
-        std::istringstream ss(line);
-        std::string tag;
-        ss >> tag;
-        if (tag == "v") {
-            Vec3f p;
-            if (!(ss >> p.x >> p.y >> p.z))
-                throw Error(path + ":" + std::to_string(lineno) + ": expected 'v x y z'");
-            v.push_back(p);
-        } else if (tag == "f") {
-            std::vector<std::size_t> idx;
-            std::string tok;
-            while (ss >> tok) {
-                long i = 0;
-                try {
-                    i = std::stol(tok.substr(0, tok.find('/')));
-                } catch (const std::exception&) {
-                    throw Error(path + ":" + std::to_string(lineno) + ": bad face index '" + tok + "'");
-                }
-                const long k = i > 0 ? i - 1 : long(v.size()) + i;
-                if (i == 0 || k < 0 || k >= long(v.size()))
-                    throw Error(path + ":" + std::to_string(lineno) + ": face index " + std::to_string(i) +
-                                " outside the " + std::to_string(v.size()) + " vertices read so far");
-                idx.push_back(std::size_t(k));
-            }
-            if (idx.size() < 3) throw Error(path + ":" + std::to_string(lineno) + ": a face needs 3 vertices");
-            for (std::size_t j = 1; j + 1 < idx.size(); ++j) m.push_back({v[idx[0]], v[idx[j]], v[idx[j + 1]]});
-        }
-    }
-    if (m.empty()) throw Error("'" + path + "' has no faces");
-    return m;
 }
 
 /// The table's labels: the library's types carry none (intersectors: support/intersector_names.hpp).
@@ -571,16 +529,7 @@ void add_run_flags(cli::App& app, Options& o) {
         ->group("Run");
     cli::text(app, "--scenes", o.scenes_dir, "--user-meshes: the folder of OBJ meshes", "DIR")->group("Run");
     cli::number(app, "--primary", o.primary, 1, 8192, "--user-meshes: N x N primary rays")->group("Run");
-    const auto set_isa = [&o](const std::string& name) {
-        o.isa = isa_from_name(name);
-        if (!o.isa) {
-            std::string names;
-            for (Isa isa : all_isas) names += std::string(names.empty() ? "" : ", ") + isa_name(isa);
-            return "unknown kernels '" + name + "' (" + names + ")";
-        }
-        if (!isa_supported(*o.isa)) return "this build and CPU cannot run the " + name + " kernels";
-        return std::string();
-    };
+    const auto set_isa = [&o](const std::string& name) { return bench::parse_isa(name, o.isa); };
     app.value("--isa", set_isa, "--user-meshes: glint's kernels (default: the best this CPU runs)", "NAME",
               isa_name(best_isa()))
         ->group("Run");
@@ -632,19 +581,9 @@ int user_meshes_main(const Options& opt) {
     u.builds = opt.builds;
     u.rays = opt.rays_set ? opt.rays : 200'000;
     u.reps = opt.reps_set ? opt.reps : 5;
-    const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return read_obj(f); });
-    if (!opt.csv.empty()) {
-        std::ofstream out(opt.csv);
-        if (!out) throw Error("cannot write '" + opt.csv + "'");
-        out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,"
-               "build_threads,api,embree_quality,query\n";
-        for (const auto& r : rows)
-            out << r.scene << ',' << r.query << ",bvh8,soa,moller-trumbore," << r.glint_mrays << ',' << r.build_s << ','
-                << r.node_bytes << ',' << double(r.node_bytes) / double(r.triangles) << ',' << r.embree_mrays
-                << ",1,meshbvh," << r.quality << ','
-                << (r.query.ends_with("_packet") ? r.query : r.query == "shadow" ? "any_hit" : "closest_hit") << '\n';
-        std::printf("# wrote %s (%zu rows)\n", opt.csv.c_str(), rows.size());
-    }
+    bench::PassClock::thread_cpu = use_cpu_time;  // --cpu-time times the passes here too
+    const auto rows = bench::run_user_meshes(u, [](const std::string& f) { return bench::read_obj(f); });
+    if (!opt.csv.empty()) bench::write_user_csv(opt.csv, rows);
     return 0;
 #else
     (void)opt;
@@ -669,7 +608,7 @@ int main(int argc, char** argv) try {
     for (const auto& path : opt.meshes) {
         std::string name = path.substr(path.find_last_of('/') + 1);
         name = name.substr(0, name.find_last_of('.'));
-        scenes.push_back({name, read_obj(path), {}});
+        scenes.push_back({name, bench::read_obj(path), {}});
     }
     if (!opt.only.empty())
         std::erase_if(scenes, [&](const Scene& sc) { return sc.name != opt.only; });

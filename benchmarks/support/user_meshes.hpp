@@ -10,12 +10,35 @@
 // rounds (default 3) of glint on 1 and 2 threads, Embree HIGH and MEDIUM, medians printed.
 #pragma once
 
+#include <optional>
+#include <string>
+
+#include <glint/core/isa.hpp>
+
+namespace glint::bench {
+
+/// --isa NAME: sets `isa` to the kernels named; an error message (empty: none) for names
+/// that are unknown or that this build and CPU cannot run.
+inline std::string parse_isa(const std::string& name, std::optional<Isa>& isa) {
+    isa = isa_from_name(name);
+    if (!isa) {
+        std::string names;
+        for (Isa i : all_isas) names += std::string(names.empty() ? "" : ", ") + isa_name(i);
+        return "unknown kernels '" + name + "' (" + names + ")";
+    }
+    if (!isa_supported(*isa)) return "this build and CPU cannot run the " + name + " kernels";
+    return std::string();
+}
+
+}  // namespace glint::bench
+
 #ifdef GLINT_HAVE_EMBREE
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <optional>
 #include <string>
@@ -25,6 +48,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "support/clock.hpp"
 #include "support/embree_scene.hpp"
 #include <pmmintrin.h>
 #include <xmmintrin.h>
@@ -143,7 +167,7 @@ template <class G, class EH, class EM>
 void user_query(const std::string& name, const char* query, std::size_t nrays, int reps, G&& glint, EH&& high,
                 EM&& medium, std::size_t tris, double build_s, std::size_t bytes, std::vector<UserRow>& rows,
                 bool& disagree) {
-    using C = std::chrono::steady_clock;
+    using C = PassClock;  // wall or thread CPU time (--cpu-time)
     std::vector<double> tg, th, tm, rh, rm;
     std::size_t hg = 0, hh = 0, hm = 0;
     for (int p = 0; p < reps; ++p) {
@@ -388,6 +412,20 @@ inline std::vector<UserRow> run_user_meshes(
     print_geomeans("generated", rows, generated);
     if (disagree) std::puts("# WARNING: hit counts disagree with Embree on some rows (DISAGREE above)");
     return rows;
+}
+
+/// Writes the mode's rows as CSV: bench_trees' columns plus api, embree_quality and query.
+inline void write_user_csv(const std::string& path, const std::vector<UserRow>& rows) {
+    std::ofstream out(path);
+    if (!out) throw Error("cannot write '" + path + "'");
+    out << "scene,rays,tree,layout,intersector,mrays_per_s,build_s,node_bytes,bytes_per_triangle,embree_mrays_per_s,"
+           "build_threads,api,embree_quality,query\n";
+    for (const auto& r : rows)
+        out << r.scene << ',' << r.query << ",bvh8,soa,moller-trumbore," << r.glint_mrays << ',' << r.build_s << ','
+            << r.node_bytes << ',' << double(r.node_bytes) / double(r.triangles) << ',' << r.embree_mrays
+            << ",1,meshbvh," << r.quality << ','
+            << (r.query.ends_with("_packet") ? r.query : r.query == "shadow" ? "any_hit" : "closest_hit") << '\n';
+    std::printf("# wrote %s (%zu rows)\n", path.c_str(), rows.size());
 }
 
 }  // namespace glint::bench

@@ -64,7 +64,7 @@ template <bool Any, class EmbreeOne>
 void packet_query(const std::string& name, const char* query, const MeshBvh<MollerTrumbore<float>, 8>& bvh,
                   RTCScene scene, EmbreeOne&& embree1, const std::vector<Ray<float>>& rays, int reps,
                   std::vector<UserRow>& rows, bool& disagree, std::size_t tris, double build_s) {
-    using C = std::chrono::steady_clock;
+    using C = PassClock;  // wall or thread CPU time (--cpu-time)
     std::vector<StoreHit<float>> hits(rays.size());
     const std::unique_ptr<bool[]> occ(new bool[rays.size()]);
     const auto single = [&] {

@@ -129,20 +129,24 @@ public:
             return traverse<Any, I, true>(ray, leaf, node_hook);
         return traverse<Any, I, false>(ray, leaf, node_hook);
     }
-    /// Runs `query(IsaTag<isa()>{})`, compiled with isa()'s kernels: the AVX2 call compiled
-    /// for AVX2 whatever the flags, with what it calls inlined. A query keeps its ray and
-    /// hit in locals of its own (a dispatch around a traversal whose ray the caller holds
-    /// would make the compiler keep that ray in memory).
+    /// Runs `query(IsaTag<I>{})` with isa()'s kernels: those above what the flags compile
+    /// (AVX2, AVX-512) in functions compiled for them whatever the flags, with what they call
+    /// inlined. AVX-512 runs the AVX2 kernels (I = avx2) compiled for AVX-512. A query keeps
+    /// its ray and hit in locals of its own (a dispatch around a traversal whose ray the
+    /// caller holds would make the compiler keep that ray in memory).
     template <class Query>
     [[gnu::always_inline]] bool dispatch(Query&& query) const {
 #if GLINT_X86
-        if constexpr (compiled_isa != Isa::avx2) {  // the caller stays small: every kernel out of line
+        if constexpr (compiled_isa < Isa::avx2) {  // the caller stays small: every kernel out of line
+#if GLINT_AVX512_KERNELS
+            if (isa_ == Isa::avx512) [[likely]] return dispatch_avx512(query);
+#endif
             if (isa_ == Isa::avx2) [[likely]] return dispatch_avx2(query);
             return dispatch_other(query);
         } else
 #endif
         {
-            return query(IsaTag<compiled_isa>{});  // the flags' kernels are the only ones compiled
+            return query(IsaTag<std::min(compiled_isa, Isa::avx2)>{});  // the flags' kernels: the only ones compiled
         }
     }
 
@@ -160,6 +164,13 @@ private:
     [[gnu::noinline, gnu::flatten]] GLINT_TARGET_AVX2 bool dispatch_avx2(Query& query) const {
         return query(IsaTag<Isa::avx2>{});
     }
+#if GLINT_AVX512_KERNELS
+    /// The AVX2 kernels compiled for AVX-512 (core/isa.hpp: GLINT_TARGET_AVX512).
+    template <class Query>
+    [[gnu::noinline, gnu::flatten]] GLINT_TARGET_AVX512 bool dispatch_avx512(Query& query) const {
+        return query(IsaTag<Isa::avx2>{});
+    }
+#endif
     /// The kernels other than AVX2 where the flags do not give AVX2 (SSE2, and the portable
     /// loops for tests and comparisons).
     template <class Query>
