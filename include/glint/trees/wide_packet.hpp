@@ -112,12 +112,12 @@ struct PacketBoxTest {
 template <>
 struct PacketBoxTest<Isa::avx2> {
     static constexpr int H = packet_lanes / 8;  // vectors of 8 lanes
-    __m256 o[H][3], inv[H][3], tmin[H];
+    alignas(64) float o[3][packet_lanes], inv[3][packet_lanes], tmin[packet_lanes];
     int near[3], far[3];
     PacketBounds p;
 
-    /// The rays `s.lanes` of r, a coherent packet (packet_shape): PacketRays' floats, the
-    /// lanes in vectors.
+    /// The rays `s.lanes` of r, a coherent packet (packet_shape): PacketRays' floats,
+    /// computed in vectors.
     GLINT_KERNEL_AVX2 PacketBoxTest(const PacketRaySoa& r, const PacketShape& s) {
         p.set_planes(r, std::countr_zero(s.lanes));
         const __m256 inf = _mm256_set1_ps(infinity<float>), ninf = _mm256_set1_ps(-infinity<float>);
@@ -128,13 +128,14 @@ struct PacketBoxTest<Isa::avx2> {
             const __m256 lanes = _mm256_castsi256_ps(_mm256_set1_epi32(int((s.lanes >> (8 * h)) & 0xffu)));
             const __m256 in = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
                 _mm256_castps_si256(_mm256_and_ps(lanes, bit)), _mm256_castps_si256(bit)));
-            tmin[h] = _mm256_blendv_ps(inf, _mm256_loadu_ps(r.tmin + 8 * h), in);
-            tlo = _mm256_min_ps(tlo, tmin[h]);
+            const __m256 t = _mm256_blendv_ps(inf, _mm256_loadu_ps(r.tmin + 8 * h), in);
+            _mm256_store_ps(tmin + 8 * h, t);
+            tlo = _mm256_min_ps(tlo, t);
             for (int a = 0; a < 3; ++a) {
                 const __m256 oa = _mm256_loadu_ps(r.o[a] + 8 * h);
                 const __m256 ia = _mm256_div_ps(one, _mm256_loadu_ps(r.d[a] + 8 * h));
-                o[h][a] = _mm256_and_ps(oa, in);  // 0 outside the packet
-                inv[h][a] = _mm256_blendv_ps(one, ia, in);
+                _mm256_store_ps(o[a] + 8 * h, _mm256_and_ps(oa, in));  // 0 outside the packet
+                _mm256_store_ps(inv[a] + 8 * h, _mm256_blendv_ps(one, ia, in));
                 lo[a] = _mm256_min_ps(lo[a], _mm256_blendv_ps(inf, oa, in));
                 hi[a] = _mm256_max_ps(hi[a], _mm256_blendv_ps(ninf, oa, in));
                 ilo[a] = _mm256_min_ps(ilo[a], _mm256_blendv_ps(inf, ia, in));
@@ -149,12 +150,6 @@ struct PacketBoxTest<Isa::avx2> {
         }
         p.set_bounded();
     }
-#if defined(__AVX512F__)
-    /// The 16 lanes of two halves.
-    [[gnu::always_inline]] static __m512 wide16(__m256 lo, __m256 hi) {
-        return _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_castps_pd(lo)), _mm256_castps_pd(hi), 1));
-    }
-#endif
     /// The smallest (Max = false) or largest of v's 8 lanes.
     template <bool Max>
     GLINT_KERNEL_AVX2 static float extreme(__m256 v) {
@@ -169,9 +164,9 @@ struct PacketBoxTest<Isa::avx2> {
     GLINT_KERNEL_AVX2 unsigned test(const WideBvhNode<N>& n, int i, const float* tmax, float* tn) const {
 #if defined(__AVX512F__)
         if constexpr (H == 2) {
-            __m512 t0 = wide16(tmin[0], tmin[1]), t1 = _mm512_loadu_ps(tmax);
+            __m512 t0 = _mm512_load_ps(tmin), t1 = _mm512_loadu_ps(tmax);
             for (int a = 0; a < 3; ++a) {
-                const __m512 o16 = wide16(o[0][a], o[1][a]), inv16 = wide16(inv[0][a], inv[1][a]);
+                const __m512 o16 = _mm512_load_ps(o[a]), inv16 = _mm512_load_ps(inv[a]);
                 const __m512 bn = _mm512_set1_ps(n.bounds[near[a]][i]), bf = _mm512_set1_ps(n.bounds[far[a]][i]);
                 // maskz: GCC 12's _mm512_max_ps / min_ps warn of their undefined pass-through
                 t0 = _mm512_maskz_max_ps(0xffff, _mm512_mul_ps(_mm512_sub_ps(bn, o16), inv16), t0);
@@ -184,12 +179,13 @@ struct PacketBoxTest<Isa::avx2> {
 #endif
         unsigned mask = 0;
         for (int h = 0; h < H; ++h) {
-            __m256 t0 = tmin[h], t1 = _mm256_load_ps(tmax + 8 * h);
+            __m256 t0 = _mm256_load_ps(tmin + 8 * h), t1 = _mm256_load_ps(tmax + 8 * h);
             for (int a = 0; a < 3; ++a) {
                 const __m256 bn = _mm256_broadcast_ss(&n.bounds[near[a]][i]);
                 const __m256 bf = _mm256_broadcast_ss(&n.bounds[far[a]][i]);
-                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(bn, o[h][a]), inv[h][a]), t0);
-                t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(bf, o[h][a]), inv[h][a]), t1);
+                const __m256 oh = _mm256_load_ps(o[a] + 8 * h), ih = _mm256_load_ps(inv[a] + 8 * h);
+                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(bn, oh), ih), t0);
+                t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(bf, oh), ih), t1);
             }
             _mm256_store_ps(tn + 8 * h, t0);
             t1 = _mm256_mul_ps(t1, _mm256_set1_ps(wide_exit_scale));
