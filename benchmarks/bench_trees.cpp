@@ -209,7 +209,13 @@ struct Options {
     bool sbvh = false;           // --sbvh: also bvh8 with spatial splits (tree sbvh8)
     bool compact = false;        // --compact-subtrees: also the wide BVH in compact subtrees
     bool quick = false, no_generated = false, all = false, memory = false, few = false, wide = false, big = false;
-    BvhBuildOptions bvh{};  // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH
+    // --bvh-ct, --bvh-ci, --bvh-block, --bvh-leaf: the wide BVH's SAH. Tree bvh8 without spatial
+    // splits (the binned tree), sbvh8 with them at every node (--sbvh-alpha, --sbvh-budget).
+    BvhBuildOptions bvh = [] {
+        BvhBuildOptions o = BvhBuildOptions::full_spatial_splits();
+        o.spatial_splits = false;
+        return o;
+    }();
     std::size_t rays = 1'000'000;
     int reps = 3;
     KdBuildOptions kd{};  // --ki, --empty-bonus: the kd-tree's SAH constants (K_T = 1)

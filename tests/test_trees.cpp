@@ -379,11 +379,11 @@ void check_intersector() {
     }
 }
 
-/// The 8-wide BVH with spatial splits (BvhBuildOptions::spatial_splits, default alpha and budget).
+/// The 8-wide BVH with spatial splits at every node (BvhBuildOptions::full_spatial_splits).
 template <class P>
 struct SpatialBvh8 : MeshBvh<P, 8> {
     explicit SpatialBvh8(const Mesh<float>& m)
-        : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m), BvhBuildOptions{.spatial_splits = true}) {}
+        : MeshBvh<P, 8>(std::span<const TriangleVertices<float>>(m), BvhBuildOptions::full_spatial_splits()) {}
 };
 
 /// The 8-wide BVH with spatial splits in the top levels (BvhBuildOptions::top_spatial_splits),
@@ -1150,10 +1150,12 @@ TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree d
     const auto clip = [&](std::uint32_t j, int axis, const AABB<float>& region) {
         return clip_triangle(knot[j][0], knot[j][1], knot[j][2], axis, region);
     };
-    BvhBuildOptions opt{.spatial_splits = true};
-    const WideBvh<8> one(boxes, {.threads = 1, .spatial_splits = true}, clip);
+    BvhBuildOptions opt = BvhBuildOptions::full_spatial_splits();
+    opt.threads = 1;
+    const WideBvh<8> one(boxes, opt, clip);
     for (unsigned threads : {2u, 4u}) {
-        const WideBvh<8> other(boxes, {.threads = threads, .spatial_splits = true}, clip);
+        opt.threads = threads;
+        const WideBvh<8> other(boxes, opt, clip);
         REQUIRE(other.nodes().size() == one.nodes().size());
         CHECK(other.prims() == one.prims());
         CHECK(std::memcmp(other.nodes().data(), one.nodes().data(), one.nodes().size() * sizeof(WideBvhNode<8>)) == 0);
@@ -1172,7 +1174,7 @@ TEST_CASE("wide BVH: spatial splits stay within the reference budget, the tree d
     }
     // Without a clipper (NoClipper) spatial splits chop the boxes: splits happen within the
     // budget, and the tree finds the hits the tree without splits finds.
-    const WideBvh<8> chopped(boxes, {.spatial_splits = true}), plain(boxes);
+    const WideBvh<8> chopped(boxes, BvhBuildOptions::full_spatial_splits()), plain(boxes, {.spatial_splits = false});
     CHECK(chopped.prims().size() > knot.size());
     CHECK(chopped.prims().size() <= std::size_t(1.5 * double(knot.size())));
     std::vector<Triangle<MollerTrumbore<float>>> tris;
@@ -1201,7 +1203,7 @@ TEST_CASE("wide BVH: top-level spatial splits split within their budget, every t
     BvhBuildOptions opt = BvhBuildOptions::top_spatial_splits();
     opt.spatial_node_overlap = 0.0f;  // the knot's top nodes overlap little: try them all
     opt.threads = 1;
-    const WideBvh<8> one(boxes, opt, clip), plain(boxes, {}, clip);
+    const WideBvh<8> one(boxes, opt, clip), plain(boxes, {.spatial_splits = false}, clip);
     CHECK(one.prims().size() > knot.size());
     CHECK(one.prims().size() <= std::size_t(double(opt.spatial_budget) * double(knot.size())));
     for (unsigned threads : {2u, 4u}) {
@@ -1440,7 +1442,7 @@ TEST_CASE("MeshBvh<>: a hit's geometric normal from the user's mesh, in its wind
         }
     const IndexedMesh<float> mesh{verts.data(), verts.size(), sizeof(Vec3f), idx.data(), soup.size()};
     const MeshBvh<> a(soup);
-    const MeshBvh<Watertight<float>, 4> b(mesh, BvhBuildOptions{.spatial_splits = true});
+    const MeshBvh<Watertight<float>, 4> b(mesh, BvhBuildOptions::full_spatial_splits());
     CHECK(geometric_normal(soup.back()) == Vec3f(0));
     CHECK(mesh.geometric_normal(0) == Vec3f(0));
     int hits = 0, bad = 0, compared = 0;

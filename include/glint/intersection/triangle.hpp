@@ -166,6 +166,13 @@ public:
         return ref;
     }
 
+    /// Room for `records` record slots (padding included) and `groups` groups in all, so
+    /// that adding up to them allocates nothing (a tree sizes its leaves' store once).
+    void reserve(std::size_t records, std::size_t groups) {
+        data_.reserve((records + W - 1) / W * W * F);
+        ids_.reserve(records);
+        groups_.reserve(groups);
+    }
     /// Number of record slots stored (triangles plus the padding of padded blocks).
     std::size_t size() const { return ids_.size(); }
     std::size_t group_count() const { return groups_.size(); }  ///< Groups of all blocks.

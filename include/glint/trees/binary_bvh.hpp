@@ -53,33 +53,38 @@ struct BvhBuildOptions {
     /// Spatial splits (Stich, Friedrich, Dietrich 2009; see detail::BinnedSah): tried at a node
     /// where the best object split's two boxes overlap by more than spatial_alpha times the
     /// root's surface area (and the node's own limits below); references stay at most
-    /// spatial_budget times the primitives. top_spatial_splits(): a cheap choice.
-    bool spatial_splits = false;
+    /// spatial_budget times the primitives. The defaults are top_spatial_splits(), the cheap
+    /// choice (docs/trees.md); full_spatial_splits() tries them at every node; false: object
+    /// splits alone (the binned SAH tree).
+    bool spatial_splits = true;
     float spatial_alpha = 1e-5f;     ///< Overlap, as a fraction of the root's area, that tries a spatial split (0 ... 1).
-    float spatial_budget = 1.5f;     ///< Cap on references per primitive over the tree (1 ... 4).
+    float spatial_budget = 1.1f;     ///< Cap on references per primitive over the tree (1 ... 4; full splits: 1.5).
     /// Overlap, as a fraction of the node's own area, that a spatial split also needs (0 ... 1;
-    /// 0: alpha alone decides).
-    float spatial_node_overlap = 0.0f;
+    /// 0: alpha alone decides, as full splits do).
+    float spatial_node_overlap = 0.4f;
     /// Spatial splits only at nodes of at least 1/2^k of the root's references (the top k
-    /// levels of a balanced tree); 0: at every node.
-    std::uint32_t spatial_levels = 0;
+    /// levels of a balanced tree); 0: at every node (full splits).
+    std::uint32_t spatial_levels = 4;
     /// Spatial search by boxes: a reference counted in its first and last bin whole, the
     /// sides cut at the plane, no clipping (the split itself still clips exactly).
-    bool spatial_box_chop = false;
-    bool spatial_one_axis = false;   ///< Spatial search on the node's longest axis only.
+    bool spatial_box_chop = true;
+    bool spatial_one_axis = true;    ///< Spatial search on the node's longest axis only.
 
-    /// Spatial splits where they pay most, at about the binned build's cost (docs/trees.md,
-    /// "Spatial splits in the top levels"): the top 4 levels, nodes whose object split
-    /// overlaps by more than 0.4 of the node's area, longest axis, box chop, budget 1.1.
-    static BvhBuildOptions top_spatial_splits() {
+    /// Spatial splits at every node, searched exactly on all three axes, budget 1.5 (Stich
+    /// et al. 2009): the best trees, at about 15 times the binned build's time.
+    static BvhBuildOptions full_spatial_splits() {
         BvhBuildOptions o;
         o.spatial_splits = true;
-        o.spatial_budget = 1.1f;
-        o.spatial_node_overlap = 0.4f;
-        o.spatial_levels = 4;
-        o.spatial_box_chop = o.spatial_one_axis = true;
+        o.spatial_budget = 1.5f;
+        o.spatial_node_overlap = 0.0f;
+        o.spatial_levels = 0;
+        o.spatial_box_chop = o.spatial_one_axis = false;
         return o;
     }
+    /// Spatial splits where they pay most, at about the binned build's cost (docs/trees.md,
+    /// "Spatial splits in the top levels"), the defaults: the top 4 levels, nodes whose object
+    /// split overlaps by more than 0.4 of the node's area, longest axis, box chop, budget 1.1.
+    static BvhBuildOptions top_spatial_splits() { return {}; }
 
     /// Throws Error naming the first option outside its range (build_binary_bvh calls it).
     void check() const {

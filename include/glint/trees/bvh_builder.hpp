@@ -31,6 +31,7 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include <glint/core/aabb.hpp>
@@ -345,19 +346,20 @@ inline void bvh_compact(BinaryBvh& out, const std::vector<BvhRef>& refs, std::ui
 
 }  // namespace detail
 
-/// Builds the binned SAH tree over the primitives whose box is not empty and finite
-/// (others are left out: they can never be hit). With opt.spatial_splits, `clip` chops
-/// primitives at split planes (clip_triangle for triangles; NoClipper chops their boxes); a primitive may then be in
-/// several leaves (prims holds it once per leaf), at most opt.spatial_budget times the
-/// primitives in all.
-template <PrimitiveClipper Clip = NoClipper>
-BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
+/// Builds the binned SAH tree over primitives 0 ... n - 1 whose box box_of(i) is not empty
+/// and finite (others are left out: they can never be hit), without an array of boxes. With
+/// opt.spatial_splits, `clip` chops primitives at split planes (clip_triangle for triangles;
+/// NoClipper chops their boxes); a primitive may then be in several leaves (prims holds it
+/// once per leaf), at most opt.spatial_budget times the primitives in all.
+template <class BoxOf, PrimitiveClipper Clip = NoClipper>
+    requires std::convertible_to<std::invoke_result_t<const BoxOf&, std::uint32_t>, AABB<float>>
+BinaryBvh build_binary_bvh(std::size_t n, const BoxOf& box_of, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
     opt.check();
-    std::vector<detail::BvhRef> refs;
-    refs.reserve(boxes.size());
+    std::vector<detail::BvhRef> refs;  // room for the references spatial splits add, reserved once
+    refs.reserve(opt.spatial_splits ? std::max(n, std::size_t(double(n) * double(opt.spatial_budget))) : n);
     typename detail::BinnedSah<Clip>::Bounds root;
-    for (std::uint32_t i = 0; i < boxes.size(); ++i) {
-        const AABB<float>& b = boxes[i];
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const AABB<float> b = box_of(i);
         if (b.empty() || !all_finite(b.lo) || !all_finite(b.hi)) continue;
         refs.push_back({b, i, 0});
         root.box.extend(b);
@@ -365,22 +367,28 @@ BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOpt
     }
     BinaryBvh out;
     if (refs.empty()) return out;
-    const std::size_t n = refs.size();
-    const std::size_t cap = opt.spatial_splits ? std::max(n, std::size_t(double(n) * double(opt.spatial_budget))) : n;
+    const std::size_t kept = refs.size();
+    const std::size_t cap = opt.spatial_splits ? std::max(kept, std::size_t(double(kept) * double(opt.spatial_budget))) : kept;
     if (cap >= (std::size_t(1) << 31))
         throw Error("build_binary_bvh: " + std::to_string(cap) + " references, at most 2^31 - 1");
     refs.resize(cap);
     out.nodes.resize(2 * cap - 1);
-    detail::BinnedSah<Clip>(refs, opt, clip, root.box.surface_area(), std::uint32_t(n), out)
-        .node(0, 0, std::uint32_t(n), std::uint32_t(cap), root);
-    if (cap == n) {  // no room was left: every node's range is already its place in tree order
-        out.prims.resize(n);
-        for (std::size_t i = 0; i < n; ++i) out.prims[i] = refs[i].prim;
+    detail::BinnedSah<Clip>(refs, opt, clip, root.box.surface_area(), std::uint32_t(kept), out)
+        .node(0, 0, std::uint32_t(kept), std::uint32_t(cap), root);
+    if (cap == kept) {  // no room was left: every node's range is already its place in tree order
+        out.prims.resize(kept);
+        for (std::size_t i = 0; i < kept; ++i) out.prims[i] = refs[i].prim;
         return out;
     }
     out.prims.reserve(cap);
     detail::bvh_compact(out, refs, 0);
     return out;
+}
+
+/// build_binary_bvh over boxes[i] for every i.
+template <PrimitiveClipper Clip = NoClipper>
+BinaryBvh build_binary_bvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
+    return build_binary_bvh(boxes.size(), [&](std::uint32_t i) { return boxes[i]; }, opt, clip);
 }
 
 }  // namespace glint

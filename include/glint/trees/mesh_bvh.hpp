@@ -24,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <span>
 #include <string>
 #include <utility>
@@ -350,31 +351,39 @@ private:
                         std::to_string(out) + " results");
     }
 
+    /// The tree over triangles tri(0 ... n - 1). Each temporary is allocated once at its
+    /// size, left uninitialized where every element is written, and released before the
+    /// leaves' store (sized once) is filled: no array of boxes (build_binary_bvh takes them
+    /// from the triangles), no copy of the triangles in leaf order (each leaf's are gathered).
     template <class Get>
     void build(std::size_t n, Get&& tri, const BvhBuildOptions& opt) {
         if (n > std::size_t(detail::wide_max_first))
             throw Error("MeshBvh: " + std::to_string(n) + " triangles, at most 2^27 - 2");
-        std::vector<AABB<float>> boxes(n);
-        std::vector<TriangleVertices<float>> tris(n);  // the user's triangles, read once, in order
-        for (std::size_t j = 0; j < n; ++j) {
-            const TriangleVertices<float>& t = tris[j] = tri(j);
-            if (!detail::can_be_hit(t)) continue;  // an empty box: left out
-            for (const auto& p : t) boxes[j].extend(p);
-        }
-        bvh_ = WideBvh<N, B, L>(boxes, opt, [&](std::uint32_t j, int axis, const AABB<float>& region) {
-            const TriangleVertices<float>& t = tris[j];
+        const auto box = [&](std::uint32_t j) {
+            const TriangleVertices<float> t = tri(j);
+            AABB<float> b;  // an empty box (left out) where the triangle cannot be hit
+            if (detail::can_be_hit(t))
+                for (const auto& p : t) b.extend(p);
+            return b;
+        };
+        const auto clip = [&](std::uint32_t j, int axis, const AABB<float>& region) {
+            const TriangleVertices<float> t = tri(j);
             return clip_triangle(t[0], t[1], t[2], axis, region);
-        });
-        // The triangles in leaf order, each asked for a few loop turns before it is copied.
+        };
+        bvh_ = WideBvh<N, B, L>(build_binary_bvh(n, box, opt, clip), opt);
         const std::vector<std::uint32_t>& prims = bvh_.prims();
-        std::vector<TriangleVertices<float>> ordered(prims.size());
-        constexpr std::size_t ahead = 16;
-        for (std::size_t k = 0; k < prims.size(); ++k) {
-            if (k + ahead < prims.size()) __builtin_prefetch(&tris[prims[k + ahead]]);
-            ordered[k] = tris[prims[k]];
-        }
+        std::size_t records = 0, leaves = 0;
+        for (const auto& node : bvh_.nodes())
+            for (int i = 0; i < N; ++i)
+                if (node.child[i] != detail::wide_empty_ref && detail::wide_is_leaf(node.child[i]))
+                    records += TriangleLeaves<P>::padded_records(detail::wide_leaf_count(node.child[i])), ++leaves;
+        leaves_.reserve(records, leaves);
+        // Each leaf's triangles gathered in leaf order into one small buffer.
+        std::vector<TriangleVertices<float>> leaf(opt.max_leaf);
         bvh_.remap_leaves([&](std::uint32_t first, std::uint32_t count) {
-            return leaves_.add(std::span(ordered).subspan(first, count), std::span(prims).subspan(first, count));
+            if (count > leaf.size()) leaf.resize(count);
+            for (std::uint32_t k = 0; k < count; ++k) leaf[k] = tri(prims[first + k]);
+            return leaves_.add(std::span(leaf).first(count), std::span(prims).subspan(first, count));
         });
     }
 

@@ -77,10 +77,14 @@ public:
     /// Over boxes[i] for every i whose box is not empty and finite; `clip` chops primitives
     /// for spatial splits (build_binary_bvh).
     template <PrimitiveClipper Clip = NoClipper>
-    explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
-        const BinaryBvh bin = build_binary_bvh(boxes, opt, clip);
-        prims_ = bin.prims;
-        if (bin.empty()) return;
+    explicit WideBvh(std::span<const AABB<float>> boxes, const BvhBuildOptions& opt = {}, const Clip& clip = {})
+        : WideBvh(build_binary_bvh(boxes, opt, clip), opt) {}
+    /// Over the binary tree `binary` (build_binary_bvh with the same `opt`), whose memory
+    /// it takes over (its primitive order) or releases (its nodes) before returning.
+    WideBvh(BinaryBvh&& binary, const BvhBuildOptions& opt) {
+        BinaryBvh bin = std::move(binary);
+        prims_ = std::move(bin.prims);
+        if (prims_.empty()) return;
         detail::WideNodes<N> wide = detail::WideFill<N>(bin, opt, stats_).take();
         detail::wide_arrange<L>(wide);
         detail::wide_store(std::move(wide), nodes_);
