@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -108,8 +109,9 @@ Vec3d rounded_to(const Vec3d& x) {
 }
 
 /// Record slots of `n` records padded to whole batches.
-inline std::uint32_t padded(std::uint32_t n) {
-    constexpr std::uint32_t w = std::uint32_t(batch_width);
+template <std::unsigned_integral U>
+constexpr U padded(U n) {
+    constexpr U w = U(batch_width);
     return (n + w - 1) / w * w;
 }
 

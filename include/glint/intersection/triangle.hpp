@@ -169,7 +169,7 @@ public:
     /// Room for `records` record slots (padding included) and `groups` groups in all, so
     /// that adding up to them allocates nothing (a tree sizes its leaves' store once).
     void reserve(std::size_t records, std::size_t groups) {
-        data_.reserve((records + W - 1) / W * W * F);
+        data_.reserve(detail::padded(records) * F);
         ids_.reserve(records);
         groups_.reserve(groups);
     }

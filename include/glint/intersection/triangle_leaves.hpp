@@ -56,11 +56,9 @@ public:
     }
 
     /// Room for `leaves` leaves of `records` records in all, each leaf's triangles rounded up
-    /// to whole batches (padded_records(); a leaf whose triangles need several frame groups
+    /// to whole batches (detail::padded; a leaf whose triangles need several frame groups
     /// takes more, allocated as it comes).
     void reserve(std::size_t records, std::size_t leaves) { store_.reserve(records, leaves); }
-    /// Records a leaf of `count` triangles in one frame group takes: whole batches.
-    static std::size_t padded_records(std::size_t count) { return (count + batch_width - 1) / batch_width * batch_width; }
 
     /// The per-query ray data of test(): P's prepared ray in the world frame (with offset
     /// frames, the leaf prepares the ray again per group).

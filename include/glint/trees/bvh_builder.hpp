@@ -60,7 +60,7 @@ public:
     BinnedSah(std::vector<BvhRef>& refs, const BvhBuildOptions& opt, const Clip& clip, float root_area, std::uint32_t root_refs,
               BinaryBvh& out)
         : refs_(refs), scratch_(refs.size()), opt_(opt), clip_(clip), out_(out), tokens_(int(opt.thread_count()) - 1),
-          spatial_(opt.spatial_splits), sbins_(opt.bins),
+          spatial_(opt.spatial_splits),
           min_overlap_(opt.spatial_alpha * root_area),
           min_refs_(opt.spatial_levels ? std::max(2u, root_refs >> std::min(opt.spatial_levels, 31u)) : 0u), cost_(opt) {}
 
@@ -198,7 +198,7 @@ private:
         AABB<float> right_box[64];
         AABB<float> acc;
         std::uint32_t cnt = 0;
-        for (std::uint32_t j = sbins_ - 1; j > 0; --j) {
+        for (std::uint32_t j = opt_.bins - 1; j > 0; --j) {
             acc.extend(rbox[j]);
             cnt += leave[j];
             right_n[j] = cnt;
@@ -208,7 +208,7 @@ private:
         }
         acc = AABB<float>{};
         cnt = 0;
-        for (std::uint32_t j = 1; j < sbins_; ++j) {
+        for (std::uint32_t j = 1; j < opt_.bins; ++j) {
             acc.extend(lbox[j - 1]);
             cnt += enter[j - 1];
             if (cnt == 0 || right_n[j] == 0 || cnt + right_n[j] > n + room) continue;
@@ -221,7 +221,7 @@ private:
     }
 
     /// Spatial bin boundary j of the node box on axis a (sah_binning.hpp's spatial_plane).
-    float plane(const AABB<float>& box, int a, std::uint32_t j) const { return spatial_plane(box, a, j, sbins_); }
+    float plane(const AABB<float>& box, int a, std::uint32_t j) const { return spatial_plane(box, a, j, opt_.bins); }
 
     /// Spatial split search (Stich et al. 2009 §3): bins of equal width over the node box;
     /// each reference is chopped into the bins it spans, each piece clipped to its bin, and
@@ -237,7 +237,7 @@ private:
             if (!(box.hi[a] > box.lo[a]) || (opt_.spatial_one_axis && a != longest)) continue;
             AABB<float> bin_box[64], rbox[64];
             std::uint32_t enter[64] = {}, leave[64] = {};
-            const SpatialBins sb(box, a, sbins_);
+            const SpatialBins sb(box, a, opt_.bins);
             for (std::uint32_t i = b; i < e; ++i) {
                 const BvhRef& r = refs_[i];
                 const std::uint32_t last = sb.to(r.box.hi[a]);
@@ -322,7 +322,6 @@ private:
     BinaryBvh& out_;
     std::atomic<int> tokens_;  // threads that may still be started
     const bool spatial_;
-    const std::uint32_t sbins_;  // spatial bins per axis
     const float min_overlap_;
     const std::uint32_t min_refs_;  // spatial splits only at nodes of at least this many references
     const SahCosts cost_;
@@ -355,8 +354,12 @@ template <class BoxOf, PrimitiveClipper Clip = NoClipper>
     requires std::convertible_to<std::invoke_result_t<const BoxOf&, std::uint32_t>, AABB<float>>
 BinaryBvh build_binary_bvh(std::size_t n, const BoxOf& box_of, const BvhBuildOptions& opt = {}, const Clip& clip = {}) {
     opt.check();
-    std::vector<detail::BvhRef> refs;  // room for the references spatial splits add, reserved once
-    refs.reserve(opt.spatial_splits ? std::max(n, std::size_t(double(n) * double(opt.spatial_budget))) : n);
+    // References for m primitives with the room spatial splits may add.
+    const auto with_room = [&](std::size_t m) {
+        return opt.spatial_splits ? std::max(m, std::size_t(double(m) * double(opt.spatial_budget))) : m;
+    };
+    std::vector<detail::BvhRef> refs;
+    refs.reserve(with_room(n));  // once: the references kept are at most n
     typename detail::BinnedSah<Clip>::Bounds root;
     for (std::uint32_t i = 0; i < n; ++i) {
         const AABB<float> b = box_of(i);
@@ -368,7 +371,7 @@ BinaryBvh build_binary_bvh(std::size_t n, const BoxOf& box_of, const BvhBuildOpt
     BinaryBvh out;
     if (refs.empty()) return out;
     const std::size_t kept = refs.size();
-    const std::size_t cap = opt.spatial_splits ? std::max(kept, std::size_t(double(kept) * double(opt.spatial_budget))) : kept;
+    const std::size_t cap = with_room(kept);
     if (cap >= (std::size_t(1) << 31))
         throw Error("build_binary_bvh: " + std::to_string(cap) + " references, at most 2^31 - 1");
     refs.resize(cap);

@@ -376,7 +376,7 @@ private:
         for (const auto& node : bvh_.nodes())
             for (int i = 0; i < N; ++i)
                 if (node.child[i] != detail::wide_empty_ref && detail::wide_is_leaf(node.child[i]))
-                    records += TriangleLeaves<P>::padded_records(detail::wide_leaf_count(node.child[i])), ++leaves;
+                    records += detail::padded(detail::wide_leaf_count(node.child[i])), ++leaves;
         leaves_.reserve(records, leaves);
         // Each leaf's triangles gathered in leaf order into one small buffer.
         std::vector<TriangleVertices<float>> leaf(opt.max_leaf);
