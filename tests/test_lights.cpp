@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <ctime>
 #include <limits>
 
 #include <glint/lights/light.hpp>
@@ -785,12 +786,27 @@ TEST_CASE("cluster tree: the same lights give the same tree on every build") {
     CHECK(!same_tree(a, c));  // the comparison can fail
 }
 
+namespace {
+
+/// The CPU seconds this thread spends building a cluster tree over `lights` (the thread's own
+/// clock: time slices given to other processes on a busy machine do not count).
+double cluster_build_cpu_seconds(const std::vector<PointLight<float>>& lights) {
+    timespec a{}, b{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &a);
+    const LightClusterTree<float> tree(lights);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &b);
+    CHECK(tree.nodes().size() == 2 * lights.size() - 1);
+    return double(b.tv_sec - a.tv_sec) + 1e-9 * double(b.tv_nsec - a.tv_nsec);
+}
+
+}  // namespace
+
 TEST_CASE("cluster tree: building 10^4 lights costs far less than 100x building 10^3 (O(n log n), not O(n^2))") {
     const auto small = random_lights(1000, 14), large = random_lights(10000, 15);
     double t_small = 1e30, t_large = 1e30;
-    for (int rep = 0; rep < 3; ++rep) {
-        t_small = std::min(t_small, LightClusterTree<float>(small).build_seconds());
-        t_large = std::min(t_large, LightClusterTree<float>(large).build_seconds());
+    for (int rep = 0; rep < 5; ++rep) {  // the fastest of five: a build that met no interruption
+        t_small = std::min(t_small, cluster_build_cpu_seconds(small));
+        t_large = std::min(t_large, cluster_build_cpu_seconds(large));
     }
     MESSAGE("build: 10^3 lights " << t_small * 1e3 << " ms, 10^4 lights " << t_large * 1e3 << " ms, ratio " << t_large / t_small);
     CHECK(t_large / t_small < 40.0);  // n log n predicts ~13, n^2 predicts 100

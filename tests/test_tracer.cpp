@@ -621,6 +621,62 @@ TEST_CASE("policies: a film defined outside the library receives exactly the pix
     CHECK(lit > int(film.luminance.size()) / 2);
 }
 
+namespace {
+
+/// Integrator I with its first_hits() hidden: the renderer traces its camera rays one at a time.
+template <class I>
+struct OneRayAtATime {
+    using scalar_type = typename I::scalar_type;
+    using pixel_state = typename I::pixel_state;
+    const I& in;
+    template <class S>
+    PathSample<scalar_type> radiance(const Ray<scalar_type>& ray, S& sampler, pixel_state& state) const {
+        return in.radiance(ray, sampler, state);
+    }
+    template <class F>
+    void finish(F& film, std::span<const pixel_state> states) const {
+        in.finish(film, states);
+    }
+};
+
+/// Renders `scene` with tracer type PT over `accel` both ways and checks the images are the same.
+template <class PT, class S, class A>
+void check_streamed_camera_rays(const Scene<float>& scene, const A& accel, const S& sampler) {
+    const PT tracer(scene, accel, {.roulette = Roulette<float, 3>::classic()});
+    static_assert(FirstHitIntegrator<PT, S>);
+    static_assert(!FirstHitIntegrator<OneRayAtATime<PT>, S>);
+    RenderSettings settings;
+    settings.width = 37, settings.height = 21;  // partial tiles and partial 4 x 4 blocks
+    settings.spp = 3;
+    settings.threads = 2;
+    const RenderResult streamed = render_image(scene, settings, tracer, sampler);
+    const RenderResult single = render_image(scene, settings, OneRayAtATime<PT>{tracer}, sampler);
+    CAPTURE(scene.name);
+    CHECK(streamed.rays == single.rays);
+    CHECK(streamed.rays > streamed.paths);
+    CHECK(streamed.image.pixels == single.image.pixels);
+    CHECK(streamed.variance.pixels == single.variance.pixels);
+}
+
+}  // namespace
+
+TEST_CASE("renderer: camera rays traced as a tile's stream (16-ray packets) render the image of one ray at a time") {
+    for (const char* name : {"cornell", "cornell-caustics", "envmap"}) {
+        const Scene<float> s = builtin_scene<float>(name);
+        const DefaultAccel bvh(s.triangles);
+        check_streamed_camera_rays<PathTracer<DefaultAccel, RandomSampler<float>, MisDirect<float>>>(s, bvh, RandomSampler<float>(7));
+        check_streamed_camera_rays<PathTracer<DefaultAccel, HaltonSampler<float>, MisDirect<float>>>(s, bvh, HaltonSampler<float>(37, 21, 16, HaltonRandomization::owen, 7));
+        // Behind AnyAccel (one virtual call per stream), as render_named() traces.
+        const auto any = any_accel_view(bvh);
+        check_streamed_camera_rays<PathTracer<AnyAccel, RandomSampler<float>, MisDirect<float>>>(s, static_cast<const AnyAccel&>(any),
+                                                                                               RandomSampler<float>(9));
+        // An accelerator without streams: one ray at a time inside first_hits().
+        const BruteForce<MollerTrumbore<float>> brute(s.triangles);
+        check_streamed_camera_rays<PathTracer<BruteForce<MollerTrumbore<float>>, RandomSampler<float>, MisDirect<float>>>(
+            s, brute, RandomSampler<float>(3));
+    }
+}
+
 TEST_CASE("convergence: the Cornell box's RMSE falls as 1/sqrt(spp)") {
     const Scene<float> s = builtin_scene<float>("cornell");
     const DefaultAccel accel(s.triangles);

@@ -148,6 +148,40 @@ TEST_CASE("exact: one visible VPL over a Lambertian floor gives f_x dPhi f_y cos
     CHECK(Lc[0] == doctest::Approx(L[0] * r2 / 4.0).epsilon(1e-5));
 }
 
+namespace {
+
+/// ShadowRayVisibility with its batch test hidden: a shadow ray at a time.
+struct OneLightAtATime {
+    ShadowRayVisibility<Accel> vis;
+    void set_point(const Vec3<float>& x, const Vec3<float>& n) { vis.set_point(x, n); }
+    bool visible(const Vec3<float>& y) const { return vis.visible(y); }
+};
+
+}  // namespace
+
+TEST_CASE("VPL gather: shadow rays to a point's VPLs as one stream (MeshBvh's packets) sum what one ray at a time sums") {
+    for (const Scene<float>& s : {builtin_scene<float>("cornell"), builtin_scene<float>("cornell-caustics"), point_box()}) {
+        const Accel accel(s.triangles);
+        RenderSettings image;
+        image.width = image.height = 24;
+        const auto points = primary_points(s, accel, image, VplSettings{});
+        const auto vpls = shoot_scene_vpls(s, accel, classic(), 200, 5);
+        const ShadowRayVisibility<Accel> batched(accel, 1e-4f);
+        static_assert(BatchVisibilityPolicy<ShadowRayVisibility<Accel>, float>);
+        static_assert(!BatchVisibilityPolicy<OneLightAtATime, float>);
+        const std::span<const PixelPoint<float>> pts(points);
+        const std::span<const Vpl<float>> vs(vpls);
+        const auto streamed = gather_image(s, pts, vs, batched, 0.0, 2);
+        const auto single = gather_image(s, pts, vs, OneLightAtATime{batched}, 0.0, 2);
+        CAPTURE(s.name);
+        REQUIRE(vpls.size() > 64);  // several blocks of the gather
+        CHECK(streamed == single);
+        int lit = 0;
+        for (const Rgb<float>& L : streamed) lit += L.max() > 0.0f;
+        CHECK(lit > int(points.size()) / 2);
+    }
+}
+
 TEST_CASE("stress: bad settings and lightless scenes throw naming the value") {
     VplSettings st;
     st.min_distance = -1;

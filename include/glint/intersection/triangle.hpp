@@ -97,6 +97,8 @@ private:
 template <class T>
 struct StoreHit : TriangleHit<T> {
     std::uint32_t id = std::numeric_limits<std::uint32_t>::max();  ///< Caller's triangle id; UINT32_MAX: no hit yet.
+    /// Whether a hit has been stored (a query found one).
+    bool found() const { return id != std::numeric_limits<std::uint32_t>::max(); }
 };
 
 /// Blocks of triangle records, stored as an array of structures of arrays (SoaView). A

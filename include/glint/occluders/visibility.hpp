@@ -49,8 +49,28 @@ concept VisibilityPolicy = requires(V v, const Vec3<T>& p) {
     { v.visible(p) } -> std::same_as<bool>;
 };
 
+/// A visibility policy that also tests many lights from the shading point in one call:
+/// visible(ys, out) sets out[i] = visible(ys[i]).
+template <class V, class T>
+concept BatchVisibilityPolicy = VisibilityPolicy<V, T> && requires(V v, std::span<const Vec3<T>> ys, std::span<bool> out) {
+    v.visible(ys, out);
+};
+
+/// out[i] = vis.visible(ys[i]) for every i (the same size): the policy's batch test where it
+/// has one, a light at a time otherwise.
+template <class T, class V>
+    requires VisibilityPolicy<V, T>
+void visible_all(V& vis, std::span<const Vec3<T>> ys, std::span<bool> out) {
+    if constexpr (BatchVisibilityPolicy<V, T>) {
+        vis.visible(ys, out);
+    } else {
+        for (std::size_t i = 0; i < ys.size(); ++i) out[i] = vis.visible(ys[i]);
+    }
+}
+
 /// Exact visibility: a shadow ray through a RayAccelerator (trees/, BruteForce) from x, moved
 /// `epsilon` along n off its surface, to just short of y (a fraction epsilon of the segment).
+/// A batch of lights goes as one stream of shadow rays (any_hits(): MeshBvh's packets).
 template <RayAccelerator Accel>
 class ShadowRayVisibility {
 public:
@@ -60,15 +80,23 @@ public:
     ShadowRayVisibility(const Accel& accel, T epsilon) : accel_(&accel), eps_(epsilon) {}
     void set_point(const Vec3<T>& x, const Vec3<T>& n) { x_ = x + eps_ * n; }  ///< Shading point x, its unit normal n.
     /// Whether no triangle lies between x and y (one any-hit query).
-    bool visible(const Vec3<T>& y) const {
-        // Ray parameter in units of |y - x|: y itself is on a surface.
-        return !accel_->any_hit(Ray<T>{x_, y - x_, T(0), T(1) - eps_});
+    bool visible(const Vec3<T>& y) const { return !accel_->any_hit(ray_to(y)); }
+    /// out[i] = visible(ys[i]) (the same size), as one stream of shadow rays.
+    void visible(std::span<const Vec3<T>> ys, std::span<bool> out) {
+        rays_.resize(ys.size());
+        for (std::size_t i = 0; i < ys.size(); ++i) rays_[i] = ray_to(ys[i]);
+        any_hits(*accel_, std::span<const Ray<T>>(rays_), out);
+        for (bool& o : out) o = !o;
     }
 
 private:
+    // Ray parameter in units of |y - x|: y itself is on a surface.
+    Ray<T> ray_to(const Vec3<T>& y) const { return Ray<T>{x_, y - x_, T(0), T(1) - eps_}; }
+
     const Accel* accel_;
     T eps_;
     Vec3<T> x_{0};
+    std::vector<Ray<T>> rays_;  // the batch's shadow rays (scratch)
 };
 
 /// Culling options shared by the sphere visibility policies.

@@ -1,6 +1,7 @@
-// glint/tracer/any_accel.hpp: AnyAccel, any ray accelerator behind one virtual call per ray,
-// the accelerator type render_named() (tracer/named_render.hpp) and the other integrators
-// chosen by name take, so that their instantiations do not multiply with the trees'.
+// glint/tracer/any_accel.hpp: AnyAccel, any ray accelerator behind one virtual call per ray
+// (or per stream of rays), the accelerator type render_named() (tracer/named_render.hpp) and
+// the other integrators chosen by name take, so that their instantiations do not multiply
+// with the trees'.
 //
 // That call costs 0.3% of a path-traced Cornell box's instructions (callgrind, 48 x 48 pixels,
 // 4 spp, the 8-wide BVH called directly against the same BVH behind AnyAccel: the same rays,
@@ -12,6 +13,8 @@
 //   const RenderResult r = render_named(scene, any_accel_view(bvh), options);
 #pragma once
 
+#include <cstddef>
+#include <span>
 #include <type_traits>
 #include <utility>
 
@@ -32,6 +35,11 @@ public:
     /// Whether anything lies in (ray.tmin, ray.tmax): the shadow-ray query, which may stop at
     /// the first hit found.
     virtual bool any_hit(const Ray<float>& ray) const = 0;
+    /// Closest hits of a stream of rays (trees/tree.hpp's closest_hits(): the held
+    /// accelerator's packets where it has them); one virtual call per stream.
+    virtual std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const = 0;
+    /// Any hits of a stream of rays (any_hits()), one virtual call per stream.
+    virtual std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded) const = 0;
 };
 
 /// `Held` (an accelerator, or a reference to one) behind AnyAccel.
@@ -43,6 +51,12 @@ public:
     explicit AnyAccelOf(Args&&... args) : a_(std::forward<Args>(args)...) {}
     bool closest_hit(const Ray<float>& ray, StoreHit<float>& hit) const override { return a_.closest_hit(ray, hit); }
     bool any_hit(const Ray<float>& ray) const override { return a_.any_hit(ray); }
+    std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const override {
+        return closest_hits(a_, rays, hits);
+    }
+    std::size_t any_hit(std::span<const Ray<float>> rays, std::span<bool> occluded) const override {
+        return any_hits(a_, rays, occluded);
+    }
 
 private:
     Held a_;

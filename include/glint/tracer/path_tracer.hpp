@@ -83,12 +83,16 @@ public:
 
     /// Radiance along a camera ray; the direct-lighting policy records the sample in `state`.
     PathSample<T> radiance(const Ray<T>& ray, S& sampler, pixel_state& state) const {
-        Queries queries(accel_);
-        typename D::vertex_record rec;
-        PathSample<T> out = walk(ray, sampler, queries, Arrival<T>{}, &rec);
-        direct_.record(state, rec, out.L);
-        out.rays = queries.rays();
-        return out;
+        return camera_sample(ray, nullptr, sampler, state);
+    }
+    /// The closest hits of camera rays as one stream (the accelerator's packets where it has
+    /// them, trees/tree.hpp's closest_hits()), for radiance(ray, first, ...) to continue from;
+    /// `hits` must start empty (StoreHit{}). The Renderer traces a tile's rays this way.
+    void first_hits(std::span<const Ray<T>> rays, std::span<StoreHit<T>> hits) const { closest_hits(accel_, rays, hits); }
+    /// The same sample as radiance(ray, sampler, state), from the camera ray's closest hit
+    /// `first` that first_hits() found (or not: first.found() false), counted as one ray.
+    PathSample<T> radiance(const Ray<T>& ray, const StoreHit<T>& first, S& sampler, pixel_state& state) const {
+        return camera_sample(ray, &first, sampler, state);
     }
     /// Radiance along a camera ray with nothing kept for the pixel (for tests).
     PathSample<T> radiance(const Ray<T>& ray, S& sampler) const {
@@ -134,6 +138,16 @@ public:
     }
 
 private:
+    /// A camera ray's sample; its closest hit is `first` when the caller traced it (else null).
+    PathSample<T> camera_sample(const Ray<T>& ray, const StoreHit<T>* first, S& sampler, pixel_state& state) const {
+        Queries queries(accel_);
+        typename D::vertex_record rec;
+        PathSample<T> out = walk(ray, sampler, queries, Arrival<T>{}, &rec, first);
+        direct_.record(state, rec, out.L);
+        out.rays = queries.rays() + (first ? 1 : 0);
+        return out;
+    }
+
     /// The pilot observations at the vertex a camera ray finds, if it is diffuse or glossy.
     void pilot_vertex(const Ray<T>& ray, S& sampler, int repeats, std::vector<RoulettePilotSample<T, 3>>& out) const {
         Queries queries(accel_);
@@ -156,8 +170,10 @@ private:
     }
 
     /// The walk from `ray`, which left a vertex as `from` says; `rec`: the primary vertex's
-    /// record for the direct-lighting policy (null after the camera ray).
-    PathSample<T> walk(Ray<T> ray, S& sampler, Queries& queries, Arrival<T> from, typename D::vertex_record* rec) const {
+    /// record for the direct-lighting policy (null after the camera ray); `first`: `ray`'s
+    /// closest hit when the caller traced it (else null).
+    PathSample<T> walk(Ray<T> ray, S& sampler, Queries& queries, Arrival<T> from, typename D::vertex_record* rec,
+                       const StoreHit<T>* first = nullptr) const {
         PathSample<T> out;
         Rgb<T> F(T(1));
         for (int depth = 0;; ++depth) {
@@ -166,10 +182,11 @@ private:
                 break;
             }
             StoreHit<T> hit;
-            if (!queries.closest_hit(ray, hit)) {
+            if (first ? !(hit = *first).found() : !queries.closest_hit(ray, hit)) {
                 if (features_.environment) out.L += F * env_.escaped(ray.direction, from);
                 break;
             }
+            first = nullptr;
             const Material<T> m = scene_.material_at(hit.id, hit.u, hit.v);
             const Vec3<T> g = scene_.normal(hit.id);
             const bool front = glm::dot(g, ray.direction) < T(0);

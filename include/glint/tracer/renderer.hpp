@@ -8,12 +8,16 @@
 // policy for a ray and the integrator (PathTracer, VplIntegrator, or any type that satisfies
 // Integrator) for the radiance along it; after all samples it lets the integrator finish the
 // film once (correlated direct lighting pools its lambda there, Szécsi 2009, §3.1.1, and adds its
-// lambda layer; the VPL method adds its indirect layer). Every pixel sample draws from the
-// sampler's stream for (x, y, sample index), so the image does not depend on the thread count
-// or the order tiles are rendered in.
+// lambda layer; the VPL method adds its indirect layer). An integrator that can continue from
+// a hit traced beforehand (FirstHitIntegrator: the path tracer) gets a tile's camera rays
+// traced as one stream, sample by sample (16-ray packets through MeshBvh; docs/tracer.md
+// measures what that gains). Every pixel sample draws from the sampler's
+// stream for (x, y, sample index), so the image does not depend on the thread count, the
+// order tiles are rendered in or whether the camera rays went as a stream.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <concepts>
@@ -21,15 +25,15 @@
 #include <functional>
 #include <mutex>
 #include <span>
-#include <string>
 #include <vector>
 
-#include <glint/core/image.hpp>
 #include <glint/core/math.hpp>
 #include <glint/core/parallel.hpp>
 #include <glint/core/ray.hpp>
 #include <glint/core/spectrum.hpp>
+#include <glint/intersection/triangle.hpp>
 #include <glint/sampling/sampler.hpp>
+#include <glint/tracer/film.hpp>
 #include <glint/tracer/scene.hpp>
 
 namespace glint {
@@ -69,55 +73,6 @@ struct RenderSettings {
     /// first_sample + spp - 1, so that progressive passes continue one sequence (a Halton
     /// sampler's pixel positions are not randomized by its seed: passes must not restart it).
     std::uint64_t first_sample = 0;
-};
-
-/// An integrator's own layer of the image, by name (the VPL method's "indirect" part,
-/// correlated sampling's "lambda").
-struct FilmLayer {
-    /// The name film users look it up by (Film::layer), e.g. "indirect" or "lambda".
-    std::string name;
-    /// The layer's values, one per pixel of the image, in the image's size.
-    Image<Rgb<float>> pixels;
-    bool grey = false;  ///< one value per pixel, in all three bands
-};
-
-/// A film policy: what the renderer does with each pixel's estimate. resize(width, height)
-/// comes first; then set_pixel(x, y, mean, variance of the mean) once per pixel, from the
-/// thread that rendered it (pixels are disjoint: a film that stores per pixel needs no lock);
-/// after all pixels, the integrator's finish(film, states) sees the same film.
-template <class F, class T>
-concept FilmPolicy = Scalar<T> && requires(F& film, int x, const Rgb<T>& value) {
-    film.resize(x, x);
-    film.set_pixel(x, x, value, value);
-};
-
-/// The renderer's default film: the image's layers.
-struct Film {
-    Image<Rgb<float>> image;     ///< mean radiance per pixel
-    Image<Rgb<float>> variance;  ///< variance of that mean (sample variance / spp)
-    std::vector<FilmLayer> layers;  ///< what integrators add in finish()
-
-    /// Makes image and variance width x height pixels of zero and drops all layers.
-    void resize(int width, int height) {
-        image = Image<Rgb<float>>(width, height);
-        variance = Image<Rgb<float>>(width, height);
-        layers.clear();
-    }
-    /// The layer called `name`, or null.
-    const FilmLayer* layer(const std::string& name) const {
-        for (const FilmLayer& l : layers)
-            if (l.name == name) return &l;
-        return nullptr;
-    }
-    /// Stores pixel (x, y)'s mean radiance and the variance of that mean, rounded to float.
-    /// (x, y) must lie inside the size of the last resize(); it is not checked.
-    template <Scalar T>
-    void set_pixel(int x, int y, const Rgb<T>& mean, const Rgb<T>& variance_of_mean) {
-        for (std::size_t c = 0; c < 3; ++c) {
-            image.at(x, y)[c] = float(mean[c]);
-            variance.at(x, y)[c] = float(variance_of_mean[c]);
-        }
-    }
 };
 
 /// What a render measured.
@@ -208,6 +163,26 @@ concept Integrator =
           { in.radiance(ray, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
       }));
 
+/// An integrator that continues camera paths from closest hits traced beforehand, so that the
+/// renderer traces a tile's camera rays as one stream (packets of 16 through MeshBvh):
+/// first_hits(rays, hits) finds them (hits start empty), radiance(ray, hit, sampler, state[,
+/// thread]) gives the same sample as radiance(ray, sampler, state[, thread]) from `hit`.
+template <class I, class S>
+concept FirstHitIntegrator =
+    Integrator<I, S> &&
+    requires(const I& in, std::span<const Ray<typename I::scalar_type>> rays,
+             std::span<StoreHit<typename I::scalar_type>> hits) { in.first_hits(rays, hits); } &&
+    ((ThreadStateIntegrator<I> &&
+      requires(const I& in, const Ray<typename I::scalar_type>& ray, const StoreHit<typename I::scalar_type>& hit,
+               S& sampler, typename I::pixel_state& state, typename I::thread_state& thread) {
+          { in.radiance(ray, hit, sampler, state, thread) } -> std::same_as<PathSample<typename I::scalar_type>>;
+      }) ||
+     (!ThreadStateIntegrator<I> &&
+      requires(const I& in, const Ray<typename I::scalar_type>& ray, const StoreHit<typename I::scalar_type>& hit,
+               S& sampler, typename I::pixel_state& state) {
+          { in.radiance(ray, hit, sampler, state) } -> std::same_as<PathSample<typename I::scalar_type>>;
+      }));
+
 namespace detail {
 
 struct NoThreadState {};
@@ -260,13 +235,17 @@ public:
         detail::parallel_blocks(tiles, settings_.threads, [&](std::atomic<int>& next) {
             S sampler = prototype;
             auto thread = detail::make_thread_state(integrator);
+            TileStream<typename I::scalar_type> stream;
             Tally tally;
             for (int t = next++; t < tiles; t = next++) {
                 const int x0 = (t % tx) * tile, y0 = (t / tx) * tile;
-                for (int y = y0; y < std::min(y0 + tile, h); ++y)
-                    for (int x = x0; x < std::min(x0 + tile, w); ++x)
-                        tally += render_pixel(integrator, x, y, sampler, states[std::size_t(y) * std::size_t(w) + std::size_t(x)],
-                                              thread, film);
+                if constexpr (FirstHitIntegrator<I, S>) {
+                    tally += render_tile(integrator, x0, y0, sampler, std::span(states), thread, film, stream);
+                } else {
+                    for (int y = y0; y < std::min(y0 + tile, h); ++y)
+                        for (int x = x0; x < std::min(x0 + tile, w); ++x)
+                            tally += render_pixel(integrator, x, y, sampler, states[pixel_index(x, y)], thread, film);
+                }
                 report();
             }
             rays += tally.rays;
@@ -291,29 +270,102 @@ private:
         }
     };
 
-    int spp() const { return std::max(1, settings_.spp); }
-
-    /// The pixel's samples, their mean and the variance of the mean (Welford's update).
-    template <class I, class S, class Th, class F>
-    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Th& thread,
-                       F& film) const {
-        using T = typename I::scalar_type;
-        Rgb<T> mean(T(0)), m2(T(0));
-        Tally tally;
-        const int n = spp();
-        for (int i = 0; i < n; ++i) {
-            const Ray<T> ray = camera_.ray(x, y, settings_.first_sample + std::uint64_t(i), sampler);
-            PathSample<T> s;
-            if constexpr (ThreadStateIntegrator<I>) s = integrator.radiance(ray, sampler, state, thread);
-            else s = integrator.radiance(ray, sampler, state);
+    /// A pixel's running mean and sum of squared deviations (Welford's update).
+    template <class T>
+    struct PixelSum {
+        Rgb<T> mean{T(0)}, m2{T(0)};
+        int n = 0;
+        /// Adds sample `s` (a non-finite radiance counts as zero) and counts it into `tally`.
+        /// Compiled once: inlined into each loop, contraction into FMAs could round the
+        /// variance differently for render_pixel() and render_tile().
+        [[gnu::noinline]] void add(const PathSample<T>& s, Tally& tally) {
             tally.rays += s.rays;
             tally.capped += s.capped ? 1 : 0;
             const Rgb<T> L = s.L.is_finite() ? s.L : Rgb<T>(T(0));  // never let one sample poison a pixel
             const Rgb<T> delta = L - mean;
-            mean += delta / T(i + 1);
+            mean += delta / T(++n);
             m2 += delta * (L - mean);
         }
-        film.set_pixel(x, y, mean, n > 1 ? m2 / T(n - 1) / T(n) : Rgb<T>(T(0)));
+        /// The mean and the variance of the mean into pixel (x, y) of `film`.
+        template <class F>
+        void store(F& film, int x, int y) const {
+            film.set_pixel(x, y, mean, n > 1 ? m2 / T(n - 1) / T(n) : Rgb<T>(T(0)));
+        }
+    };
+
+    /// A rendering thread's scratch for render_tile(): the tile's pixels, rays, hits and sums.
+    template <class T>
+    struct TileStream {
+        std::vector<std::array<int, 2>> pixels;
+        std::vector<Ray<T>> rays;
+        std::vector<StoreHit<T>> hits;
+        std::vector<PixelSum<T>> sums;
+    };
+
+    int spp() const { return std::max(1, settings_.spp); }
+    std::size_t pixel_index(int x, int y) const { return std::size_t(y) * std::size_t(settings_.width) + std::size_t(x); }
+
+    /// One sample of `integrator` along `ray`, from its closest hit `first` where given.
+    template <class I, class S, class Th>
+    static PathSample<typename I::scalar_type> sample(const I& integrator, const Ray<typename I::scalar_type>& ray,
+                                                      const StoreHit<typename I::scalar_type>* first, S& sampler,
+                                                      typename I::pixel_state& state, Th& thread) {
+        if constexpr (FirstHitIntegrator<I, S>) {
+            if constexpr (ThreadStateIntegrator<I>) return integrator.radiance(ray, *first, sampler, state, thread);
+            else return integrator.radiance(ray, *first, sampler, state);
+        } else {
+            if constexpr (ThreadStateIntegrator<I>) return integrator.radiance(ray, sampler, state, thread);
+            else return integrator.radiance(ray, sampler, state);
+        }
+    }
+
+    /// The pixel's samples, their mean and the variance of the mean.
+    template <class I, class S, class Th, class F>
+    Tally render_pixel(const I& integrator, int x, int y, S& sampler, typename I::pixel_state& state, Th& thread,
+                       F& film) const {
+        PixelSum<typename I::scalar_type> sum;
+        Tally tally;
+        for (int i = 0; i < spp(); ++i) {
+            const auto ray = camera_.ray(x, y, settings_.first_sample + std::uint64_t(i), sampler);
+            sum.add(sample(integrator, ray, nullptr, sampler, state, thread), tally);
+        }
+        sum.store(film, x, y);
+        return tally;
+    }
+
+    /// The tile at (x0, y0) through camera-ray streams: its pixels in 4 x 4 blocks, each pixel's
+    /// samples in order, taken 256 at a time: their camera rays traced as one stream (16
+    /// consecutive rays, a packet, are one pixel's samples or a few neighbours'), then each
+    /// sample from its hit, the sampler restarted at the pixel sample as render_pixel() starts
+    /// it: the same samples, the same image.
+    template <class I, class S, class Th, class F, class T = typename I::scalar_type>
+    Tally render_tile(const I& integrator, int x0, int y0, S& sampler, std::span<typename I::pixel_state> states,
+                      Th& thread, F& film, TileStream<T>& ws) const {
+        ws.pixels.clear();
+        for (int b = 0; b < 256; ++b) {
+            const int x = x0 + (b >> 4 & 3) * 4 + (b & 3), y = y0 + (b >> 6) * 4 + (b >> 2 & 3);
+            if (x < settings_.width && y < settings_.height) ws.pixels.push_back({x, y});
+        }
+        ws.sums.assign(ws.pixels.size(), PixelSum<T>{});
+        const std::size_t n = std::size_t(spp()), items = ws.pixels.size() * n, batch = 256;
+        const auto start = [&](std::size_t j) {  // item j: sample j % n of pixel j / n
+            const auto [x, y] = ws.pixels[j / n];
+            return camera_.ray(x, y, settings_.first_sample + std::uint64_t(j % n), sampler);
+        };
+        Tally tally;
+        for (std::size_t j0 = 0; j0 < items; j0 += batch) {
+            const std::size_t m = std::min(batch, items - j0);
+            ws.rays.resize(m);
+            for (std::size_t j = 0; j < m; ++j) ws.rays[j] = start(j0 + j);
+            ws.hits.assign(m, StoreHit<T>{});
+            integrator.first_hits(std::span<const Ray<T>>(ws.rays), std::span<StoreHit<T>>(ws.hits));
+            for (std::size_t j = 0; j < m; ++j) {
+                start(j0 + j);  // starts the sampler at the pixel sample again
+                const auto [x, y] = ws.pixels[(j0 + j) / n];
+                ws.sums[(j0 + j) / n].add(sample(integrator, ws.rays[j], &ws.hits[j], sampler, states[pixel_index(x, y)], thread), tally);
+            }
+        }
+        for (std::size_t k = 0; k < ws.pixels.size(); ++k) ws.sums[k].store(film, ws.pixels[k][0], ws.pixels[k][1]);
         return tally;
     }
 

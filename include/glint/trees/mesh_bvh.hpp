@@ -201,7 +201,7 @@ private:
     /// packet_lanes rays (the last may be short); returns the sum of what it returns.
     template <class Out, class Packet>
     std::size_t stream(const char* query, std::span<const Ray<float>> rays, std::span<Out> out, Packet&& packet) const {
-        check_stream(query, rays.size(), out.size());
+        detail::check_stream(std::string("MeshBvh::") + query, rays.size(), out.size());
         std::size_t n = 0;
         detail::PacketEntry stack[WideBvh<N, B, L>::max_stack];
         bvh_.dispatch([&](auto kernels) __attribute__((always_inline)) {
@@ -343,12 +343,6 @@ private:
             ++c.packets;
             c.nodes += std::uint64_t(std::popcount(lanes));
         };
-    }
-
-    static void check_stream(const char* query, std::size_t rays, std::size_t out) {
-        if (rays != out)
-            throw Error(std::string("MeshBvh::") + query + ": " + std::to_string(rays) + " rays but " +
-                        std::to_string(out) + " results");
     }
 
     /// The tree over triangles tri(0 ... n - 1). Each temporary is allocated once at its

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include <glint/core/aabb.hpp>
+#include <glint/core/error.hpp>
 #include <glint/core/math.hpp>
 #include <glint/intersection/triangle.hpp>
 
@@ -222,5 +223,56 @@ concept RayAccelerator = requires(const A& a, const Ray<typename A::scalar_type>
     { a.closest_hit(r, h) } -> std::same_as<bool>;
     { a.any_hit(r) } -> std::same_as<bool>;
 };
+
+/// A ray accelerator that also answers streams of rays in one call (MeshBvh: packets of 16
+/// where the rays are coherent): hits[i] and occluded[i] as the single-ray queries give them,
+/// each count the number of hits.
+template <class A>
+concept StreamAccelerator =
+    RayAccelerator<A> && requires(const A& a, std::span<const Ray<typename A::scalar_type>> r,
+                                  std::span<StoreHit<typename A::scalar_type>> h, std::span<bool> o) {
+        { a.closest_hit(r, h) } -> std::same_as<std::size_t>;
+        { a.any_hit(r, o) } -> std::same_as<std::size_t>;
+    };
+
+namespace detail {
+
+/// Throws Error naming `query`'s two sizes unless a stream's rays and results are as many.
+inline void check_stream(const std::string& query, std::size_t rays, std::size_t results) {
+    if (rays != results)
+        throw Error(query + ": " + std::to_string(rays) + " rays but " + std::to_string(results) + " results");
+}
+
+}  // namespace detail
+
+/// Closest hits of `rays` into `hits` (the same size; a miss leaves its hit as it was) through
+/// any accelerator: its stream query where it has one, a ray at a time otherwise. Returns the
+/// number of hits; throws Error naming both sizes when they differ.
+template <RayAccelerator A>
+std::size_t closest_hits(const A& accel, std::span<const Ray<typename A::scalar_type>> rays,
+                         std::span<StoreHit<typename A::scalar_type>> hits) {
+    if constexpr (StreamAccelerator<A>) {
+        return accel.closest_hit(rays, hits);
+    } else {
+        detail::check_stream("glint::closest_hits", rays.size(), hits.size());
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) n += accel.closest_hit(rays[i], hits[i]) ? 1 : 0;
+        return n;
+    }
+}
+
+/// Any hits of `rays` into `occluded` (the same size), as closest_hits() chooses; returns the
+/// number occluded.
+template <RayAccelerator A>
+std::size_t any_hits(const A& accel, std::span<const Ray<typename A::scalar_type>> rays, std::span<bool> occluded) {
+    if constexpr (StreamAccelerator<A>) {
+        return accel.any_hit(rays, occluded);
+    } else {
+        detail::check_stream("glint::any_hits", rays.size(), occluded.size());
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) n += (occluded[i] = accel.any_hit(rays[i])) ? 1 : 0;
+        return n;
+    }
+}
 
 }  // namespace glint

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <concepts>
@@ -155,21 +156,34 @@ Rgb<T> direct_light(const Scene<T>& s, RayQueries<A>& rays, const EmitterSet<T>&
 }
 
 /// Sum over the VPLs of dPhi (kd_y / pi) w(wi) cos(theta_x) cos(theta_y) / max(r^2, d2min)
-/// V(x, y) at point x (normal n), w(wi) = brdf(wi) (f_r for radiance, 1 for irradiance).
+/// V(x, y) at point x (normal n), w(wi) = brdf(wi) (f_r for radiance, 1 for irradiance). The
+/// VPLs go in blocks of 64: the ones that would contribute, then one batch visibility test
+/// (visible_all: a stream of shadow rays for ShadowRayVisibility), then the sum in VPL order.
 template <Scalar T, class V, class Brdf>
     requires VisibilityPolicy<V, T>
 Rgb<T> vpl_sum(const Vec3<T>& x, const Vec3<T>& n, std::span<const Vpl<T>> vpls, V& vis, T d2min, const Brdf& brdf) {
+    constexpr std::size_t block = 64;
+    std::array<Vec3<T>, block> at;
+    std::array<Rgb<T>, block> term;
+    std::array<bool, block> seen;
     Rgb<T> sum(T(0));
-    for (const Vpl<T>& v : vpls) {
-        const Vec3<T> d = v.position - x;
-        const T r2 = glm::dot(d, d);
-        if (!(r2 > T(0))) continue;
-        const Vec3<T> wi = d / std::sqrt(r2);
-        const T cx = glm::dot(n, wi), cy = -glm::dot(v.normal, wi);
-        if (cx <= T(0) || cy <= T(0)) continue;  // facing away: no contribution, no test
-        const Rgb<T> f = brdf(wi);
-        if (f.max() <= T(0) || !vis.visible(v.position)) continue;
-        sum += v.power * v.albedo * f * (cx * cy / (std::max(r2, d2min) * pi<T>));
+    for (std::size_t b = 0; b < vpls.size(); b += block) {
+        std::size_t k = 0;
+        for (const Vpl<T>& v : vpls.subspan(b, std::min(block, vpls.size() - b))) {
+            const Vec3<T> d = v.position - x;
+            const T r2 = glm::dot(d, d);
+            if (!(r2 > T(0))) continue;
+            const Vec3<T> wi = d / std::sqrt(r2);
+            const T cx = glm::dot(n, wi), cy = -glm::dot(v.normal, wi);
+            if (cx <= T(0) || cy <= T(0)) continue;  // facing away: no contribution, no test
+            const Rgb<T> f = brdf(wi);
+            if (f.max() <= T(0)) continue;
+            at[k] = v.position;
+            term[k++] = v.power * v.albedo * f * (cx * cy / (std::max(r2, d2min) * pi<T>));
+        }
+        visible_all<T>(vis, std::span<const Vec3<T>>(at.data(), k), std::span<bool>(seen.data(), k));
+        for (std::size_t i = 0; i < k; ++i)
+            if (seen[i]) sum += term[i];
     }
     return sum;
 }
