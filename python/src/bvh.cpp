@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string>
 
 #include <glint/core/parallel.hpp>
@@ -60,6 +61,23 @@ struct Rays {
     Ray<float> ray(std::size_t i, float tmin, float tmax) const { return {row(origin_rows, i), row(direction_rows, i), tmin, tmax}; }
 };
 
+/// Rays per stream query (MeshBvh's packets of 16 where the rays are coherent), on the stack:
+/// a heap block of 4096 rays (128 KiB) was mapped and unmapped by glibc at every call, a page
+/// fault per 4 KiB.
+constexpr std::size_t stream_chunk = 256;
+
+/// Calls f(rays, first) on the rays [begin, end) of r, stream_chunk at a time, `first` the
+/// index of rays[0].
+template <class F>
+void for_each_chunk(const Rays& r, std::size_t begin, std::size_t end, float tmin, float tmax, const F& f) {
+    Ray<float> rays[stream_chunk];
+    for (std::size_t first = begin; first < end; first += stream_chunk) {
+        const std::size_t m = std::min(stream_chunk, end - first);
+        for (std::size_t k = 0; k < m; ++k) rays[k] = r.ray(first + k, tmin, tmax);
+        f(std::span<const Ray<float>>(rays, m), first);
+    }
+}
+
 class PyMeshBvh {
 public:
     PyMeshBvh(const py::object& vertices, const py::object& indices, unsigned build_threads) {
@@ -95,11 +113,14 @@ public:
         float *pt = t.mutable_data(), *pu = u.mutable_data(), *pv = v.mutable_data(), *pn = normal.mutable_data();
         std::int32_t* pid = id.mutable_data();
         for_each_block(n, threads, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) {
-                StoreHit<float> h;  // a miss leaves t = inf, u = v = 0 and id = 2^32 - 1 (-1 as int32)
-                bvh_->closest_hit(r.ray(i, tmin, tmax), h);
-                pt[i] = h.t, pu[i] = h.u, pv[i] = h.v, pid[i] = std::int32_t(h.id);
-            }
+            for_each_chunk(r, begin, end, tmin, tmax, [&](std::span<const Ray<float>> rays, std::size_t first) {
+                StoreHit<float> hits[stream_chunk];  // a miss leaves t = inf, u = v = 0 and id = -1 as int32
+                bvh_->closest_hit(rays, std::span<StoreHit<float>>(hits, rays.size()));
+                for (std::size_t k = 0; k < rays.size(); ++k) {
+                    const std::size_t i = first + k;
+                    pt[i] = hits[k].t, pu[i] = hits[k].u, pv[i] = hits[k].v, pid[i] = std::int32_t(hits[k].id);
+                }
+            });
             if (normals) write_normals(pid + begin, pn + 3 * begin, end - begin);
         });
         if (!normals) std::fill_n(pn, 3 * n, 0.0f);
@@ -111,7 +132,9 @@ public:
         py::array_t<bool> out(py::ssize_t(r.n));
         bool* p = out.mutable_data();
         for_each_block(r.n, threads, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) p[i] = bvh_->any_hit(r.ray(i, tmin, tmax));
+            for_each_chunk(r, begin, end, tmin, tmax, [&](std::span<const Ray<float>> rays, std::size_t first) {
+                bvh_->any_hit(rays, std::span<bool>(p + first, rays.size()));
+            });
         });
         return out;
     }
