@@ -229,8 +229,8 @@ private:
         });
     }
     /// One packet of n <= packet_lanes rays: the packet traversal where they are coherent,
-    /// single rays otherwise; returns the hits. Its lambdas are always_inline: in a large unit
-    /// GCC left the packet functions out of the kernels' dispatch, compiled for the baseline
+    /// single rays otherwise; returns the hits. The single rays' lambdas are always_inline: in
+    /// a large unit GCC left them out of the kernels' dispatch, compiled for the baseline
     /// instruction set (random rays 0.78x single rays through a Python module).
     template <Isa I, class Wrap, class Hook>
     [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
@@ -243,10 +243,14 @@ private:
         if constexpr (detail::packet_leaf_supported<P>) {
             alignas(64) detail::PacketLeafRays p;
             p.load(rays, n, [&](int k) { return tmax_before(rays[k], hits[k]); });
-            const detail::PacketShape shape = detail::packet_shape(p, n);
-            if (!shape.coherent || bvh_.nodes().empty()) return singles();
+            if (bvh_.nodes().empty()) return singles();
             p.set_bounds(n, [&](int k) { return hits[k].t; });
-            const unsigned hit = packet_leaves<false>(kernels, p, shape, wrap, hook, stack);
+            unsigned hit = 0;  // packets of the rays with one sign per axis, the others alone
+            const auto group = [&](const auto& g) { hit |= packet_leaves<false>(kernels, p, g, wrap, hook, stack); };
+            const auto alone = [&](int k) __attribute__((always_inline)) {
+                found += closest(kernels, rays[k], hits[k], wrap, [&]() __attribute__((always_inline)) { hook(1u); });
+            };
+            detail::for_sign_groups(detail::packet_shape(p, n), n, group, alone);
             for (unsigned m = hit; m; m &= m - 1, ++found) {
                 const int k = std::countr_zero(m);
                 hits[k].t = p.t[k], hits[k].u = p.u[k], hits[k].v = p.v[k], hits[k].id = leaves_.id(p.id[k]);
@@ -278,10 +282,12 @@ private:
         if constexpr (detail::packet_leaf_supported<P>) {
             alignas(64) detail::PacketLeafRays p;
             p.load(rays, n, [&](int k) { return rays[k].tmax; });
-            const detail::PacketShape shape = detail::packet_shape(p, n);
-            if (!shape.coherent || bvh_.nodes().empty()) return singles();
+            if (bvh_.nodes().empty()) return singles();
             p.set_bounds(n, [](int) { return infinity<float>; });
-            hit = packet_leaves<true>(kernels, p, shape, wrap, hook, stack);
+            hit = 0;  // packets of the rays with one sign per axis, the others alone
+            const auto group = [&](const auto& g) { hit |= packet_leaves<true>(kernels, p, g, wrap, hook, stack); };
+            const auto alone = [&](int k) { hit |= unsigned(any(kernels, rays[k], wrap, [&] { hook(1u); })) << k; };
+            detail::for_sign_groups(detail::packet_shape(p, n), n, group, alone);
         } else {
             Ray<float> r[detail::packet_lanes];
             StoreHit<float> h[detail::packet_lanes];

@@ -2,8 +2,9 @@
 // (wide_packet.hpp) and the packet leaf test (packet_leaf.hpp) read them: up to 16 rays in
 // structure-of-arrays form (PacketRaySoa, filled in loops the compiler vectorizes), whether
 // they can be traced together (packet_shape: valid rays, one direction sign per axis, tmin
-// >= 0), and what the packet's interval test needs (PacketBounds: the plane rows and the
-// intervals of origins and reciprocal directions, Boulos, Wald, Shirley, Parker 2006).
+// >= 0; for_sign_groups: a packet's rays grouped by their signs where these differ), and what
+// the packet's interval test needs (PacketBounds: the plane rows and the intervals of origins
+// and reciprocal directions, Boulos, Wald, Shirley, Parker 2006).
 #pragma once
 
 #include <algorithm>
@@ -24,6 +25,9 @@ namespace detail {
 inline constexpr int packet_lanes = 16;
 /// Fewer valid rays than this in a packet: single rays are cheaper.
 inline constexpr int packet_min_rays = 2;
+/// More direction sign classes than this among a packet's rays: they are incoherent (each
+/// class a few rays from anywhere), single rays are cheaper (for_sign_groups).
+inline constexpr int packet_max_groups = 4;
 
 /// Calls f(k, j) for every lane k of a packet of n rays (n >= 1), j the ray it holds: k for
 /// k < n, else 0 (so every lane holds a ray). A whole packet is a loop compilers vectorize.
@@ -50,12 +54,14 @@ struct alignas(64) PacketRaySoa {
     }
 };
 
-/// The valid rays of a packet (wide_ray_valid) among its first n lanes as a lane mask, and
+/// The valid rays of a packet (wide_ray_valid) among its first n lanes as a lane mask,
 /// whether they can share the packet traversal (at least packet_min_rays, one sign per axis,
-/// tmin >= 0).
+/// tmin >= 0), and what for_sign_groups() splits them by.
 struct PacketShape {
     unsigned lanes = 0;
     bool coherent = false;
+    unsigned traceable = 0;  // valid lanes with tmin >= 0: those a packet may hold
+    unsigned neg[3] = {};    // per axis, the lanes whose direction is negative
 };
 
 [[gnu::always_inline]] inline PacketShape packet_shape(const PacketRaySoa& r, int n) {
@@ -71,7 +77,39 @@ struct PacketShape {
     bool same = (below & s.lanes) == 0;
     for (int a = 0; a < 3; ++a) same &= (neg[a] & s.lanes) == 0 || (neg[a] & s.lanes) == s.lanes;
     s.coherent = same && std::popcount(s.lanes) >= packet_min_rays;
+    s.traceable = s.lanes & ~below;
+    for (int a = 0; a < 3; ++a) s.neg[a] = neg[a];
     return s;
+}
+
+/// The first n lanes of s by direction signs: where the traceable lanes fall into at most
+/// packet_max_groups sign classes, `packet(g)` for each class g of at least packet_min_rays
+/// lanes (a coherent PacketShape); `single(k)` for every other lane k.
+template <class Packet, class Single>
+[[gnu::always_inline]] inline void for_sign_groups(const PacketShape& s, int n, Packet&& packet, Single&& single) {
+    unsigned left = s.traceable, alone = (0xffffffffu >> (32 - n)) & ~left;
+    int classes = 0;
+    for (unsigned o = 0; o < 8; ++o) {
+        unsigned m = left;
+        for (int a = 0; a < 3; ++a) m &= (o >> a) & 1u ? s.neg[a] : ~s.neg[a];
+        classes += m != 0;
+    }
+    if (classes > packet_max_groups) alone |= left, left = 0;
+    while (left != 0) {
+        const int k = std::countr_zero(left);
+        unsigned g = left;
+        for (int a = 0; a < 3; ++a) g &= (s.neg[a] >> k) & 1u ? s.neg[a] : ~s.neg[a];
+        left &= ~g;
+        if (std::popcount(g) < packet_min_rays) {
+            alone |= g;
+            continue;
+        }
+        PacketShape c = s;
+        c.lanes = c.traceable = g;
+        c.coherent = true;
+        packet(c);
+    }
+    for (; alone != 0; alone &= alone - 1) single(std::countr_zero(alone));
 }
 
 /// Whether x is a normal float (std::isnormal).

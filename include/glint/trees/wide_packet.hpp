@@ -20,7 +20,8 @@
 //
 // The packet needs one near / far plane choice per axis: every ray's direction has the same
 // signs, and every interval starts at 0 or later (the unsigned box test). packet_shape()
-// says whether rays qualify; a caller traces the rest as single rays.
+// says whether rays qualify, for_sign_groups() splits a packet's rays into groups that do;
+// a caller traces the rest as single rays.
 #pragma once
 
 #include <algorithm>
