@@ -229,9 +229,10 @@ private:
         });
     }
     /// One packet of n <= packet_lanes rays: the packet traversal where they are coherent,
-    /// single rays otherwise; returns the hits. The single rays' lambdas are always_inline: in
-    /// a large unit GCC left them out of the kernels' dispatch, compiled for the baseline
-    /// instruction set (random rays 0.78x single rays through a Python module).
+    /// single rays otherwise; returns the hits. The single rays are traced in this function's
+    /// own loop, not from a lambda that for_sign_groups() calls: in a large unit GCC left such
+    /// lambdas out of the kernels' dispatch, compiled for the baseline instruction set (random
+    /// rays 0.75-0.78x single rays through the Python module).
     template <Isa I, class Wrap, class Hook>
     [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
                                               Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
@@ -247,10 +248,9 @@ private:
             p.set_bounds(n, [&](int k) { return hits[k].t; });
             unsigned hit = 0;  // packets of the rays with one sign per axis, the others alone
             const auto group = [&](const auto& g) { hit |= packet_leaves<false>(kernels, p, g, wrap, hook, stack); };
-            const auto alone = [&](int k) __attribute__((always_inline)) {
-                found += closest(kernels, rays[k], hits[k], wrap, [&]() __attribute__((always_inline)) { hook(1u); });
-            };
-            detail::for_sign_groups(detail::packet_shape(p, n), n, group, alone);
+            const auto one = [&]() __attribute__((always_inline)) { hook(1u); };
+            for (unsigned m = detail::for_sign_groups(detail::packet_shape(p, n), n, group); m; m &= m - 1)
+                found += closest(kernels, rays[std::countr_zero(m)], hits[std::countr_zero(m)], wrap, one);
             for (unsigned m = hit; m; m &= m - 1, ++found) {
                 const int k = std::countr_zero(m);
                 hits[k].t = p.t[k], hits[k].u = p.u[k], hits[k].v = p.v[k], hits[k].id = leaves_.id(p.id[k]);
@@ -286,8 +286,9 @@ private:
             p.set_bounds(n, [](int) { return infinity<float>; });
             hit = 0;  // packets of the rays with one sign per axis, the others alone
             const auto group = [&](const auto& g) { hit |= packet_leaves<true>(kernels, p, g, wrap, hook, stack); };
-            const auto alone = [&](int k) { hit |= unsigned(any(kernels, rays[k], wrap, [&] { hook(1u); })) << k; };
-            detail::for_sign_groups(detail::packet_shape(p, n), n, group, alone);
+            const auto one = [&]() __attribute__((always_inline)) { hook(1u); };
+            for (unsigned m = detail::for_sign_groups(detail::packet_shape(p, n), n, group); m; m &= m - 1)
+                hit |= unsigned(any(kernels, rays[std::countr_zero(m)], wrap, one)) << std::countr_zero(m);
         } else {
             Ray<float> r[detail::packet_lanes];
             StoreHit<float> h[detail::packet_lanes];

@@ -84,9 +84,9 @@ struct PacketShape {
 
 /// The first n lanes of s by direction signs: where the traceable lanes fall into at most
 /// packet_max_groups sign classes, `packet(g)` for each class g of at least packet_min_rays
-/// lanes (a coherent PacketShape); `single(k)` for every other lane k.
-template <class Packet, class Single>
-[[gnu::always_inline]] inline void for_sign_groups(const PacketShape& s, int n, Packet&& packet, Single&& single) {
+/// lanes (a coherent PacketShape); returns the other lanes, for the caller to trace alone.
+template <class Packet>
+[[gnu::always_inline]] inline unsigned for_sign_groups(const PacketShape& s, int n, Packet&& packet) {
     unsigned left = s.traceable, alone = (0xffffffffu >> (32 - n)) & ~left;
     int classes = 0;
     for (unsigned o = 0; o < 8; ++o) {
@@ -109,7 +109,7 @@ template <class Packet, class Single>
         c.coherent = true;
         packet(c);
     }
-    for (; alone != 0; alone &= alone - 1) single(std::countr_zero(alone));
+    return alone;
 }
 
 /// Whether x is a normal float (std::isnormal).
