@@ -10,10 +10,10 @@
 // film once (correlated direct lighting pools its lambda there, Szécsi 2009, §3.1.1, and adds its
 // lambda layer; the VPL method adds its indirect layer). An integrator that can continue from
 // a hit traced beforehand (FirstHitIntegrator: the path tracer) gets a tile's camera rays
-// traced as one stream, sample by sample (16-ray packets through MeshBvh; docs/tracer.md
-// measures what that gains). Every pixel sample draws from the sampler's
-// stream for (x, y, sample index), so the image does not depend on the thread count, the
-// order tiles are rendered in or whether the camera rays went as a stream.
+// traced as streams of 256 pixel samples (16-ray packets through MeshBvh; docs/tracer.md
+// measures what that gains). Every pixel sample draws from the sampler's stream for (x, y,
+// sample index), so the image does not depend on the thread count, the order tiles are
+// rendered in or whether the camera rays went as a stream.
 #pragma once
 
 #include <algorithm>
