@@ -22,6 +22,7 @@
 #include <glint/core/random.hpp>
 #include <glint/intersection/moller_trumbore.hpp>
 #include <glint/intersection/watertight.hpp>
+#include <glint/trees/brute_force.hpp>
 #include <glint/trees/mesh_bvh.hpp>
 
 #include "support/tree_scenes.hpp"
@@ -178,4 +179,31 @@ TEST_CASE("packets: empty streams, an empty tree, and sizes that differ") {
     CHECK(empty.closest_hit(rays, hits) == 0);
     CHECK(empty.any_hit(rays, std::span<bool>(occ, 16)) == 0);
     for (bool o : occ) CHECK(!o);
+}
+
+TEST_CASE("closest_hits / any_hits: a stream through any accelerator (a ray at a time without streams)") {
+    const Mesh<float> mesh = make_torus_knot<float>(40, 6);
+    const std::span<const TriangleVertices<float>> tris(mesh);
+    const MeshBvh<> bvh{tris};
+    const BruteForce<MollerTrumbore<float>> brute(tris);
+    static_assert(StreamAccelerator<MeshBvh<>> && !StreamAccelerator<BruteForce<MollerTrumbore<float>>>);
+    const std::vector<Ray<float>> rays = make_primary_rays<float>(mesh, 24, 24);
+    std::vector<StoreHit<float>> a(rays.size()), b(rays.size());
+    std::unique_ptr<bool[]> oa(new bool[rays.size()]), ob(new bool[rays.size()]);
+    const std::size_t hits = closest_hits(bvh, std::span<const Ray<float>>(rays), std::span<StoreHit<float>>(a));
+    CHECK(closest_hits(brute, std::span<const Ray<float>>(rays), std::span<StoreHit<float>>(b)) == hits);
+    CHECK(hits > rays.size() / 20);  // a good number hit (83 of 576)
+    CHECK(hits < rays.size());  // some rays miss
+    CHECK(any_hits(bvh, std::span<const Ray<float>>(rays), std::span<bool>(oa.get(), rays.size())) == hits);
+    CHECK(any_hits(brute, std::span<const Ray<float>>(rays), std::span<bool>(ob.get(), rays.size())) == hits);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        CHECK(a[i].id == b[i].id);
+        CHECK(a[i].found() == oa[i]);
+        CHECK(oa[i] == ob[i]);
+    }
+    b.pop_back();
+    CHECK_THROWS_WITH_AS(closest_hits(brute, std::span<const Ray<float>>(rays), std::span<StoreHit<float>>(b)),
+                         doctest::Contains("576 rays but 575"), Error);
+    CHECK_THROWS_WITH_AS(any_hits(brute, std::span<const Ray<float>>(rays), std::span<bool>(ob.get(), 3)),
+                         doctest::Contains("576 rays but 3"), Error);
 }
