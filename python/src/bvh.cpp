@@ -61,9 +61,8 @@ struct Rays {
     Ray<float> ray(std::size_t i, float tmin, float tmax) const { return {row(origin_rows, i), row(direction_rows, i), tmin, tmax}; }
 };
 
-/// Rays per stream query (MeshBvh's packets of 16 where the rays are coherent), on the stack:
-/// a heap block of 4096 rays (128 KiB) was mapped and unmapped by glibc at every call, a page
-/// fault per 4 KiB.
+/// Rays per stream query (MeshBvh's packets of 16 where the rays are coherent), held on the
+/// stack with their hits.
 constexpr std::size_t stream_chunk = 256;
 
 /// Calls f(rays, first) on the rays [begin, end) of r, stream_chunk at a time, `first` the
