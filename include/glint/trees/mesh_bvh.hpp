@@ -237,8 +237,9 @@ private:
     [[gnu::always_inline]] int closest_packet(IsaTag<I> kernels, const Ray<float>* rays, StoreHit<float>* hits, int n,
                                               Wrap& wrap, Hook& hook, detail::PacketEntry* stack) const {
         int found = 0;
+        const auto one = [&]() __attribute__((always_inline)) { hook(1u); };  // a single ray's node hook
         const auto singles = [&]() __attribute__((always_inline)) {  // single rays (an empty tree: no hits)
-            for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, [&]() __attribute__((always_inline)) { hook(1u); });
+            for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, one);
             return found;
         };
         if constexpr (detail::packet_leaf_supported<P>) {
@@ -248,7 +249,6 @@ private:
             p.set_bounds(n, [&](int k) { return hits[k].t; });
             unsigned hit = 0;  // packets of the rays with one sign per axis, the others alone
             const auto group = [&](const auto& g) { hit |= packet_leaves<false>(kernels, p, g, wrap, hook, stack); };
-            const auto one = [&]() __attribute__((always_inline)) { hook(1u); };
             for (unsigned m = detail::for_sign_groups(detail::packet_shape(p, n), n, group); m; m &= m - 1)
                 found += closest(kernels, rays[std::countr_zero(m)], hits[std::countr_zero(m)], wrap, one);
             for (unsigned m = hit; m; m &= m - 1, ++found) {
@@ -274,8 +274,9 @@ private:
     [[gnu::always_inline]] int any_packet(IsaTag<I> kernels, const Ray<float>* rays, bool* occluded, int n, Wrap& wrap,
                                           Hook& hook, detail::PacketEntry* stack) const {
         int found = 0;
+        const auto one = [&]() __attribute__((always_inline)) { hook(1u); };
         const auto singles = [&]() __attribute__((always_inline)) {
-            for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, [&]() __attribute__((always_inline)) { hook(1u); });
+            for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, one);
             return found;
         };
         unsigned hit;
@@ -286,7 +287,6 @@ private:
             p.set_bounds(n, [](int) { return infinity<float>; });
             hit = 0;  // packets of the rays with one sign per axis, the others alone
             const auto group = [&](const auto& g) { hit |= packet_leaves<true>(kernels, p, g, wrap, hook, stack); };
-            const auto one = [&]() __attribute__((always_inline)) { hook(1u); };
             for (unsigned m = detail::for_sign_groups(detail::packet_shape(p, n), n, group); m; m &= m - 1)
                 hit |= unsigned(any(kernels, rays[std::countr_zero(m)], wrap, one)) << std::countr_zero(m);
         } else {
