@@ -207,3 +207,21 @@ TEST_CASE("closest_hits / any_hits: a stream through any accelerator (a ray at a
     CHECK_THROWS_WITH_AS(any_hits(brute, std::span<const Ray<float>>(rays), std::span<bool>(ob.get(), 3)),
                          doctest::Contains("576 rays but 3"), Error);
 }
+
+TEST_CASE("MeshBvh<P, 4>: streams a ray at a time, the single rays' hits") {
+    const Mesh<float> mesh = make_torus_knot<float>(40, 6);
+    const MeshBvh<MollerTrumbore<float>, 4> bvh{std::span<const TriangleVertices<float>>(mesh)};
+    static_assert(!MeshBvh<MollerTrumbore<float>, 4>::packets && MeshBvh<>::packets);
+    const std::vector<Ray<float>> rays = make_primary_rays<float>(mesh, 24, 24);
+    std::vector<StoreHit<float>> hits(rays.size());
+    std::unique_ptr<bool[]> occ(new bool[rays.size()]);
+    const std::size_t n = bvh.closest_hit(rays, hits);
+    CHECK(bvh.any_hit(rays, std::span<bool>(occ.get(), rays.size())) == n);
+    CHECK(n > rays.size() / 20);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        StoreHit<float> h;
+        CHECK(bvh.closest_hit(rays[i], h) == hits[i].found());
+        CHECK((h.id == hits[i].id && h.t == hits[i].t && h.u == hits[i].u && h.v == hits[i].v));
+        CHECK(occ[i] == hits[i].found());
+    }
+}

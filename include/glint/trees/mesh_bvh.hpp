@@ -6,7 +6,6 @@
 //   glint::StoreHit<float> hit;  // hit.id: the index of the user's triangle
 //   if (bvh.closest_hit(ray, hit)) n = mesh.geometric_normal(hit.id);  // core/offset.hpp
 //   bvh.closest_hit(rays, hits);  // spans of rays and hits: packets of 16 where coherent (wide_packet.hpp)
-//
 // Leaves are TriangleLeaves<P> (padded to whole batches of 8 records, tested with the
 // intersector's batch kernel through the leaf callable, a LeafQuery, WideBvh::intersect takes), laid out
 // in the order traversal meets the nodes.
@@ -122,9 +121,11 @@ public:
         });
     }
 
+    /// Packets on 8-wide trees (measured, tested); other widths trace streams a ray at a time.
+    static constexpr bool packets = N == 8;
     /// Closest hits of a stream of rays: hits[i] as closest_hit(rays[i], hits[i]) gives it
-    /// (the same t, u, v and id); returns how many hits were updated. Consecutive rays go in
-    /// packets of 16 sharing the node visits where they are coherent (trees/wide_packet.hpp),
+    /// (the same t, u, v and id); returns how many hits were updated. On 8-wide trees consecutive
+    /// rays go in packets of 16 sharing the node visits where they are coherent (wide_packet.hpp),
     /// as single rays otherwise. Throws glint::Error naming both sizes when they differ.
     std::size_t closest_hit(std::span<const Ray<float>> rays, std::span<StoreHit<float>> hits) const {
         return closest_stream(rays, hits, uncounted, [](unsigned) {});
@@ -242,7 +243,8 @@ private:
             for (int k = 0; k < n; ++k) found += closest(kernels, rays[k], hits[k], wrap, one);
             return found;
         };
-        if constexpr (detail::packet_leaf_supported<P>) {
+        if constexpr (!packets) return singles();
+        else if constexpr (detail::packet_leaf_supported<P>) {
             alignas(64) detail::PacketLeafRays p;
             p.load(rays, n, [&](int k) { return tmax_before(rays[k], hits[k]); });
             if (bvh_.nodes().empty()) return singles();
@@ -279,6 +281,7 @@ private:
             for (int k = 0; k < n; ++k) found += occluded[k] = any(kernels, rays[k], wrap, one);
             return found;
         };
+        if constexpr (!packets) return singles();
         unsigned hit;
         if constexpr (detail::packet_leaf_supported<P>) {
             alignas(64) detail::PacketLeafRays p;
