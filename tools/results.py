@@ -285,17 +285,19 @@ def job_trees_user(c, rep, program='bench_trees'):
     tree types, where GCC inlines otherwise)."""
     if not os.path.isdir(c.scenes):
         raise Skip('the shared meshes are not beside the repository (%s)' % c.scenes)
-    argv = [c.exe(program)] + (['--user-meshes'] if program == 'bench_trees' else []) + ['--scenes', c.scenes]
+    mode, log = (['--user-meshes'], 'bench_trees_user') if program == 'bench_trees' else ([], program)
+    argv = [c.exe(program)] + mode + ['--scenes', c.scenes]
     if c.a.quick:
         argv += ['--only', 'bunny', '--rays', '2000', '--primary', '32', '--reps', '1', '--no-generated']
+    no_peer = Skip('%s was built without Embree 3 (the peer): install it and rebuild' % program)
     try:
-        text = c.run(program + '_user' if program == 'bench_trees' else program, argv, rep)
+        text = c.run(log, argv, rep)
     except RuntimeError as e:
         if 'needs Embree 3' in str(e):  # bench_user_meshes without its peer exits 1
-            raise Skip('%s was built without Embree 3 (the peer): install it and rebuild' % program)
+            raise no_peer
         raise
     if 'Embree' not in text:
-        raise Skip('%s was built without Embree 3 (the peer): install it and rebuild' % program)
+        raise no_peer
     return parse_bench_trees_user(text)
 
 
